@@ -1,0 +1,51 @@
+#pragma once
+#include <Eigen/Core>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace canalid::drivers {
+
+/// A bad CSV file: the message names the file, the line (1-based, the header is line 1) and the
+/// column where they apply, e.g. "data.csv:14: column 'level': 'abc' is not a number".
+class CsvError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// A uniformly sampled table read from CSV (DESIGN.md): a header row of column names, `time_s`
+/// first, then one numeric row per sample.  Rejected, with file, line and column: a missing file,
+/// an empty file, a header without `time_s` first, duplicate names, rows with the wrong number
+/// of cells, a cell that is not a finite number, time that does not increase, sampling that is
+/// not uniform (relative tolerance 1e-6 of the first interval; gaps are never resampled), and
+/// fewer than 2 rows.
+class CsvTable {
+ public:
+  /// @throws CsvError
+  static CsvTable Read(const std::string& path);
+  /// Parses text as if it were the contents of a file called `name` (for tests and pipes).
+  /// @throws CsvError
+  static CsvTable Parse(const std::string& text, const std::string& name);
+
+  const std::string& source() const { return source_; }
+  const std::vector<std::string>& columns() const { return columns_; }
+  Eigen::Index rows() const { return data_.rows(); }
+  double sample_time_s() const { return sample_time_s_; }
+  Eigen::VectorXd time_s() const { return data_.col(0); }
+  bool HasColumn(const std::string& name) const;
+  /// @throws CsvError naming the file, the missing column and the columns there are.
+  Eigen::VectorXd Column(const std::string& name) const;
+
+ private:
+  std::string source_;
+  std::vector<std::string> columns_;
+  Eigen::MatrixXd data_;
+  double sample_time_s_ = 0.0;
+};
+
+/// Writes `time_s` and the given columns as CSV with full double precision (17 significant
+/// digits).  @throws CsvError if the file cannot be written or the sizes disagree.
+void WriteCsv(const std::string& path, const std::vector<std::string>& names,
+              const std::vector<Eigen::VectorXd>& columns);
+
+}  // namespace canalid::drivers
