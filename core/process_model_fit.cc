@@ -14,6 +14,7 @@ namespace {
 
 struct Problem {
   Eigen::VectorXd u;  // deviation input
+  double u0 = 0.0;    // the input value the deviations are taken from
   Eigen::VectorXd y;  // measured output
   double ts = 1.0;
   double max_delay_s = 0.0;
@@ -32,7 +33,8 @@ Problem MakeProblem(const Eigen::Ref<const Eigen::VectorXd>& u,
   if (!(ts > 0.0)) throw std::invalid_argument("process fit: sample time must be > 0");
   if (!u.allFinite() || !y.allFinite()) throw std::invalid_argument("process fit: non-finite data");
   Problem p;
-  p.u = u.array() - u(0);
+  p.u0 = u(0);
+  p.u = u.array() - p.u0;
   if (p.u.cwiseAbs().maxCoeff() == 0.0)
     throw std::invalid_argument("process fit: the input never moves");
   p.y = y;
@@ -81,6 +83,7 @@ ProcessFit<Model> Finish(const Problem& p, Model unit_model, int iterations) {
   fit.model = unit_model;
   fit.model.gain = lin.gain;
   fit.output_offset = lin.offset;
+  fit.input_offset = p.u0;
   fit.simulated = (lin.gain * s).array() + lin.offset;
   fit.metrics = ComputeMetrics(p.y, fit.simulated, p.ts);
   fit.iterations = iterations;

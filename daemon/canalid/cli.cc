@@ -4,21 +4,33 @@
 #include <exception>
 #include <iostream>
 
+#include "daemon/canalid/identify_command.h"
+#include "daemon/canalid/input_error.h"
+
 namespace canalid::cli {
 
 int Run(int argc, char** argv) {
-  CLI::App app{"canalid: identification of canal pools from experiment data"};
+  CLI::App app{"canalid: identification of canal pools from experiment data (offline tool)"};
   app.require_subcommand(1);
+  app.footer(
+      "Run 'canalid COMMAND --help' for a command's options. Documentation: README.md, docs/.");
+  app.set_version_flag("--version", "canalid 0.1.0");
+  int exit_code = kExitOk;
+  IdentifyOptions identify;
+  AddIdentifyCommand(app, identify, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     const int code = app.exit(e);
     return code == 0 ? kExitOk : kExitBadInput;
-  } catch (const std::exception& e) {
+  } catch (const InputError& e) {
     std::cerr << "canalid: " << e.what() << "\n";
+    return kExitBadInput;
+  } catch (const std::exception& e) {
+    std::cerr << "canalid: internal error: " << e.what() << "\n";
     return kExitFailure;
   }
-  return kExitOk;
+  return exit_code;
 }
 
 }  // namespace canalid::cli

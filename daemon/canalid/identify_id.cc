@@ -1,0 +1,28 @@
+#include <stdexcept>
+
+#include "core/id_model.h"
+#include "daemon/canalid/identify_command.h"
+#include "daemon/canalid/input_error.h"
+#include "daemon/canalid/table_columns.h"
+#include "drivers/json/model_json.h"
+
+namespace canalid::cli {
+
+nlohmann::json IdentifyId(const IdentifyOptions& options, const drivers::CsvTable& table) {
+  const Eigen::VectorXd q_in = RequireMovingColumn(table, options.qin);
+  const Eigen::VectorXd q_out = RequireColumn(table, options.qout);
+  const Eigen::VectorXd level = RequireColumn(table, options.level);
+  const double ts = table.sample_time_s();
+  core::IdFitOptions fit_options;
+  if (options.max_delay_s > 0.0) fit_options.max_nk = static_cast<int>(options.max_delay_s / ts);
+  fit_options.closed_loop = options.closed_loop == "on"    ? core::ClosedLoopMode::kOn
+                            : options.closed_loop == "off" ? core::ClosedLoopMode::kOff
+                                                           : core::ClosedLoopMode::kAuto;
+  try {
+    return drivers::ToJson(core::FitIdModel(q_in, q_out, level, ts, fit_options));
+  } catch (const std::invalid_argument& e) {
+    throw InputError(table.source() + ": " + e.what());
+  }
+}
+
+}  // namespace canalid::cli

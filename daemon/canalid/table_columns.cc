@@ -1,0 +1,55 @@
+#include "daemon/canalid/table_columns.h"
+
+#include <charconv>
+
+#include "daemon/canalid/input_error.h"
+
+namespace canalid::cli {
+
+Eigen::VectorXd RequireColumn(const drivers::CsvTable& table, const std::string& name) {
+  try {
+    return table.Column(name);
+  } catch (const drivers::CsvError& e) {
+    throw InputError(e.what());
+  }
+}
+
+Eigen::VectorXd RequireMovingColumn(const drivers::CsvTable& table, const std::string& name) {
+  Eigen::VectorXd column = RequireColumn(table, name);
+  if (column.maxCoeff() == column.minCoeff()) {
+    throw InputError(table.source() + ": column '" + name + "' never moves (constant " +
+                     std::to_string(column(0)) + " over " + std::to_string(column.size()) +
+                     " rows), so it cannot excite the model");
+  }
+  return column;
+}
+
+std::vector<std::string> SplitList(const std::string& text, const std::string& option) {
+  std::vector<std::string> parts;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t comma = text.find(',', start);
+    const std::string part =
+        text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    if (part.empty()) throw InputError(option + ": empty item in '" + text + "'");
+    parts.push_back(part);
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return parts;
+}
+
+std::vector<int> ParseIntList(const std::string& text, const std::string& option) {
+  std::vector<int> values;
+  for (const auto& part : SplitList(text, option)) {
+    int v = 0;
+    const auto [ptr, ec] = std::from_chars(part.data(), part.data() + part.size(), v);
+    if (ec != std::errc() || ptr != part.data() + part.size() || v < 0) {
+      throw InputError(option + ": '" + part + "' is not a whole number >= 0");
+    }
+    values.push_back(v);
+  }
+  return values;
+}
+
+}  // namespace canalid::cli

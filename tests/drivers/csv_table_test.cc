@@ -1,0 +1,65 @@
+#include "drivers/csv/csv_table.h"
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+namespace canalid::drivers {
+namespace {
+
+std::string ErrorOf(const std::string& text) {
+  try {
+    CsvTable::Parse(text, "f.csv");
+  } catch (const CsvError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(CsvTable, ReadsColumnsAndSampleTime) {
+  const CsvTable t = CsvTable::Parse("time_s,a,b\n0,1,2\n0.5,3,4\n1.0,5,6\n", "f.csv");
+  EXPECT_EQ(t.rows(), 3);
+  EXPECT_DOUBLE_EQ(t.sample_time_s(), 0.5);
+  EXPECT_DOUBLE_EQ(t.Column("b")(2), 6.0);
+  EXPECT_TRUE(t.HasColumn("a"));
+}
+
+TEST(CsvTable, NamesFileLineAndColumnInEveryError) {
+  EXPECT_EQ(ErrorOf(""), "f.csv: empty file (no header row)");
+  EXPECT_EQ(ErrorOf("t,a\n0,1\n1,2\n"), "f.csv:1: the first column must be 'time_s' (found 't')");
+  EXPECT_EQ(ErrorOf("time_s,a,a\n0,1,1\n"), "f.csv:1: column 'a' appears twice");
+  EXPECT_EQ(ErrorOf("time_s,a\n0,1\n1,abc\n"), "f.csv:3: column 'a': 'abc' is not a number");
+  EXPECT_EQ(ErrorOf("time_s,a\n0,1\n1,nan\n"), "f.csv:3: column 'a': 'nan' is not finite");
+  EXPECT_EQ(ErrorOf("time_s,a\n0,1\n1\n"), "f.csv:3: expected 2 cells, found 1");
+  EXPECT_EQ(ErrorOf("time_s,a\n0,1\n1,2\n0.5,3\n"),
+            "f.csv:4: time_s 0.5 does not increase (previous 1)");
+  EXPECT_EQ(ErrorOf("time_s,a\n0,1\n1,2\n2,3\n4,3\n"),
+            "f.csv:5: time_s 4 breaks uniform sampling (expected 3, sample time 1 s)");
+  EXPECT_EQ(ErrorOf("time_s,a\n0,1\n"), "f.csv: needs at least 2 data rows, found 1");
+  EXPECT_EQ(ErrorOf("time_s,a\n0,1\n1,"), "f.csv:3: column 'a': '' is not a number");
+}
+
+TEST(CsvTable, ToleratesCarriageReturnsAndFloatingPointTime) {
+  std::string text = "time_s,a\r\n";
+  for (int k = 0; k < 1000; ++k) text += std::to_string(0.1 * k) + ",1\r\n";
+  const CsvTable t = CsvTable::Parse(text, "f.csv");
+  EXPECT_EQ(t.rows(), 1000);
+  EXPECT_NEAR(t.sample_time_s(), 0.1, 1e-9);
+}
+
+TEST(CsvTable, MissingColumnListsTheOnesThereAre) {
+  const CsvTable t = CsvTable::Parse("time_s,a,b\n0,1,2\n1,3,4\n", "f.csv");
+  try {
+    t.Column("level");
+    FAIL() << "no error";
+  } catch (const CsvError& e) {
+    EXPECT_STREQ(e.what(), "f.csv: no column 'level' (columns: time_s, a, b)");
+  }
+}
+
+TEST(CsvTable, MissingFileIsAnError) {
+  EXPECT_THROW(CsvTable::Read("/nonexistent/x.csv"), CsvError);
+}
+
+}  // namespace
+}  // namespace canalid::drivers
