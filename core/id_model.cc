@@ -16,21 +16,6 @@ namespace {
 constexpr int kMinFitSamples = 20;
 constexpr int kSensitivityOrder = 4;
 
-struct LineFit {
-  double b = 0.0;
-  double loss = 0.0;  // mean squared residual
-};
-
-// y_d and q_d are already detrended, so b = <q, y>/<q, q> is the least-squares b of
-// y = b Q + c + d k (Frisch-Waugh-Lovell).
-LineFit FitDetrended(const Eigen::VectorXd& y_d, const Eigen::VectorXd& q_d) {
-  LineFit f;
-  const double qq = q_d.squaredNorm();
-  f.b = qq > 0.0 ? q_d.dot(y_d) / qq : 0.0;
-  f.loss = (y_d - f.b * q_d).squaredNorm() / static_cast<double>(y_d.size());
-  return f;
-}
-
 Eigen::VectorXd Detrended(Eigen::VectorXd v) {
   RemoveLine(v);
   return v;
@@ -195,6 +180,17 @@ Eigen::VectorXd IntegratedTotalFlow(const Eigen::Ref<const Eigen::VectorXd>& q_i
   return q;
 }
 
+Eigen::MatrixXd OpenLoopRegressors(const Eigen::Ref<const Eigen::VectorXd>& q_in,
+                                   const Eigen::Ref<const Eigen::VectorXd>& q_out, int nk, int k0) {
+  const Eigen::Index rows = q_in.size() - k0;
+  Eigen::MatrixXd x(rows, 4);
+  x.col(0) = IntegratedTotalFlow(q_in, q_out, nk, k0);
+  x.col(1) = q_in.segment(k0 - nk, rows);
+  x.col(2).setOnes();
+  x.col(3) = Eigen::VectorXd::LinSpaced(rows, 0.0, static_cast<double>(rows - 1));
+  return x;
+}
+
 IdFitResult FitIdModel(const Eigen::Ref<const Eigen::VectorXd>& q_in,
                        const Eigen::Ref<const Eigen::VectorXd>& q_out,
                        const Eigen::Ref<const Eigen::VectorXd>& level, double sample_time_s,
@@ -219,19 +215,27 @@ IdFitResult FitIdModel(const Eigen::Ref<const Eigen::VectorXd>& q_in,
   result.model.sample_time_s = sample_time_s;
   const Eigen::VectorXd y_d = Detrended(level.tail(n - k0));
 
-  // Delay scan on the plain regression.
+  // Delay scan.  The wave front reaches the level sensor as a jump (IDZ's p21), which an
+  // integrator alone fits by pulling the delay short and the area small; the inflow term
+  // p21 q_in(k - nk) takes the jump, so nk and b describe the integrating part.
   result.loss_by_nk.resize(max_nk - options.min_nk + 1);
+  const Eigen::VectorXd y_fit = level.tail(n - k0);
   double best_loss = std::numeric_limits<double>::infinity();
+  Eigen::VectorXd best_theta;
   for (int nk = options.min_nk; nk <= max_nk; ++nk) {
-    const LineFit f = FitDetrended(y_d, Detrended(IntegratedTotalFlow(q_in, q_out, nk, k0)));
-    result.loss_by_nk(nk - options.min_nk) = f.loss;
-    if (f.loss < best_loss) {
-      best_loss = f.loss;
+    const LeastSquaresSolution fit =
+        SolveLeastSquares(OpenLoopRegressors(q_in, q_out, nk, k0), y_fit);
+    const double loss = fit.residual_sum_of_squares / static_cast<double>(y_fit.size());
+    result.loss_by_nk(nk - options.min_nk) = loss;
+    if (loss < best_loss) {
+      best_loss = loss;
       result.model.nk = nk;
-      result.model.b = f.b;
+      best_theta = fit.theta;
     }
   }
   const int nk = result.model.nk;
+  result.model.b = best_theta(0);
+  result.wave_front_gain_s_per_m2 = best_theta(1);
   result.open_loop_area_m2 = sample_time_s / result.model.b;
 
   // Closed-loop detection: does the outflow follow the level?
@@ -269,25 +273,26 @@ IdFitResult FitIdModel(const Eigen::Ref<const Eigen::VectorXd>& q_in,
   const double b_iv = iv_denominator != 0.0 ? instrument_d.dot(y_d) / iv_denominator : 0.0;
   result.iv_area_m2 = b_iv != 0.0 ? sample_time_s / b_iv : 0.0;
 
-  // Regressors of the final fit: the integrated total flow, plus (closed loop) the integrated
-  // free responses of the sensitivity model, which absorb its unknown initial state.
-  Eigen::MatrixXd regressors;
+  // Open loop: the scan's regression is the fit.  Closed loop: the three-step regressors, the
+  // integrated noise-free total flow plus the integrated free responses of the sensitivity
+  // model (they absorb its unknown initial state).  The wave-front term is left out there: with
+  // a moving outflow its partner p22 q_out would be needed, and q_out follows the level itself.
+  Eigen::MatrixXd x;
   if (result.closed_loop) {
     const TotalFlowModel flow_model =
         NoiseFreeTotalFlow(Detrended(delayed_inflow), Detrended(total_flow));
-    regressors.resize(n - k0, 1 + flow_model.free_responses.cols());
-    regressors.col(0) = CumulativeSum(flow_model.flow);
-    for (Eigen::Index i = 0; i < flow_model.free_responses.cols(); ++i) {
-      regressors.col(1 + i) = CumulativeSum(flow_model.free_responses.col(i));
-    }
+    const Eigen::Index free = flow_model.free_responses.cols();
+    x.resize(n - k0, 3 + free);
+    x.col(0) = CumulativeSum(flow_model.flow);
+    for (Eigen::Index i = 0; i < free; ++i)
+      x.col(1 + i) = CumulativeSum(flow_model.free_responses.col(i));
+    x.col(1 + free).setOnes();
+    x.col(2 + free) = Eigen::VectorXd::LinSpaced(n - k0, 0.0, n - k0 - 1.0);
+    result.wave_front_gain_s_per_m2 = 0.0;
   } else {
-    regressors = CumulativeSum(total_flow);
+    x = OpenLoopRegressors(q_in, q_out, nk, k0);
   }
-  // Offset and drift through the line: [regressors, 1, k - k0] solved by QR.
-  Eigen::MatrixXd x(n - k0, regressors.cols() + 2);
-  x << regressors, Eigen::VectorXd::Ones(n - k0),
-      Eigen::VectorXd::LinSpaced(n - k0, 0.0, n - k0 - 1.0);
-  const LeastSquaresSolution fit = SolveLeastSquares(x, level.tail(n - k0));
+  const LeastSquaresSolution fit = SolveLeastSquares(x, y_fit);
   result.model.b = fit.theta(0);
   result.offset_m = fit.theta(x.cols() - 2);
   result.drift_m_per_sample = fit.theta(x.cols() - 1);

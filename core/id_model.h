@@ -28,11 +28,12 @@ struct IdFitOptions {
 /// What FitIdModel found, with the evidence for it.
 struct IdFitResult {
   IdModel model;
-  double offset_m = 0.0;            ///< c in y = b Q + c + d (k - k0)
-  double drift_m_per_sample = 0.0;  ///< d (sensor drift and flow-meter bias end up here)
-  int first_sample = 0;             ///< k0: samples before it only feed the delayed inflow
-  bool closed_loop = false;         ///< true: the three-step closed-loop method was used
-  std::string closed_loop_reason;   ///< why (option, or the correlation found by kAuto)
+  double wave_front_gain_s_per_m2 = 0.0;  ///< p21 in y = b Q + p21 q_in(k-nk) + c + d (k-k0)
+  double offset_m = 0.0;                  ///< c
+  double drift_m_per_sample = 0.0;        ///< d (sensor drift and flow-meter bias end up here)
+  int first_sample = 0;                   ///< k0: samples before it only feed the delayed inflow
+  bool closed_loop = false;               ///< true: the three-step closed-loop method was used
+  std::string closed_loop_reason;         ///< why (option, or the correlation found by kAuto)
   double outflow_level_correlation = 0.0;
   Eigen::VectorXd loss_by_nk;       ///< mean squared residual of the scan, index nk - min_nk
   double open_loop_area_m2 = 0.0;   ///< the plain fit at the chosen nk
@@ -47,13 +48,15 @@ struct IdFitResult {
 /// For each candidate nk in [min_nk, max_nk], with k0 = max_nk + 1 so every candidate uses the
 /// same samples:
 ///   v(k) = q_in(k - nk) - q_out(k - 1),   Q(k) = sum_{j=k0..k} v(j),
-///   y(k) = b Q(k) + c + d (k - k0)        (least squares; offset and linear drift)
-/// and nk minimises the residual.  With a fixed downstream gate the outflow follows the level
-/// (closed loop) and measured total flow is correlated with the noise; then the three-step
-/// method of Van den Hof & Schrama is used: (1) nk from the scan, (2) a 4th-order ARX from the
-/// delayed inflow to the total flow constrained to zero DC gain, (3) the noise-free total flow
-/// simulated through it, integrated and fitted as above.  kAuto decides from the data: closed
-/// loop when the outflow moves (std above 2 % of the inflow's) and correlates with the level
+///   y(k) = b Q(k) + p21 q_in(k - nk) + c + d (k - k0)
+/// by least squares (QR), and nk minimises the residual.  p21 is IDZ's direct gain of the inflow
+/// (the wave front arrives as a jump); c and d take the offset and a linear drift of the sensor.
+/// With a fixed downstream gate the outflow follows the level (closed loop) and measured total flow
+/// is correlated with the noise; then the three-step method of Van den Hof & Schrama is used: (1)
+/// nk from the scan, (2) a 4th-order ARX from the delayed inflow to the total flow constrained to
+/// zero DC gain, (3) the noise-free total flow simulated through it, integrated and fitted as
+/// above.  kAuto decides from the data: closed loop when the outflow moves (std above 2 % of the
+/// inflow's) and correlates with the level
 /// (|r| > 0.3, both detrended).  The instrumental variable with the integrated delayed inflow as
 /// instrument is always computed as a cross-check.
 /// @throws std::invalid_argument on size mismatch, non-finite data, Ts <= 0, fewer than 20
@@ -63,7 +66,11 @@ IdFitResult FitIdModel(const Eigen::Ref<const Eigen::VectorXd>& q_in,
                        const Eigen::Ref<const Eigen::VectorXd>& level, double sample_time_s,
                        const IdFitOptions& options = {});
 
-/// The regressor of the fit for one nk: Q(k) for k = k0..N-1 (see FitIdModel).
+/// Rows k = k0..N-1 of the open-loop regression [Q(k), q_in(k - nk), 1, k - k0] (see FitIdModel).
+Eigen::MatrixXd OpenLoopRegressors(const Eigen::Ref<const Eigen::VectorXd>& q_in,
+                                   const Eigen::Ref<const Eigen::VectorXd>& q_out, int nk, int k0);
+
+/// The integrated total flow Q(k) for k = k0..N-1 (see FitIdModel).
 Eigen::VectorXd IntegratedTotalFlow(const Eigen::Ref<const Eigen::VectorXd>& q_in,
                                     const Eigen::Ref<const Eigen::VectorXd>& q_out, int nk, int k0);
 

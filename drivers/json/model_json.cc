@@ -18,6 +18,7 @@ nlohmann::json ToJson(const core::IdFitResult& fit) {
           {"b", fit.model.b},
           {"area_m2", fit.model.area_m2()},
           {"sample_time_s", ts},
+          {"p21_s_per_m2", fit.wave_front_gain_s_per_m2},
           {"offset_m", fit.offset_m},
           {"drift_m_per_s", fit.drift_m_per_sample / ts},
           {"closed_loop", fit.closed_loop},
