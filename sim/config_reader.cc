@@ -1,0 +1,107 @@
+#include "sim/config_reader.h"
+
+#include <algorithm>
+#include <sstream>
+
+namespace canalid::sim {
+namespace {
+
+std::string Join(const std::vector<std::string>& problems) {
+  std::string all;
+  for (const std::string& p : problems) all += (all.empty() ? "" : "\n") + p;
+  return all;
+}
+
+}  // namespace
+
+ConfigError::ConfigError(std::vector<std::string> problems)
+    : std::runtime_error(Join(problems)), problems_(std::move(problems)) {}
+
+std::string KeyPath(std::string_view where, std::string_view key) {
+  return where.empty() ? std::string(key) : std::string(where) + "." + std::string(key);
+}
+
+ConfigReader::ConfigReader(const std::string& path) : path_(path) {
+  try {
+    root_ = toml::parse_file(path);
+  } catch (const toml::parse_error& e) {
+    std::ostringstream os;
+    os << path << ":" << e.source().begin.line << ":" << e.source().begin.column << ": "
+       << e.description();
+    throw ConfigError({os.str()});
+  }
+}
+
+void ConfigReader::Problem(const toml::source_region& region, const std::string& message) {
+  std::ostringstream os;
+  os << path_ << ":" << region.begin.line << ":" << region.begin.column << ": " << message;
+  problems_.push_back(os.str());
+}
+
+double ConfigReader::Number(const toml::table& table, std::string_view key, std::string_view where,
+                            std::optional<double> fallback, double lo, double hi) {
+  const toml::node* node = table.get(key);
+  if (node == nullptr) {
+    if (!fallback) Problem(table.source(), "missing key '" + KeyPath(where, key) + "'");
+    return fallback.value_or(0.0);
+  }
+  std::optional<double> value = node->value<double>();
+  if (!value || !(node->is_floating_point() || node->is_integer())) {
+    Problem(node->source(), "'" + KeyPath(where, key) + "' must be a number");
+    return fallback.value_or(0.0);
+  }
+  if (!(*value >= lo && *value <= hi)) {
+    std::ostringstream os;
+    os << "'" << KeyPath(where, key) << "' = " << *value << " is outside [" << lo << ", " << hi
+       << "]";
+    Problem(node->source(), os.str());
+  }
+  return *value;
+}
+
+std::string ConfigReader::String(const toml::table& table, std::string_view key,
+                                 std::string_view where, std::optional<std::string> fallback) {
+  const toml::node* node = table.get(key);
+  if (node == nullptr) {
+    if (!fallback) Problem(table.source(), "missing key '" + KeyPath(where, key) + "'");
+    return fallback.value_or("");
+  }
+  if (!node->is_string()) {
+    Problem(node->source(), "'" + KeyPath(where, key) + "' must be a string");
+    return fallback.value_or("");
+  }
+  return std::string(*node->value<std::string_view>());
+}
+
+std::string ConfigReader::Choice(const toml::table& table, std::string_view key,
+                                 std::string_view where, std::optional<std::string> fallback,
+                                 std::initializer_list<std::string_view> allowed) {
+  std::string value = String(table, key, where, fallback);
+  if (std::find(allowed.begin(), allowed.end(), value) == allowed.end()) {
+    std::string list;
+    for (std::string_view a : allowed)
+      list += (list.empty() ? "\"" : ", \"") + std::string(a) + "\"";
+    const toml::node* node = table.get(key);
+    Problem(node != nullptr ? node->source() : table.source(),
+            "'" + KeyPath(where, key) + "' = \"" + value + "\" must be one of " + list);
+  }
+  return value;
+}
+
+void ConfigReader::CheckKeys(const toml::table& table, std::string_view where,
+                             std::initializer_list<std::string_view> allowed) {
+  for (const auto& [key, node] : table) {
+    if (std::find(allowed.begin(), allowed.end(), key.str()) == allowed.end()) {
+      std::string list;
+      for (std::string_view a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+      Problem(node.source(),
+              "unknown key '" + KeyPath(where, key.str()) + "' (allowed: " + list + ")");
+    }
+  }
+}
+
+void ConfigReader::Finish() const {
+  if (!problems_.empty()) throw ConfigError(problems_);
+}
+
+}  // namespace canalid::sim

@@ -1,0 +1,57 @@
+#pragma once
+#include <toml++/toml.h>
+#include <initializer_list>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace canalid::sim {
+
+/// Every problem found in a configuration file, one "file:line:column: message" per entry.
+class ConfigError : public std::runtime_error {
+ public:
+  explicit ConfigError(std::vector<std::string> problems);
+  const std::vector<std::string>& problems() const { return problems_; }
+
+ private:
+  std::vector<std::string> problems_;
+};
+
+/// Reads typed values out of a parsed TOML document and collects the problems (with file, line,
+/// column and key path) instead of stopping at the first one.  Call Finish() at the end.
+class ConfigReader final {
+ public:
+  /// Parses the file.  @throws ConfigError with the parser's location on a syntax error.
+  explicit ConfigReader(const std::string& path);
+  const toml::table& root() const { return root_; }
+  const std::string& path() const { return path_; }
+
+  /// A number in [lo, hi]; a missing key yields `fallback` or, without one, a problem.
+  double Number(const toml::table& table, std::string_view key, std::string_view where,
+                std::optional<double> fallback, double lo, double hi);
+  std::string String(const toml::table& table, std::string_view key, std::string_view where,
+                     std::optional<std::string> fallback);
+  /// One of `allowed`; reports the allowed values otherwise.
+  std::string Choice(const toml::table& table, std::string_view key, std::string_view where,
+                     std::optional<std::string> fallback,
+                     std::initializer_list<std::string_view> allowed);
+  /// Unknown keys are errors (a typo must not be ignored silently).
+  void CheckKeys(const toml::table& table, std::string_view where,
+                 std::initializer_list<std::string_view> allowed);
+  void Problem(const toml::source_region& region, const std::string& message);
+  bool HasProblems() const { return !problems_.empty(); }
+  /// @throws ConfigError if any problem was recorded.
+  void Finish() const;
+
+ private:
+  std::string path_;
+  toml::table root_;
+  std::vector<std::string> problems_;
+};
+
+/// "where.key" or "key" when where is empty.
+std::string KeyPath(std::string_view where, std::string_view key);
+
+}  // namespace canalid::sim

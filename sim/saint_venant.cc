@@ -1,0 +1,295 @@
+#include "sim/saint_venant.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "core/check.h"
+#include "sim/backwater.h"
+
+namespace canalid::sim {
+namespace {
+
+// Newton stops when no depth moves more than this (m) and no flow more than kFlowTol (m^3/s);
+// both are far below anything a sensor can see and keep the mass error at round-off level.
+constexpr double kDepthTol = 1e-10;
+constexpr double kFlowTol = 1e-9;
+constexpr int kMaxIterations = 30;
+// Levels below which a tailwater does not influence a structure (free outfall).
+constexpr double kFreeOutfall = -1e3;
+// Step for the numerical derivatives of structure and offtake laws (m).
+constexpr double kDiffStep = 1e-7;
+
+}  // namespace
+
+SaintVenantCanal::SaintVenantCanal(const Canal& canal) : canal_(canal) {
+  ValidateCanal(canal_);
+  const int pools = num_pools();
+  offset_.assign(pools + 1, 0);
+  for (int p = 0; p < pools; ++p) {
+    const Pool& pool = canal_.pools[p];
+    sections_.emplace_back(pool.bottom_width_m, pool.side_slope, pool.manning_n);
+    const int cells = static_cast<int>(std::ceil(pool.length_m / canal_.max_dx_m - 1e-9));
+    dx_.push_back(pool.length_m / std::max(cells, 1));
+    offset_[p + 1] = offset_[p] + std::max(cells, 1) + 1;
+    structure_setting_.push_back(pool.structure.setting);
+    offtake_setting_.push_back(pool.offtake.setting);
+  }
+  const int n = 2 * offset_[pools];
+  x_.setZero(n);
+  residual_.setZero(n);
+  delta_.setZero(n);
+  jacobian_.resize(n, n);
+  BuildSteadyState();
+  old_x_ = x_;
+  initial_volume_m3_ = Volume();
+}
+
+double SaintVenantCanal::TailLevel(int pool) const {
+  const double tail = canal_.pools[pool].structure.tailwater_m;
+  return tail < 0.0 ? kFreeOutfall : tail;
+}
+
+void SaintVenantCanal::BuildSteadyState() {
+  const int pools = num_pools();
+  double flow = canal_.upstream.flow_m3s;
+  std::vector<double> pool_flow(pools);
+  for (int p = 0; p < pools; ++p) {
+    pool_flow[p] = flow;
+    const Pool& pool = canal_.pools[p];
+    flow -= sim::OfftakeFlow(pool.offtake, offtake_setting_[p], pool.target_depth_m);
+    if (flow < 0.0) {
+      std::ostringstream os;
+      os << "pool " << pool.name << ": offtakes take more than the inflow "
+         << canal_.upstream.flow_m3s << " m3/s at the steady state";
+      throw std::invalid_argument(os.str());
+    }
+  }
+  for (int p = 0; p < pools; ++p) {
+    const std::vector<double> depth = SteadyProfile(canal_.pools[p], pool_flow[p], num_nodes(p) - 1,
+                                                    canal_.pools[p].target_depth_m);
+    for (int i = 0; i < num_nodes(p); ++i) {
+      x_[2 * (offset_[p] + i)] = depth[i];
+      x_[2 * (offset_[p] + i) + 1] = pool_flow[p];
+    }
+  }
+  for (int p = 0; p < pools; ++p) {
+    const Pool& pool = canal_.pools[p];
+    const double through = p + 1 < pools
+                               ? pool_flow[p + 1]
+                               : pool_flow[p] - sim::OfftakeFlow(pool.offtake, offtake_setting_[p],
+                                                                 pool.target_depth_m);
+    const double down = p + 1 < pools ? UpstreamDepth(p + 1) - pool.structure.drop_m : TailLevel(p);
+    if (pool.structure.setting_from_steady_state) {
+      try {
+        structure_setting_[p] =
+            SteadyStructureSetting(pool.structure, through, DownstreamDepth(p), down);
+      } catch (const std::invalid_argument& e) {
+        throw std::invalid_argument("pool " + pool.name + " structure: " + e.what());
+      }
+    }
+  }
+  upstream_value_ = canal_.upstream.type == UpstreamBoundary::Type::kFlow ? canal_.upstream.flow_m3s
+                                                                          : UpstreamDepth(0);
+}
+
+double SaintVenantCanal::StructureFlow(int pool) const {
+  if (pool + 1 < num_pools()) return PoolInflow(pool + 1);
+  return PoolOutflow(pool) - OfftakeFlow(pool);
+}
+
+double SaintVenantCanal::OfftakeFlow(int pool) const {
+  return sim::OfftakeFlow(canal_.pools[pool].offtake, offtake_setting_[pool],
+                          DownstreamDepth(pool));
+}
+
+double SaintVenantCanal::PoolVolume(int pool) const {
+  const TrapezoidSection& s = sections_[pool];
+  double sum = 0.0;
+  const int n = num_nodes(pool);
+  for (int i = 0; i < n; ++i) {
+    const double a = s.Area(depth_m(pool, i));
+    sum += (i == 0 || i == n - 1) ? 0.5 * a : a;
+  }
+  return sum * dx_[pool];
+}
+
+double SaintVenantCanal::Volume() const {
+  double v = 0.0;
+  for (int p = 0; p < num_pools(); ++p) v += PoolVolume(p);
+  return v;
+}
+
+void SaintVenantCanal::Add(int row, int col, double value) {
+  if (recording_) {
+    triplets_.emplace_back(row, col, value);
+    return;
+  }
+  jacobian_.valuePtr()[slots_[add_count_++]] = value;
+}
+
+void SaintVenantCanal::Assemble(const Eigen::VectorXd& old_x, double dt_s) {
+  const double theta = canal_.theta;
+  const double g = kGravity;
+  add_count_ = 0;
+  int row = 0;
+  // Upstream boundary.
+  if (canal_.upstream.type == UpstreamBoundary::Type::kFlow) {
+    residual_[row] = x_[1] - upstream_value_;
+    Add(row, 1, 1.0);
+  } else {
+    residual_[row] = x_[0] - upstream_value_;
+    Add(row, 0, 1.0);
+  }
+  ++row;
+  const int pools = num_pools();
+  for (int p = 0; p < pools; ++p) {
+    const TrapezoidSection& s = sections_[p];
+    const double dx = dx_[p];
+    const double slope = canal_.pools[p].bed_slope;
+    for (int j = offset_[p]; j + 1 < offset_[p + 1]; ++j) {
+      const int hl = 2 * j, ql = hl + 1, hr = hl + 2, qr = hl + 3;
+      const double hl1 = x_[hl], ql1 = x_[ql], hr1 = x_[hr], qr1 = x_[qr];
+      const double hl0 = old_x[hl], ql0 = old_x[ql], hr0 = old_x[hr], qr0 = old_x[qr];
+      const double al1 = s.Area(hl1), ar1 = s.Area(hr1), al0 = s.Area(hl0), ar0 = s.Area(hr0);
+      const double tl1 = s.TopWidth(hl1), tr1 = s.TopWidth(hr1);
+      // Continuity.
+      residual_[row] = (al1 + ar1 - al0 - ar0) / (2.0 * dt_s) +
+                       (theta * (qr1 - ql1) + (1.0 - theta) * (qr0 - ql0)) / dx;
+      Add(row, hl, tl1 / (2.0 * dt_s));
+      Add(row, ql, -theta / dx);
+      Add(row, hr, tr1 / (2.0 * dt_s));
+      Add(row, qr, theta / dx);
+      ++row;
+      // Momentum; z differences include the bed: z_r - z_l = h_r - h_l - S0 dx.
+      double gl1, gl1h, gl1q, gr1, gr1h, gr1q, gl0, gl0h, gl0q, gr0, gr0h, gr0q;
+      s.Friction(hl1, ql1, &gl1, &gl1h, &gl1q);
+      s.Friction(hr1, qr1, &gr1, &gr1h, &gr1q);
+      s.Friction(hl0, ql0, &gl0, &gl0h, &gl0q);
+      s.Friction(hr0, qr0, &gr0, &gr0h, &gr0q);
+      const double fl1 = ql1 * ql1 / al1, fr1 = qr1 * qr1 / ar1;
+      const double fl0 = ql0 * ql0 / al0, fr0 = qr0 * qr0 / ar0;
+      const double abar = 0.5 * theta * (al1 + ar1) + 0.5 * (1.0 - theta) * (al0 + ar0);
+      const double dz = theta * (hr1 - hl1) + (1.0 - theta) * (hr0 - hl0) - slope * dx;
+      residual_[row] = (ql1 + qr1 - ql0 - qr0) / (2.0 * dt_s) +
+                       (theta * (fr1 - fl1) + (1.0 - theta) * (fr0 - fl0)) / dx +
+                       g * abar * dz / dx +
+                       0.5 * g * (theta * (gl1 + gr1) + (1.0 - theta) * (gl0 + gr0));
+      const double dfl_dh = -fl1 * tl1 / al1, dfr_dh = -fr1 * tr1 / ar1;
+      Add(row, hl,
+          -theta * dfl_dh / dx + 0.5 * g * theta * tl1 * dz / dx - g * abar * theta / dx +
+              0.5 * g * theta * gl1h);
+      Add(row, ql, 1.0 / (2.0 * dt_s) - theta * 2.0 * ql1 / al1 / dx + 0.5 * g * theta * gl1q);
+      Add(row, hr,
+          theta * dfr_dh / dx + 0.5 * g * theta * tr1 * dz / dx + g * abar * theta / dx +
+              0.5 * g * theta * gr1h);
+      Add(row, qr, 1.0 / (2.0 * dt_s) + theta * 2.0 * qr1 / ar1 / dx + 0.5 * g * theta * gr1q);
+      ++row;
+    }
+    // Downstream end of the pool: offtake and structure.
+    const Pool& pool = canal_.pools[p];
+    const int a = offset_[p + 1] - 1;
+    const int ha = 2 * a, qa = ha + 1;
+    const double h = x_[ha];
+    const double off = sim::OfftakeFlow(pool.offtake, offtake_setting_[p], h);
+    const double off_h = (sim::OfftakeFlow(pool.offtake, offtake_setting_[p], h + kDiffStep) -
+                          sim::OfftakeFlow(pool.offtake, offtake_setting_[p], h - kDiffStep)) /
+                         (2.0 * kDiffStep);
+    const Structure& st = pool.structure;
+    const double setting = structure_setting_[p];
+    if (p + 1 < pools) {
+      const int hb = ha + 2, qb = ha + 3;
+      const double down = x_[hb] - st.drop_m;
+      residual_[row] = x_[qa] - off - x_[qb];
+      Add(row, ha, -off_h);
+      Add(row, qa, 1.0);
+      Add(row, qb, -1.0);
+      ++row;
+      const double f = sim::StructureFlow(st, setting, h, down);
+      const double f_up = (sim::StructureFlow(st, setting, h + kDiffStep, down) -
+                           sim::StructureFlow(st, setting, h - kDiffStep, down)) /
+                          (2.0 * kDiffStep);
+      const double f_dn = (sim::StructureFlow(st, setting, h, down + kDiffStep) -
+                           sim::StructureFlow(st, setting, h, down - kDiffStep)) /
+                          (2.0 * kDiffStep);
+      residual_[row] = x_[qb] - f;
+      Add(row, ha, -f_up);
+      Add(row, hb, -f_dn);
+      Add(row, qb, 1.0);
+      ++row;
+    } else {
+      const double tail = TailLevel(p);
+      const double f = sim::StructureFlow(st, setting, h, tail);
+      const double f_up = (sim::StructureFlow(st, setting, h + kDiffStep, tail) -
+                           sim::StructureFlow(st, setting, h - kDiffStep, tail)) /
+                          (2.0 * kDiffStep);
+      residual_[row] = x_[qa] - off - f;
+      Add(row, ha, -off_h - f_up);
+      Add(row, qa, 1.0);
+      ++row;
+    }
+  }
+  CANALID_DEMAND(row == residual_.size(), "one equation per unknown");
+}
+
+void SaintVenantCanal::Step(double dt_s) {
+  if (!(dt_s > 0.0)) {
+    throw std::invalid_argument("SaintVenantCanal::Step: dt_s " + std::to_string(dt_s) +
+                                " must be > 0");
+  }
+  old_x_ = x_;
+  double off_old = 0.0;
+  for (int p = 0; p < num_pools(); ++p) off_old += OfftakeFlow(p);
+  const double in_old = PoolInflow(0);
+  const double out_old = StructureFlow(num_pools() - 1);
+  bool converged = false;
+  int it = 0;
+  for (; it < kMaxIterations && !converged; ++it) {
+    Assemble(old_x_, dt_s);
+    if (recording_) {
+      jacobian_.setFromTriplets(triplets_.begin(), triplets_.end());
+      jacobian_.makeCompressed();
+      // Remember where each coefficient lives so later assemblies write values in place.
+      slots_.resize(triplets_.size());
+      for (std::size_t k = 0; k < triplets_.size(); ++k) {
+        const double* base = jacobian_.valuePtr();
+        slots_[k] =
+            static_cast<int>(&jacobian_.coeffRef(triplets_[k].row(), triplets_[k].col()) - base);
+      }
+      lu_.analyzePattern(jacobian_);
+      recording_ = false;
+    }
+    lu_.factorize(jacobian_);
+    if (lu_.info() != Eigen::Success) break;
+    delta_ = lu_.solve(-residual_);
+    converged = true;
+    for (Eigen::Index k = 0; k < delta_.size(); k += 2) {
+      if (std::abs(delta_[k]) > kDepthTol || std::abs(delta_[k + 1]) > kFlowTol) {
+        converged = false;
+      }
+    }
+    x_ += delta_;
+    for (Eigen::Index k = 0; k < x_.size(); k += 2) x_[k] = std::max(x_[k], 1e-4);
+  }
+  last_iterations_ = it;
+  if (!converged || !x_.allFinite()) {
+    std::ostringstream os;
+    os << "SaintVenantCanal: Newton did not converge in " << kMaxIterations
+       << " iterations at t = " << time_s_ + dt_s << " s (dt " << dt_s << " s)";
+    throw std::runtime_error(os.str());
+  }
+  time_s_ += dt_s;
+  double off_new = 0.0;
+  for (int p = 0; p < num_pools(); ++p) off_new += OfftakeFlow(p);
+  mass_.inflow_volume_m3 += 0.5 * dt_s * (in_old + PoolInflow(0));
+  mass_.offtake_volume_m3 += 0.5 * dt_s * (off_old + off_new);
+  mass_.outflow_volume_m3 += 0.5 * dt_s * (out_old + StructureFlow(num_pools() - 1));
+  mass_.volume_change_m3 = Volume() - initial_volume_m3_;
+  mass_.error_m3 = mass_.volume_change_m3 -
+                   (mass_.inflow_volume_m3 - mass_.offtake_volume_m3 - mass_.outflow_volume_m3);
+  mass_.relative_error =
+      mass_.inflow_volume_m3 > 0.0 ? std::abs(mass_.error_m3) / mass_.inflow_volume_m3 : 0.0;
+}
+
+}  // namespace canalid::sim

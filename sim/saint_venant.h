@@ -1,0 +1,103 @@
+#pragma once
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <Eigen/SparseLU>
+#include <vector>
+
+#include "sim/canal.h"
+#include "sim/hydraulics.h"
+
+namespace canalid::sim {
+
+/// Volume accounting since construction (m^3).  `error_m3` = volume change - net boundary volume,
+/// where the boundary flows (upstream inflow, offtakes, outflow of the last pool) are integrated
+/// with the trapezoidal rule over each time step.
+struct MassBalance {
+  double volume_change_m3 = 0.0;
+  double inflow_volume_m3 = 0.0;
+  double offtake_volume_m3 = 0.0;
+  double outflow_volume_m3 = 0.0;
+  double error_m3 = 0.0;
+  /// |error| / inflow volume (0 if no inflow yet).
+  double relative_error = 0.0;
+};
+
+/// Unsteady open-channel flow in a chain of pools: the 1-D Saint-Venant equations
+///   dA/dt + dQ/dx = 0,   dQ/dt + d(Q^2/A)/dx + g A dz/dx + g A Sf = 0,   Sf = n^2 Q|Q|/(A^2 R^4/3)
+/// with z the water surface elevation, discretised with the Preissmann four-point box scheme
+/// (space weight 1/2, time weight theta) and solved at each step by Newton iterations on all the
+/// depths and flows at once; the sparse (banded) Jacobian is factorised with Eigen::SparseLU.
+/// The structure between two pools adds two algebraic equations (flow continuity with the
+/// offtake, structure law); the upstream end takes a flow or a level, the downstream end of the
+/// last pool its structure law against the tailwater.
+/// Construction starts from the steady state for `canal.upstream.flow_m3s` and the pools'
+/// target depths (SteadyProfile), with the structure settings that hold it where asked.
+/// Not thread-safe.  Allocates only in the constructor.
+class SaintVenantCanal final {
+ public:
+  /// @throws std::invalid_argument (ValidateCanal, SteadyStructureSetting) or
+  /// std::runtime_error (no steady profile).
+  explicit SaintVenantCanal(const Canal& canal);
+
+  /// Advances by dt_s with the inputs set now taken as the values at the end of the step.
+  /// @throws std::runtime_error if Newton does not converge (the message gives the time).
+  void Step(double dt_s);
+
+  /// Inflow (m^3/s) or reservoir depth (m), according to canal().upstream.type.
+  void SetUpstream(double value) { upstream_value_ = value; }
+  double upstream() const { return upstream_value_; }
+  void SetStructureSetting(int pool, double setting) { structure_setting_.at(pool) = setting; }
+  double structure_setting(int pool) const { return structure_setting_.at(pool); }
+  void SetOfftakeSetting(int pool, double setting) { offtake_setting_.at(pool) = setting; }
+  double offtake_setting(int pool) const { return offtake_setting_.at(pool); }
+
+  const Canal& canal() const { return canal_; }
+  double time_s() const { return time_s_; }
+  int num_pools() const { return static_cast<int>(canal_.pools.size()); }
+  int num_nodes(int pool) const { return offset_.at(pool + 1) - offset_.at(pool); }
+  double dx_m(int pool) const { return dx_.at(pool); }
+  double depth_m(int pool, int node) const { return x_[2 * (offset_[pool] + node)]; }
+  double flow_m3s(int pool, int node) const { return x_[2 * (offset_[pool] + node) + 1]; }
+  double PoolInflow(int pool) const { return flow_m3s(pool, 0); }
+  /// Flow leaving the pool at its downstream end (structure flow plus offtake).
+  double PoolOutflow(int pool) const { return flow_m3s(pool, num_nodes(pool) - 1); }
+  double UpstreamDepth(int pool) const { return depth_m(pool, 0); }
+  double DownstreamDepth(int pool) const { return depth_m(pool, num_nodes(pool) - 1); }
+  double StructureFlow(int pool) const;
+  double OfftakeFlow(int pool) const;
+  /// Water volume of a pool (m^3), trapezoidal rule over the nodes.
+  double PoolVolume(int pool) const;
+  double Volume() const;
+  const MassBalance& mass_balance() const { return mass_; }
+  int last_iterations() const { return last_iterations_; }
+
+ private:
+  void BuildSteadyState();
+  void Assemble(const Eigen::VectorXd& old_x, double dt_s);
+  void Add(int row, int col, double value);
+  double TailLevel(int pool) const;
+
+  Canal canal_;
+  std::vector<TrapezoidSection> sections_;
+  std::vector<int> offset_;  // first node of each pool, plus the total at the end
+  std::vector<double> dx_;
+  std::vector<double> structure_setting_;
+  std::vector<double> offtake_setting_;
+  double upstream_value_ = 0.0;
+  double time_s_ = 0.0;
+  Eigen::VectorXd x_;  // depth and flow interleaved: h0, Q0, h1, Q1, ...
+  Eigen::VectorXd old_x_;
+  Eigen::VectorXd residual_;
+  Eigen::VectorXd delta_;
+  Eigen::SparseMatrix<double> jacobian_;
+  Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>> lu_;
+  std::vector<Eigen::Triplet<double>> triplets_;
+  std::vector<int> slots_;  // value index of each Add call, recorded at the first assembly
+  bool recording_ = true;
+  int add_count_ = 0;
+  int last_iterations_ = 0;
+  double initial_volume_m3_ = 0.0;
+  MassBalance mass_;
+};
+
+}  // namespace canalid::sim
