@@ -40,8 +40,9 @@ struct ArxModel {
   /// equations used.
   double loss = 0.0;
   double noise_variance = 0.0;  ///< sigma^2 = SSR / (N - d)
-  /// Akaike's criterion in its normalised form log(V) + 2 d / N (MATLAB `aic(sys,'nAIC')`, and
-  /// what `aic` returned before R2016a); N log(V) + 2 d is N times this.
+  /// Akaike's criterion, normalised form: log(V) + 2 d / N (d parameters, N equations), which
+  /// is MATLAB's default `aic(sys)` = `aic(sys,'nAIC')` = sys.Report.Fit.nAIC.  MATLAB's raw
+  /// `aic(sys,'aic')` is N log(V) + 2 d + N (log(2 pi) + 1) for one output.
   double aic = 0.0;
   double fpe = 0.0;               ///< Akaike's final prediction error V (1 + d/N) / (1 - d/N)
   Eigen::Index first_sample = 0;  ///< 0-based index of the first equation (time t)
@@ -53,9 +54,9 @@ struct ArxModel {
 /// u_i(t-nk_i)..u_i(t-nk_i-nb_i+1) for each input]) for t = first_sample..N-1 and solves
 /// min ||Y - Phi theta|| with a column-pivoting Householder QR.  No demeaning: detrend first.
 /// @param y  output, N samples.  @param u  N x m inputs (one column per input).
-/// @param first_sample  first equation index; -1 uses orders.min_first_sample() (MATLAB's
-///        window).  A later start lets several models share one data window (delay scans,
-///        comparisons with Octave).
+/// @param first_sample  first equation index; -1 uses orders.min_first_sample(), the first sample
+///        whose regressors all exist in the record (no zero padding).  A later start lets several
+///        models share one data window (delay scans, comparisons with Octave).
 /// @throws std::invalid_argument on bad orders or sizes, first_sample < min_first_sample(), fewer
 ///         equations than parameters, non-finite data, or a rank-deficient regressor (the message
 ///         names the rank: the input is not persistently exciting for these orders).

@@ -6,8 +6,10 @@
 
 namespace canalid::core {
 
-/// Settings of the ARX delay scan (MATLAB `delayest`): orders of every input as in FitArx; the
-/// nk of the scanned input is ignored and replaced by each candidate in [min_nk, max_nk].
+/// Settings of the ARX delay scan (MATLAB `delayest`, defaults na = nb = 2, nk 0..20): orders of
+/// every input as in FitArx; the nk of the scanned input is ignored and replaced by each
+/// candidate in [min_nk, max_nk].  Unlike delayest, which searches all inputs' delays jointly,
+/// one input is scanned and the others keep their given nk (e.g. the outflow with nk = 1).
 struct ArxDelayScanOptions {
   ArxOrders orders{2, {2}, {0}};  ///< default na = 2, nb = 2 (use na = nb = 4 for 4th order)
   int input = 0;                  ///< column of u whose delay is scanned

@@ -13,9 +13,9 @@
 ##  * no demeaning or detrending.
 ##  * 'nk' > 0 is applied by nkshift (drops the first nk samples of y and the last nk of u), then
 ##    the equations run over t = max(na, max(nb)) + 1 .. N of the shifted data.  In the original
-##    indexing (1-based) the first equation is t = max(na, max(nb)) + nk_octave + 1, whereas
-##    MATLAB starts at max(na, max(nb) + nk - 1) + 1.  They differ when na > max(nb) and
-##    nk_octave > 0; the C++ test passes this first_sample to FitArx so both solve the same
+##    indexing (1-based) the first equation is t = max(na, max(nb)) + nk_octave + 1, whereas the
+##    first sample whose regressors all exist (canalid's default) is max(na, max(nb) + nk - 1) + 1.
+##    They differ when na > max(nb) and nk_octave > 0; the C++ test passes this first_sample to FitArx so both solve the same
 ##    least-squares problem.
 ##  * the estimate is solved as Octave's "square-root algorithm": QR of [Phi, Y], then an SVD
 ##    solve of R1 theta = R2.

@@ -2,7 +2,8 @@
 // tests/data/octave/arx_expected.csv were produced by scripts/octave/arx_reference.m from
 // tests/data/octave/arx_input.csv (made by scripts/octave/make_arx_input.m); CI does not need
 // Octave.  That script documents Octave's conventions: its 'nk' is MATLAB's nk - 1, it does not
-// demean, and with nk > 1 its first equation can be later than MATLAB's, which is why the
+// demean, and with nk > 1 its first equation can be later than canalid's default (the first
+// sample whose regressors all exist), which is why the
 // expected file carries the first_sample Octave used.
 #include <gtest/gtest.h>
 
@@ -94,8 +95,8 @@ TEST_F(ArxOctave, CoefficientsAgreeToOnePartPerMillion) {
 }
 
 TEST_F(ArxOctave, OctaveStartsLaterThanMatlabWhenNaExceedsNbAndNkIsAboveOne) {
-  // Case 2 is na=4, nb=[2 2], nk=3: MATLAB's window starts at max(4, 2+3-1) = 4, Octave's at
-  // max(4, 2) + (3-1) = 6.  The default (MATLAB) window therefore gives a different estimate;
+  // Case 2 is na=4, nb=[2 2], nk=3: canalid's default window starts at max(4, 2+3-1) = 4,
+  // Octave's at max(4, 2) + (3-1) = 6.  The default window therefore gives a different estimate;
   // this test pins that the first_sample in the expected file is needed, not a fudge factor.
   const OctaveCase& c = cases_.at(2);
   ASSERT_EQ(c.orders.min_first_sample(), 4);

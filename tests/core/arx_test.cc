@@ -67,7 +67,7 @@ TEST(Arx, RecoversExactCoefficientsFromNoiseFreeTwoInputData) {
   ASSERT_EQ(m.b.size(), 2U);
   EXPECT_NEAR(m.b[0](0), 1.0, 1e-9);
   EXPECT_NEAR(m.b[1](2), 0.1, 1e-9);
-  // MATLAB's window: max(na, nb + nk - 1) = max(2, 2, 5) = 5.
+  // First sample with every regressor: max(na, nb + nk - 1) = max(2, 2, 5) = 5.
   EXPECT_EQ(m.first_sample, 5);
   EXPECT_EQ(m.num_samples, 495);
   EXPECT_LT(m.loss, 1e-20);
