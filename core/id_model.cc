@@ -138,6 +138,21 @@ TotalFlowModel NoiseFreeTotalFlow(const Eigen::VectorXd& delayed_inflow_d,
   return {best->Simulate(), best->FreeResponses()};
 }
 
+// Least squares on [Q, q_in(k-nk), 1, k] with the wave-front gain p21 >= 0 (a jump *up* when the
+// inflow rises).  Without the sign constraint, (nk - 1, p21 = -b) reproduces (nk, p21 = 0)
+// exactly, so the delay would be ambiguous by one sample.  One inequality: the optimum is the
+// unconstrained one, or the fit with the column removed.
+LeastSquaresSolution FitWaveFrontNonNegative(const Eigen::MatrixXd& x, const Eigen::VectorXd& y) {
+  LeastSquaresSolution fit = SolveLeastSquares(x, y);
+  if (fit.theta(1) >= 0.0) return fit;
+  Eigen::MatrixXd reduced(x.rows(), 3);
+  reduced << x.col(0), x.col(2), x.col(3);
+  const LeastSquaresSolution constrained = SolveLeastSquares(reduced, y);
+  fit.theta << constrained.theta(0), 0.0, constrained.theta(1), constrained.theta(2);
+  fit.residual_sum_of_squares = constrained.residual_sum_of_squares;
+  return fit;
+}
+
 Eigen::VectorXd CumulativeSum(const Eigen::VectorXd& v) {
   Eigen::VectorXd s(v.size());
   double total = 0.0;
@@ -224,7 +239,7 @@ IdFitResult FitIdModel(const Eigen::Ref<const Eigen::VectorXd>& q_in,
   Eigen::VectorXd best_theta;
   for (int nk = options.min_nk; nk <= max_nk; ++nk) {
     const LeastSquaresSolution fit =
-        SolveLeastSquares(OpenLoopRegressors(q_in, q_out, nk, k0), y_fit);
+        FitWaveFrontNonNegative(OpenLoopRegressors(q_in, q_out, nk, k0), y_fit);
     const double loss = fit.residual_sum_of_squares / static_cast<double>(y_fit.size());
     result.loss_by_nk(nk - options.min_nk) = loss;
     if (loss < best_loss) {
@@ -292,7 +307,8 @@ IdFitResult FitIdModel(const Eigen::Ref<const Eigen::VectorXd>& q_in,
   } else {
     x = OpenLoopRegressors(q_in, q_out, nk, k0);
   }
-  const LeastSquaresSolution fit = SolveLeastSquares(x, y_fit);
+  const LeastSquaresSolution fit =
+      result.closed_loop ? SolveLeastSquares(x, y_fit) : FitWaveFrontNonNegative(x, y_fit);
   result.model.b = fit.theta(0);
   result.offset_m = fit.theta(x.cols() - 2);
   result.drift_m_per_sample = fit.theta(x.cols() - 1);
