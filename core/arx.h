@@ -42,7 +42,8 @@ struct ArxModel {
   double noise_variance = 0.0;  ///< sigma^2 = SSR / (N - d)
   /// Akaike's criterion, normalised form: log(V) + 2 d / N (d parameters, N equations), which
   /// is MATLAB's default `aic(sys)` = `aic(sys,'nAIC')` = sys.Report.Fit.nAIC.  MATLAB's raw
-  /// `aic(sys,'aic')` is N log(V) + 2 d + N (log(2 pi) + 1) for one output.
+  /// `aic(sys,'aic')` is N log(V) + 2 d + N (log(2 pi) + 1) for one output.  -infinity when the
+  /// fit is exact (V = 0, noise-free data): check before writing it to JSON.
   double aic = 0.0;
   double fpe = 0.0;               ///< Akaike's final prediction error V (1 + d/N) / (1 - d/N)
   Eigen::Index first_sample = 0;  ///< 0-based index of the first equation (time t)
