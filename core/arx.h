@@ -6,8 +6,7 @@ namespace canalid::core {
 
 /// Orders of a multi-input ARX model in MATLAB's convention:
 ///   y(t) + a_1 y(t-1) + ... + a_na y(t-na)
-///        = sum_i [ b_i1 u_i(t-nk_i) + b_i2 u_i(t-nk_i-1) + ... + b_i,nb_i u_i(t-nk_i-nb_i+1) ] +
-///        e(t)
+///     = sum_i [b_i1 u_i(t-nk_i) + ... + b_i,nb_i u_i(t-nk_i-nb_i+1)] + e(t)
 /// so `na=2 nb=2 nk=1` is y(t) + a1 y(t-1) + a2 y(t-2) = b1 u(t-1) + b2 u(t-2).
 /// nk_i = 0 is direct feedthrough; nb_i = 0 leaves input i out of the model.  A constant input
 /// column (all ones, nb=1, nk=0) estimates an offset.
