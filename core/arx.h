@@ -6,8 +6,7 @@ namespace canalid::core {
 
 /// Orders of a multi-input ARX model in MATLAB's convention:
 ///   y(t) + a_1 y(t-1) + ... + a_na y(t-na)
-///        = sum_i [ b_i1 u_i(t-nk_i) + b_i2 u_i(t-nk_i-1) + ... + b_i,nb_i u_i(t-nk_i-nb_i+1) ] +
-///        e(t)
+///     = sum_i [b_i1 u_i(t-nk_i) + ... + b_i,nb_i u_i(t-nk_i-nb_i+1)] + e(t)
 /// so `na=2 nb=2 nk=1` is y(t) + a1 y(t-1) + a2 y(t-2) = b1 u(t-1) + b2 u(t-2).
 /// nk_i = 0 is direct feedthrough; nb_i = 0 leaves input i out of the model.  A constant input
 /// column (all ones, nb=1, nk=0) estimates an offset.
@@ -42,7 +41,8 @@ struct ArxModel {
   double noise_variance = 0.0;  ///< sigma^2 = SSR / (N - d)
   /// Akaike's criterion, normalised form: log(V) + 2 d / N (d parameters, N equations), which
   /// is MATLAB's default `aic(sys)` = `aic(sys,'nAIC')` = sys.Report.Fit.nAIC.  MATLAB's raw
-  /// `aic(sys,'aic')` is N log(V) + 2 d + N (log(2 pi) + 1) for one output.
+  /// `aic(sys,'aic')` is N log(V) + 2 d + N (log(2 pi) + 1) for one output.  -infinity when the
+  /// fit is exact (V = 0, noise-free data): check before writing it to JSON.
   double aic = 0.0;
   double fpe = 0.0;               ///< Akaike's final prediction error V (1 + d/N) / (1 - d/N)
   Eigen::Index first_sample = 0;  ///< 0-based index of the first equation (time t)

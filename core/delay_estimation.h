@@ -78,7 +78,9 @@ struct CorrelationDelayEstimate {
 /// normalised cross-correlation r(k) of the filtered input and output (CrossCorrelation).  With a
 /// white filtered input r(k) is proportional to the impulse response g(k) of the plant, so the
 /// delay is the first lag where r is significant, i.e. |r(k)| > z(confidence)/sqrt(N).
-/// Use detrended data.
+/// Use detrended data.  For an integrating pool pass the level increments y(t) - y(t-1) as y:
+/// the level itself wanders like a random walk and its correlation with the input is diluted
+/// (the increments' impulse response is b at lag nk and 0 before).
 /// @throws std::invalid_argument on bad options, mismatched sizes or too short a record.
 CorrelationDelayEstimate EstimateDelayByCorrelation(const Eigen::Ref<const Eigen::VectorXd>& y,
                                                     const Eigen::Ref<const Eigen::VectorXd>& u,

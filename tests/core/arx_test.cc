@@ -158,6 +158,28 @@ TEST(Arx, SimulationReproducesNoiseFreeDataAndPredictionGivesTheResiduals) {
   EXPECT_LT(rms, 0.1);
 }
 
+TEST(Arx, StaticFitOnAnIntegratedInputWithOffset) {
+  // The ID-model fit of the domain brief: level = b * sum(q_tot) + c, as ARX with na = 0, one
+  // input (the integrated flow, nb = 1, nk = 0) and a constant input for the offset.
+  const int n = 200;
+  Eigen::MatrixXd u(n, 2);
+  double sum = 0.0;
+  for (int t = 0; t < n; ++t) {
+    sum += std::sin(0.05 * t) + 0.3;
+    u(t, 0) = sum;
+    u(t, 1) = 1.0;
+  }
+  const Eigen::VectorXd y = (0.012 * u.col(0)).array() + 1.85;
+  ArxOrders o;
+  o.na = 0;
+  o.nb = {1, 1};
+  o.nk = {0, 0};
+  const ArxModel m = FitArx(y, u, o);
+  EXPECT_EQ(m.first_sample, 0);
+  EXPECT_NEAR(m.b[0](0), 0.012, 1e-12);
+  EXPECT_NEAR(m.b[1](0), 1.85, 1e-10);
+}
+
 TEST(Arx, LaterFirstSampleUsesFewerEquations) {
   const Data d = Generate(400, 0.01, 8);
   const ArxModel m = FitArx(d.y, d.u, TruthOrders(), 20);

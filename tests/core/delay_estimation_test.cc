@@ -159,6 +159,44 @@ TEST(DelayEstimation, CorrelationAndScanAgreeOnThePoolRecord) {
   EXPECT_EQ(ScanArxDelay(r.y, r.u, TwoInputScan(0, 60)).best_nk, 23);
 }
 
+TEST(DelayEstimation, IntegratorDelayPool) {
+  // ID model (domain brief section 2): y(k) - y(k-1) = b (q_in(k-nk) - q_out(k-1)), b = Ts/A with
+  // Ts = 60 s and A = 5000 m2, PRBS inflow of +-0.1 m3/s (clock 8 samples: +-1.2 mm per sample),
+  // random outflow changes, 1 mm level noise, nk = 14.  (With A = 20000 m2 and 3 mm noise the
+  // per-sample signal is 0.07 of the noise on the increments and neither method is reliable on
+  // 3000 samples.)
+  const int n = 3000;
+  const int nk = 14;
+  const double b = 60.0 / 5000.0;
+  PrbsSignalSpec spec;
+  spec.nominal = 0.0;
+  spec.amplitude = 0.1;
+  spec.clock_period_samples = 8;
+  spec.order = 9;
+  const Eigen::VectorXd q_in = GeneratePrbs(spec, n);
+  std::mt19937_64 rng(8);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  Eigen::VectorXd q_out = Eigen::VectorXd::Zero(n);
+  for (int k = 1; k < n; ++k) q_out(k) = 0.95 * q_out(k - 1) + 0.01 * normal(rng);
+  Eigen::VectorXd level = Eigen::VectorXd::Zero(n);
+  for (int k = 1; k < n; ++k) {
+    level(k) = level(k - 1) + b * ((k >= nk ? q_in(k - nk) : 0.0) - q_out(k - 1));
+  }
+  Eigen::VectorXd y = level;
+  for (int k = 0; k < n; ++k) y(k) += 0.001 * normal(rng);
+  Eigen::MatrixXd u(n, 2);
+  u << q_in, q_out;
+  EXPECT_EQ(ScanArxDelay(y, u, TwoInputScan(0, 40)).refined_nk, nk);
+  // Correlation on the level increments (see the header); dy(j) = y(j+1) - y(j) belongs to time
+  // j + 1, so it is paired with q_in from time 1 on.
+  const Eigen::VectorXd dy = y.tail(n - 1) - y.head(n - 1);
+  CorrelationDelayOptions options;
+  options.max_lag = 40;
+  const CorrelationDelayEstimate c = EstimateDelayByCorrelation(dy, q_in.tail(n - 1), options);
+  EXPECT_EQ(c.first_significant_lag, nk);
+  EXPECT_EQ(c.peak_lag, nk);
+}
+
 TEST(DelayEstimation, RejectsBadArguments) {
   const Record r = MakeRecord(200, 3, 0.01, 6);
   ArxDelayScanOptions o = TwoInputScan(5, 2);
