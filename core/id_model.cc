@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/detrend.h"
 #include "core/least_squares.h"
 
 namespace canalid::core {
@@ -16,10 +17,7 @@ namespace {
 constexpr int kMinFitSamples = 20;
 constexpr int kSensitivityOrder = 4;
 
-Eigen::VectorXd Detrended(Eigen::VectorXd v) {
-  RemoveLine(v);
-  return v;
-}
+Eigen::VectorXd Detrended(const Eigen::VectorXd& v) { return RemoveLinearTrend(v).detrended; }
 
 double Correlation(const Eigen::VectorXd& a_d, const Eigen::VectorXd& b_d) {
   const double denominator = a_d.norm() * b_d.norm();

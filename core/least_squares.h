@@ -14,8 +14,4 @@ struct LeastSquaresSolution {
 LeastSquaresSolution SolveLeastSquares(const Eigen::Ref<const Eigen::MatrixXd>& x,
                                        const Eigen::Ref<const Eigen::VectorXd>& y);
 
-/// Removes the least-squares line a + b k (k = 0..n-1) from `values`, in place, and returns
-/// (a, b).  Exactly the projection onto the orthogonal complement of span{1, k}.
-Eigen::Vector2d RemoveLine(Eigen::Ref<Eigen::VectorXd> values);
-
 }  // namespace canalid::core

@@ -4,6 +4,7 @@
 #include <exception>
 #include <iostream>
 
+#include "daemon/canalid/design_command.h"
 #include "daemon/canalid/identify_command.h"
 #include "daemon/canalid/input_error.h"
 
@@ -18,6 +19,8 @@ int Run(int argc, char** argv) {
   int exit_code = kExitOk;
   IdentifyOptions identify;
   AddIdentifyCommand(app, identify, exit_code);
+  DesignOptions design;
+  AddDesignCommand(app, design, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -20,6 +20,8 @@ int RunIdentify(const IdentifyOptions& options) {
   nlohmann::json model;
   if (options.model == "id") {
     model = IdentifyId(options, table);
+  } else if (options.model == "arx") {
+    model = IdentifyArx(options, table);
   } else {
     model = IdentifyProcessModel(options, table);
   }
@@ -42,10 +44,11 @@ void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code)
       "Examples:\n"
       "  canalid identify --model id --input pool2.csv --max-delay-s 3600\n"
       "  canalid identify --model foptd --input step.csv --u gate --y level --pretty\n"
+      "  canalid identify --model arx --input F.csv --u u1,u2 --y y --na 2 --nb 2,3 --nk 1,2\n"
       "Output: one JSON object on stdout (keys in docs/model-json.md). Exit 2 on bad input.");
   cmd->add_option("--model", options.model, "Model kind")
       ->required()
-      ->check(CLI::IsMember({"id", "foptd", "soptd"}));
+      ->check(CLI::IsMember({"id", "arx", "foptd", "soptd"}));
   cmd->add_option("--input", options.input, "CSV file: header row, time_s first, uniform sampling")
       ->required();
   cmd->add_option("--out", options.out, "Also write the model JSON to this file");
@@ -67,6 +70,15 @@ void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code)
   io->add_option("--u", options.u, "Input column(s); arx takes a comma-separated list")
       ->capture_default_str();
   io->add_option("--y", options.y, "Output column")->capture_default_str();
+  auto* arx = cmd->add_option_group("ARX (--model arx), MATLAB conventions");
+  arx->add_option("--na", options.na, "Number of a coefficients")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  arx->add_option("--nb", options.nb, "b coefficients: one value, or one per input (N[,N...])")
+      ->capture_default_str();
+  arx->add_option("--nk", options.nk, "Delays in samples: one value, or one per input")
+      ->capture_default_str();
+  arx->add_flag("--detrend", options.detrend, "Remove linear trends from y and every u first");
   cmd->callback([&options, &exit_code] { exit_code = RunIdentify(options); });
 }
 

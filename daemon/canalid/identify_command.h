@@ -31,6 +31,7 @@ struct IdentifyOptions {
   int na = 2;
   std::string nb = "2";
   std::string nk = "1";
+  bool detrend = false;
 };
 
 /// Registers `identify` on the app; `exit_code` receives the result when it runs.
@@ -38,6 +39,7 @@ void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code)
 
 /// One model kind each; they return the model JSON (DESIGN.md keys).  @throws InputError.
 nlohmann::json IdentifyId(const IdentifyOptions& options, const drivers::CsvTable& table);
+nlohmann::json IdentifyArx(const IdentifyOptions& options, const drivers::CsvTable& table);
 nlohmann::json IdentifyProcessModel(const IdentifyOptions& options, const drivers::CsvTable& table);
 
 }  // namespace canalid::cli

@@ -1,6 +1,6 @@
 #include <stdexcept>
 
-#include "core/id_model.h"
+#include "core/id_pipeline.h"
 #include "daemon/canalid/identify_command.h"
 #include "daemon/canalid/input_error.h"
 #include "daemon/canalid/table_columns.h"
@@ -13,13 +13,14 @@ nlohmann::json IdentifyId(const IdentifyOptions& options, const drivers::CsvTabl
   const Eigen::VectorXd q_out = RequireColumn(table, options.qout);
   const Eigen::VectorXd level = RequireColumn(table, options.level);
   const double ts = table.sample_time_s();
-  core::IdFitOptions fit_options;
-  if (options.max_delay_s > 0.0) fit_options.max_nk = static_cast<int>(options.max_delay_s / ts);
-  fit_options.closed_loop = options.closed_loop == "on"    ? core::ClosedLoopMode::kOn
-                            : options.closed_loop == "off" ? core::ClosedLoopMode::kOff
-                                                           : core::ClosedLoopMode::kAuto;
+  core::IdPipelineOptions pipeline;
+  pipeline.remove_level_outliers = !options.keep_outliers;
+  if (options.max_delay_s > 0.0) pipeline.fit.max_nk = static_cast<int>(options.max_delay_s / ts);
+  pipeline.fit.closed_loop = options.closed_loop == "on"    ? core::ClosedLoopMode::kOn
+                             : options.closed_loop == "off" ? core::ClosedLoopMode::kOff
+                                                            : core::ClosedLoopMode::kAuto;
   try {
-    return drivers::ToJson(core::FitIdModel(q_in, q_out, level, ts, fit_options));
+    return drivers::ToJson(core::IdentifyPool(q_in, q_out, level, ts, pipeline));
   } catch (const std::invalid_argument& e) {
     throw InputError(table.source() + ": " + e.what());
   }

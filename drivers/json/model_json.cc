@@ -32,6 +32,57 @@ nlohmann::json ToJson(const core::IdFitResult& fit) {
           {"warnings", fit.warnings}};
 }
 
+nlohmann::json ToJson(const core::IdPipelineResult& result) {
+  nlohmann::json json = ToJson(result.fit);
+  const double ts = result.fit.model.sample_time_s;
+  const auto& replaced = result.level_outliers.replaced;
+  json["preprocessing"] = {{"level_outliers_replaced", result.level_outliers.count},
+                           {"level_outlier_times_s", nlohmann::json::array()}};
+  for (std::size_t i = 0; i < replaced.size() && i < 20; ++i) {
+    json["preprocessing"]["level_outlier_times_s"].push_back(static_cast<double>(replaced[i]) * ts);
+  }
+  if (result.correlation.num_samples > 0) {
+    const int lag = result.correlation.first_significant_lag;
+    json["cross_check"]["correlation_delay_s"] =
+        lag >= 0 ? nlohmann::json(lag * ts) : nlohmann::json();
+    json["cross_check"]["correlation_peak_delay_s"] = result.correlation.peak_lag * ts;
+  }
+  return json;
+}
+
+nlohmann::json ToJson(const core::ArxModel& model) {
+  nlohmann::json b = nlohmann::json::array();
+  for (const auto& coefficients : model.b) {
+    b.push_back(
+        std::vector<double>(coefficients.data(), coefficients.data() + coefficients.size()));
+  }
+  return {{"model", "arx"},
+          {"na", model.orders.na},
+          {"nb", model.orders.nb},
+          {"nk", model.orders.nk},
+          {"a", std::vector<double>(model.a.data(), model.a.data() + model.a.size())},
+          {"b_coeffs", b},
+          {"parameter_std",
+           std::vector<double>(model.parameter_std.data(),
+                               model.parameter_std.data() + model.parameter_std.size())},
+          {"loss", model.loss},
+          {"aic", model.aic},
+          {"fpe", model.fpe},
+          {"fit_from_sample", model.first_sample},
+          {"equations", model.num_samples}};
+}
+
+nlohmann::json ToJson(const core::ExperimentDesign& design) {
+  return {{"amplitude", design.amplitude_m3s},
+          {"clock_period_s", design.clock_period_s},
+          {"clock_period_samples", design.clock_period_samples},
+          {"order", design.order},
+          {"num_periods", design.num_periods},
+          {"num_samples", design.num_samples},
+          {"duration_s", design.duration_s},
+          {"explanation", design.explanation}};
+}
+
 nlohmann::json ToJson(const core::FoptdFit& fit) {
   return {{"model", "foptd"},
           {"gain", fit.model.gain},

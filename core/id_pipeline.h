@@ -1,0 +1,36 @@
+#pragma once
+#include <Eigen/Core>
+
+#include "core/delay_estimation.h"
+#include "core/id_model.h"
+#include "core/outliers.h"
+
+namespace canalid::core {
+
+struct IdPipelineOptions {
+  IdFitOptions fit;
+  bool remove_level_outliers = true;
+  /// Hampel settings for the level: 31-sample window, 5 sigma, sigma never below 1 mm (a level
+  /// sensor's resolution), so flat stretches of a quantised sensor are not flagged.
+  HampelOptions level_outliers{15, 5.0, 0.001};
+};
+
+/// Batch identification of a pool's ID model as `canalid identify --model id` and the daemon's
+/// end-of-experiment step do it (Ljung's loop, domain brief section 4):
+///   1. level spikes replaced by interpolation (Hampel), inflow and outflow untouched;
+///   2. FitIdModel (delay scan, closed-loop detection, IV cross-check);
+///   3. correlation analysis with prewhitening between the inflow and the level's first
+///      difference (whose impulse response is b at lag nk) as a cross-check of the delay.
+struct IdPipelineResult {
+  IdFitResult fit;
+  OutlierReport level_outliers;
+  CorrelationDelayEstimate correlation;  ///< num_samples == 0 if the record was too short for it
+};
+
+/// @throws std::invalid_argument as FitIdModel.
+IdPipelineResult IdentifyPool(const Eigen::Ref<const Eigen::VectorXd>& q_in,
+                              const Eigen::Ref<const Eigen::VectorXd>& q_out,
+                              const Eigen::Ref<const Eigen::VectorXd>& level, double sample_time_s,
+                              const IdPipelineOptions& options = {});
+
+}  // namespace canalid::core

@@ -1,0 +1,58 @@
+#include <stdexcept>
+
+#include "core/arx.h"
+#include "core/detrend.h"
+#include "core/metrics.h"
+#include "daemon/canalid/identify_command.h"
+#include "daemon/canalid/input_error.h"
+#include "daemon/canalid/table_columns.h"
+#include "drivers/json/model_json.h"
+
+namespace canalid::cli {
+
+nlohmann::json IdentifyArx(const IdentifyOptions& options, const drivers::CsvTable& table) {
+  const std::vector<std::string> inputs = SplitList(options.u, "--u");
+  core::ArxOrders orders;
+  orders.na = options.na;
+  orders.nb = ParseIntList(options.nb, "--nb");
+  orders.nk = ParseIntList(options.nk, "--nk");
+  // One value of nb or nk applies to every input, as in MATLAB's arx.
+  if (orders.nb.size() == 1) orders.nb.resize(inputs.size(), orders.nb.front());
+  if (orders.nk.size() == 1) orders.nk.resize(inputs.size(), orders.nk.front());
+  if (orders.nb.size() != inputs.size() || orders.nk.size() != inputs.size()) {
+    throw InputError("--nb and --nk need one value, or one per input column (" +
+                     std::to_string(inputs.size()) + ")");
+  }
+  Eigen::VectorXd y = RequireColumn(table, options.y);
+  Eigen::MatrixXd u(table.rows(), static_cast<Eigen::Index>(inputs.size()));
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    u.col(static_cast<Eigen::Index>(i)) = RequireMovingColumn(table, inputs[i]);
+  }
+  nlohmann::json preprocessing = {{"detrended", options.detrend}};
+  if (options.detrend) {
+    const core::DetrendResult line = core::RemoveLinearTrend(y);
+    y = line.detrended;
+    preprocessing["y_trend"] = {{"intercept", line.intercept},
+                                {"slope_per_sample", line.slope_per_sample}};
+    for (Eigen::Index i = 0; i < u.cols(); ++i)
+      u.col(i) = core::RemoveLinearTrend(u.col(i)).detrended;
+  }
+  try {
+    const core::ArxModel model = core::FitArx(y, u, orders);
+    nlohmann::json json = drivers::ToJson(model);
+    json["inputs"] = inputs;
+    json["output"] = options.y;
+    json["sample_time_s"] = table.sample_time_s();
+    json["preprocessing"] = preprocessing;
+    // Validation by simulation from the first measured outputs, not one-step prediction.
+    const Eigen::Index warmup = std::max<Eigen::Index>(model.first_sample, 1);
+    const Eigen::VectorXd simulated = core::SimulateArx(model, u, y.head(warmup));
+    json["metrics"] = drivers::ToJson(core::ComputeMetrics(
+        y.tail(y.size() - warmup), simulated.tail(y.size() - warmup), table.sample_time_s()));
+    return json;
+  } catch (const std::invalid_argument& e) {
+    throw InputError(table.source() + ": " + e.what());
+  }
+}
+
+}  // namespace canalid::cli
