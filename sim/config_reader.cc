@@ -94,7 +94,7 @@ void ConfigReader::CheckKeys(const toml::table& table, std::string_view where,
     if (std::find(allowed.begin(), allowed.end(), key.str()) == allowed.end()) {
       std::string list;
       for (std::string_view a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
-      Problem(node.source(),
+      Problem(key.source(),
               "unknown key '" + KeyPath(where, key.str()) + "' (allowed: " + list + ")");
     }
   }

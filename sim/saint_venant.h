@@ -72,6 +72,12 @@ class SaintVenantCanal final {
   int last_iterations() const { return last_iterations_; }
 
  private:
+  struct BoundaryFlows {
+    double inflow_m3s = 0.0;
+    double offtake_m3s = 0.0;
+    double outflow_m3s = 0.0;
+  };
+  BoundaryFlows CurrentBoundaryFlows() const;
   void BuildSteadyState();
   void Assemble(const Eigen::VectorXd& old_x, double dt_s);
   void Add(int row, int col, double value);
@@ -98,6 +104,7 @@ class SaintVenantCanal final {
   int last_iterations_ = 0;
   double initial_volume_m3_ = 0.0;
   MassBalance mass_;
+  BoundaryFlows boundary_;
 };
 
 }  // namespace canalid::sim

@@ -205,7 +205,7 @@ Scenario LoadScenario(const std::string& path, const Canal& full) {
             reader.Number(*t, "seed", where, static_cast<double>(sc.seed), 0.0, 4e9));
         e.end_s = reader.Number(*t, "end_s", where, std::numeric_limits<double>::infinity(),
                                 e.time_s, std::numeric_limits<double>::infinity());
-      } else {
+      } else if (kind == "set" || kind == "step") {
         e.kind = kind == "set" ? Event::Kind::kSet : Event::Kind::kStep;
         e.value = reader.Number(*t, "value", where, std::nullopt, -kBig, kBig);
       }
