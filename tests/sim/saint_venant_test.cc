@@ -42,6 +42,78 @@ TEST(SaintVenantCanal, FullCanal2StaysAtItsSteadyState) {
   EXPECT_NEAR(plant.PoolOutflow(7), 4.0, 1e-7);
 }
 
+double TestVolume(const SaintVenantCanal& plant);
+
+TEST(SaintVenantCanal, FullCanal1StaysAtItsSteadyState) {
+  const Canal canal = LoadCanal(kSource + "/config/sim/asce-canal1.toml");
+  SaintVenantCanal plant(canal);
+  std::vector<double> before;
+  for (int p = 0; p < 8; ++p) before.push_back(plant.DownstreamDepth(p));
+  for (int k = 0; k < 360; ++k) plant.Step(10.0);
+  // Same bound as for canal 2: Newton tolerance accumulated over an hour.
+  for (int p = 0; p < 8; ++p) EXPECT_NEAR(plant.DownstreamDepth(p), before[p], 1e-7) << p;
+  EXPECT_NEAR(plant.StructureFlow(7), 0.6, 1e-7);
+}
+
+// A reservoir upstream, a free weir, an orifice offtake and a free gate at the end: after the
+// reservoir rises the canal must settle to a new steady state in which every structure passes
+// the same flow, with volume conserved on the way.
+TEST(SaintVenantCanal, ReservoirWeirOrificeAndFreeGateSettle) {
+  Canal c;
+  c.name = "mixed";
+  c.upstream.type = UpstreamBoundary::Type::kLevel;
+  c.upstream.flow_m3s = 3.0;
+  c.max_dx_m = 100.0;
+  Pool p;
+  p.length_m = 1500;
+  p.bottom_width_m = 3;
+  p.side_slope = 1.5;
+  p.bed_slope = 2e-4;
+  p.manning_n = 0.02;
+  p.target_depth_m = 1.5;
+  c.pools = {p, p, p};
+  c.pools[0].name = "1";
+  c.pools[1].name = "2";
+  c.pools[2].name = "3";
+  c.pools[0].structure.type = Structure::Type::kWeir;
+  c.pools[0].structure.width_m = 3.0;
+  c.pools[0].structure.coefficient = 1.7;
+  c.pools[0].structure.drop_m = 0.6;  // keeps the weir free
+  c.pools[1].offtake.type = Offtake::Type::kOrifice;
+  c.pools[1].offtake.setting = 0.1;  // m^2
+  c.pools[1].structure.width_m = 3.0;
+  c.pools[2].structure.width_m = 3.0;  // gate to a free outfall
+  SaintVenantCanal plant(c);
+  const double v0 = TestVolume(plant);
+  const double off0 = plant.OfftakeFlow(1);
+  EXPECT_NEAR(plant.StructureFlow(0), 3.0, 1e-9);
+  EXPECT_NEAR(plant.StructureFlow(2), 3.0 - off0, 1e-9);
+  const double level = plant.upstream();
+  plant.SetUpstream(level + 0.1);
+  double in = 0.0, out = 0.0, before_in = plant.PoolInflow(0), before_out = 3.0;
+  for (int k = 0; k < 8640; ++k) {  // 24 h at 10 s
+    plant.Step(10.0);
+    const double now_in = plant.PoolInflow(0);
+    const double now_out = plant.StructureFlow(2) + plant.OfftakeFlow(1);
+    in += 5.0 * (before_in + now_in);
+    out += 5.0 * (before_out + now_out);
+    before_in = now_in;
+    before_out = now_out;
+  }
+  const double q = plant.PoolInflow(0);
+  EXPECT_GT(q, 3.2);  // more head, more flow
+  // Settled: the weir, the offtake plus gate, and the inflow agree to 0.1 %.
+  EXPECT_NEAR(plant.StructureFlow(0), q, 1e-3 * q);
+  EXPECT_NEAR(plant.StructureFlow(2) + plant.OfftakeFlow(1), q, 1e-3 * q);
+  EXPECT_GT(plant.OfftakeFlow(1), off0);
+  // Weir law with Villemonte submergence, from the test's own formula.
+  const double h1 = plant.DownstreamDepth(0) - plant.structure_setting(0);
+  const double h2 = std::max(plant.UpstreamDepth(1) - 0.6 - plant.structure_setting(0), 0.0);
+  EXPECT_NEAR(plant.StructureFlow(0),
+              1.7 * 3.0 * std::pow(h1, 1.5) * std::pow(1.0 - std::pow(h2 / h1, 1.5), 0.385), 1e-9);
+  EXPECT_LT(std::abs(TestVolume(plant) - v0 - (in - out)), 1e-4 * in);
+}
+
 // Independent bookkeeping: volume from the test's own section formula over the nodes, boundary
 // flows from what the test commands (inflow, fixed offtakes) and the free-weir law at the end.
 double TestVolume(const SaintVenantCanal& plant) {
