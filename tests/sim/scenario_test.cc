@@ -90,7 +90,7 @@ TEST(Scenario, Canal2Pool2StepArrivalAndLateArea) {
   const double y0 = level[360];
   EXPECT_NEAR(y0, 2.1, 1e-9);  // an hour at rest
   // Arrival: the first time the downstream level has risen 5 mm above its initial value: about a
-  // quarter of the 18.5 mm wave front, above the scheme's +-3 mm ripples ahead of it.
+  // quarter of the 18.5 mm wave front, and above any ripple of the scheme ahead of it.
   double arrival = -1.0;
   for (std::size_t k = 361; k < level.size() && arrival < 0.0; ++k) {
     if (level[k] - y0 > 0.005) {
