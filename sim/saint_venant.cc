@@ -76,8 +76,14 @@ void SaintVenantCanal::BuildSteadyState() {
     }
   }
   for (int p = 0; p < pools; ++p) {
-    const std::vector<double> depth = SteadyProfile(canal_.pools[p], pool_flow[p], num_nodes(p) - 1,
-                                                    canal_.pools[p].target_depth_m);
+    std::vector<double> depth;
+    try {
+      depth = SteadyProfile(canal_.pools[p], pool_flow[p], num_nodes(p) - 1,
+                            canal_.pools[p].target_depth_m);
+    } catch (const std::runtime_error& e) {
+      // No steady state for these flows and targets: a problem of the configuration.
+      throw std::invalid_argument(e.what());
+    }
     for (int i = 0; i < num_nodes(p); ++i) {
       x_[2 * (offset_[p] + i)] = depth[i];
       x_[2 * (offset_[p] + i) + 1] = pool_flow[p];

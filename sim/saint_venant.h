@@ -35,8 +35,9 @@ struct MassBalance {
 /// Not thread-safe.  Allocates only in the constructor.
 class SaintVenantCanal final {
  public:
-  /// @throws std::invalid_argument (ValidateCanal, SteadyStructureSetting) or
-  /// std::runtime_error (no steady profile).
+  /// @throws std::invalid_argument if the canal is invalid (ValidateCanal) or has no steady state
+  /// for its flows and target depths (supercritical profile, a structure that cannot pass its
+  /// flow at the steady levels).
   explicit SaintVenantCanal(const Canal& canal);
 
   /// Advances by dt_s with the inputs set now taken as the values at the end of the step.

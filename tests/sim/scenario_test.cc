@@ -13,6 +13,7 @@
 
 #include "sim/canal_config.h"
 #include "sim/config_reader.h"
+#include "sim/saint_venant.h"
 #include "sim/scenario_runner.h"
 
 namespace canalid::sim {
@@ -169,6 +170,30 @@ TEST(Scenario, PrbsAndFaultsAreWhereTheFilesSayTheyAre) {
   EXPECT_GT(hi - lo, 0.3);
 }
 
+TEST(Scenario, InputValueAppliesSetStepAndPrbsInOrder) {
+  Scenario sc;
+  InputRef gate{InputRef::Kind::kStructure, 2};
+  InputRef inflow{InputRef::Kind::kUpstream, 0};
+  Event set{Event::Kind::kSet, gate, 100.0, 0.8};
+  Event step{Event::Kind::kStep, gate, 200.0, 0.1};
+  Event prbs{Event::Kind::kPrbs, gate, 300.0};
+  prbs.amplitude = 0.05;
+  prbs.clock_s = 60.0;
+  prbs.order = 3;
+  prbs.end_s = 300.0 + 7 * 60.0;
+  Event other{Event::Kind::kStep, inflow, 0.0, 5.0};
+  sc.events = {set, step, prbs, other};
+  const std::vector<std::vector<int>> seq = {{}, {}, {1, -1, 1, 1, -1, -1, 1}, {}};
+  EXPECT_DOUBLE_EQ(InputValue(sc, seq, gate, 0.7, 99.0), 0.7);
+  EXPECT_DOUBLE_EQ(InputValue(sc, seq, gate, 0.7, 100.0), 0.8);
+  EXPECT_DOUBLE_EQ(InputValue(sc, seq, gate, 0.7, 250.0), 0.9);
+  EXPECT_DOUBLE_EQ(InputValue(sc, seq, gate, 0.7, 300.0), 0.95);
+  EXPECT_DOUBLE_EQ(InputValue(sc, seq, gate, 0.7, 370.0), 0.85);   // second clock: -1
+  EXPECT_DOUBLE_EQ(InputValue(sc, seq, gate, 0.7, 659.0), 0.85);   // sixth clock: -1
+  EXPECT_DOUBLE_EQ(InputValue(sc, seq, gate, 0.7, 720.0), 0.9);    // ended
+  EXPECT_DOUBLE_EQ(InputValue(sc, seq, inflow, 10.0, 1.0), 15.0);  // other input untouched above
+}
+
 std::string WriteTemp(const std::string& name, const std::string& text) {
   const std::string path = kBinary + "/" + name;
   std::ofstream(path) << text;
@@ -224,6 +249,14 @@ TEST(Scenario, CanalsimExitCodes) {
   EXPECT_EQ(status(exe + " run --canal " + bad + " --scenario " + good + " --out /dev/null"), 78);
   EXPECT_EQ(status(exe + " run --canal " + canal + " --scenario " + good + " --check-config"), 0);
   EXPECT_NE(status(exe + " run --canal " + canal), 0);  // missing --scenario
+  // A steady state that cannot exist (more inflow than pool 2 carries subcritically at 0.3 m).
+  const std::string infeasible = WriteTemp("infeasible.toml",
+                                           "duration_s = 60.0\noutput_period_s = 10.0\n"
+                                           "first_pool = \"2\"\nlast_pool = \"2\"\n"
+                                           "inflow_m3s = 80.0\n[pools.2]\ntarget_depth_m = 0.3\n"
+                                           "[output]\nlevel = \"pool2.level_downstream\"\n");
+  EXPECT_EQ(
+      status(exe + " run --canal " + canal + " --scenario " + infeasible + " --out /dev/null"), 78);
 }
 
 }  // namespace
