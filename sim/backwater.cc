@@ -20,6 +20,16 @@ std::vector<double> SteadyProfile(const Pool& pool, double flow_m3s, int num_cel
   const TrapezoidSection section(pool.bottom_width_m, pool.side_slope, pool.manning_n);
   const double dx = pool.length_m / num_cells;
   const double q = flow_m3s;
+  auto froude2 = [&](double h) {
+    const double area = section.Area(h);
+    return q * q * section.TopWidth(h) / (kGravity * area * area * area);
+  };
+  if (froude2(downstream_depth_m) >= 1.0) {
+    std::ostringstream os;
+    os << "SteadyProfile(" << pool.name << "): downstream depth " << downstream_depth_m
+       << " m is not subcritical at " << flow_m3s << " m3/s";
+    throw std::runtime_error(os.str());
+  }
   std::vector<double> depth(num_cells + 1);
   depth[num_cells] = downstream_depth_m;
   for (int j = num_cells - 1; j >= 0; --j) {
@@ -58,10 +68,7 @@ std::vector<double> SteadyProfile(const Pool& pool, double flow_m3s, int num_cel
         break;
       }
     }
-    const double top = section.TopWidth(h);
-    const double area = section.Area(h);
-    const double froude2 = q * q * top / (kGravity * area * area * area);
-    if (!converged || !(h > 0.0) || froude2 >= 1.0) {
+    if (!converged || !(h > 0.0) || froude2(h) >= 1.0) {
       std::ostringstream os;
       os << "SteadyProfile(" << pool.name << "): no subcritical profile at " << flow_m3s
          << " m3/s from downstream depth " << downstream_depth_m << " m (failed at node " << j

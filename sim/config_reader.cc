@@ -35,7 +35,14 @@ ConfigReader::ConfigReader(const std::string& path) : path_(path) {
 void ConfigReader::Problem(const toml::source_region& region, const std::string& message) {
   std::ostringstream os;
   os << path_ << ":" << region.begin.line << ":" << region.begin.column << ": " << message;
-  problems_.push_back(os.str());
+  // Keep the file's order: problems are found table by table, not line by line.
+  auto at = problems_.begin();
+  while (at != problems_.end() &&
+         (at->first.line < region.begin.line ||
+          (at->first.line == region.begin.line && at->first.column <= region.begin.column))) {
+    ++at;
+  }
+  problems_.insert(at, {region.begin, os.str()});
 }
 
 double ConfigReader::Number(const toml::table& table, std::string_view key, std::string_view where,
@@ -57,6 +64,28 @@ double ConfigReader::Number(const toml::table& table, std::string_view key, std:
     Problem(node->source(), os.str());
   }
   return *value;
+}
+
+std::int64_t ConfigReader::Integer(const toml::table& table, std::string_view key,
+                                   std::string_view where, std::optional<std::int64_t> fallback,
+                                   std::int64_t lo, std::int64_t hi) {
+  const toml::node* node = table.get(key);
+  if (node == nullptr) {
+    if (!fallback) Problem(table.source(), "missing key '" + KeyPath(where, key) + "'");
+    return fallback.value_or(0);
+  }
+  if (!node->is_integer()) {
+    Problem(node->source(), "'" + KeyPath(where, key) + "' must be an integer");
+    return fallback.value_or(0);
+  }
+  const std::int64_t value = *node->value<std::int64_t>();
+  if (value < lo || value > hi) {
+    std::ostringstream os;
+    os << "'" << KeyPath(where, key) << "' = " << value << " is outside [" << lo << ", " << hi
+       << "]";
+    Problem(node->source(), os.str());
+  }
+  return value;
 }
 
 std::string ConfigReader::String(const toml::table& table, std::string_view key,
@@ -94,14 +123,17 @@ void ConfigReader::CheckKeys(const toml::table& table, std::string_view where,
     if (std::find(allowed.begin(), allowed.end(), key.str()) == allowed.end()) {
       std::string list;
       for (std::string_view a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
-      Problem(node.source(),
+      Problem(key.source(),
               "unknown key '" + KeyPath(where, key.str()) + "' (allowed: " + list + ")");
     }
   }
 }
 
 void ConfigReader::Finish() const {
-  if (!problems_.empty()) throw ConfigError(problems_);
+  if (problems_.empty()) return;
+  std::vector<std::string> messages;
+  for (const auto& [position, message] : problems_) messages.push_back(message);
+  throw ConfigError(messages);
 }
 
 }  // namespace canalid::sim

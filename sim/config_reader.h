@@ -1,10 +1,12 @@
 #pragma once
 #include <toml++/toml.h>
+#include <cstdint>
 #include <initializer_list>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 namespace canalid::sim {
@@ -31,6 +33,9 @@ class ConfigReader final {
   /// A number in [lo, hi]; a missing key yields `fallback` or, without one, a problem.
   double Number(const toml::table& table, std::string_view key, std::string_view where,
                 std::optional<double> fallback, double lo, double hi);
+  /// An integer in [lo, hi] (a float such as 7.0 is not accepted).
+  std::int64_t Integer(const toml::table& table, std::string_view key, std::string_view where,
+                       std::optional<std::int64_t> fallback, std::int64_t lo, std::int64_t hi);
   std::string String(const toml::table& table, std::string_view key, std::string_view where,
                      std::optional<std::string> fallback);
   /// One of `allowed`; reports the allowed values otherwise.
@@ -48,7 +53,7 @@ class ConfigReader final {
  private:
   std::string path_;
   toml::table root_;
-  std::vector<std::string> problems_;
+  std::vector<std::pair<toml::source_position, std::string>> problems_;
 };
 
 /// "where.key" or "key" when where is empty.

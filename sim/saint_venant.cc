@@ -44,6 +44,15 @@ SaintVenantCanal::SaintVenantCanal(const Canal& canal) : canal_(canal) {
   BuildSteadyState();
   old_x_ = x_;
   initial_volume_m3_ = Volume();
+  boundary_ = CurrentBoundaryFlows();
+}
+
+SaintVenantCanal::BoundaryFlows SaintVenantCanal::CurrentBoundaryFlows() const {
+  BoundaryFlows b;
+  b.inflow_m3s = PoolInflow(0);
+  for (int p = 0; p < num_pools(); ++p) b.offtake_m3s += OfftakeFlow(p);
+  b.outflow_m3s = StructureFlow(num_pools() - 1);
+  return b;
 }
 
 double SaintVenantCanal::TailLevel(int pool) const {
@@ -67,8 +76,14 @@ void SaintVenantCanal::BuildSteadyState() {
     }
   }
   for (int p = 0; p < pools; ++p) {
-    const std::vector<double> depth = SteadyProfile(canal_.pools[p], pool_flow[p], num_nodes(p) - 1,
-                                                    canal_.pools[p].target_depth_m);
+    std::vector<double> depth;
+    try {
+      depth = SteadyProfile(canal_.pools[p], pool_flow[p], num_nodes(p) - 1,
+                            canal_.pools[p].target_depth_m);
+    } catch (const std::runtime_error& e) {
+      // No steady state for these flows and targets: a problem of the configuration.
+      throw std::invalid_argument(e.what());
+    }
     for (int i = 0; i < num_nodes(p); ++i) {
       x_[2 * (offset_[p] + i)] = depth[i];
       x_[2 * (offset_[p] + i) + 1] = pool_flow[p];
@@ -239,10 +254,6 @@ void SaintVenantCanal::Step(double dt_s) {
                                 " must be > 0");
   }
   old_x_ = x_;
-  double off_old = 0.0;
-  for (int p = 0; p < num_pools(); ++p) off_old += OfftakeFlow(p);
-  const double in_old = PoolInflow(0);
-  const double out_old = StructureFlow(num_pools() - 1);
   bool converged = false;
   int it = 0;
   for (; it < kMaxIterations && !converged; ++it) {
@@ -280,11 +291,13 @@ void SaintVenantCanal::Step(double dt_s) {
     throw std::runtime_error(os.str());
   }
   time_s_ += dt_s;
-  double off_new = 0.0;
-  for (int p = 0; p < num_pools(); ++p) off_new += OfftakeFlow(p);
-  mass_.inflow_volume_m3 += 0.5 * dt_s * (in_old + PoolInflow(0));
-  mass_.offtake_volume_m3 += 0.5 * dt_s * (off_old + off_new);
-  mass_.outflow_volume_m3 += 0.5 * dt_s * (out_old + StructureFlow(num_pools() - 1));
+  // Boundary flows of the previous step were stored then: an input changed since then (an
+  // offtake setting) must not be counted at the old time level.
+  const BoundaryFlows now = CurrentBoundaryFlows();
+  mass_.inflow_volume_m3 += 0.5 * dt_s * (boundary_.inflow_m3s + now.inflow_m3s);
+  mass_.offtake_volume_m3 += 0.5 * dt_s * (boundary_.offtake_m3s + now.offtake_m3s);
+  mass_.outflow_volume_m3 += 0.5 * dt_s * (boundary_.outflow_m3s + now.outflow_m3s);
+  boundary_ = now;
   mass_.volume_change_m3 = Volume() - initial_volume_m3_;
   mass_.error_m3 = mass_.volume_change_m3 -
                    (mass_.inflow_volume_m3 - mass_.offtake_volume_m3 - mass_.outflow_volume_m3);

@@ -35,8 +35,9 @@ struct MassBalance {
 /// Not thread-safe.  Allocates only in the constructor.
 class SaintVenantCanal final {
  public:
-  /// @throws std::invalid_argument (ValidateCanal, SteadyStructureSetting) or
-  /// std::runtime_error (no steady profile).
+  /// @throws std::invalid_argument if the canal is invalid (ValidateCanal) or has no steady state
+  /// for its flows and target depths (supercritical profile, a structure that cannot pass its
+  /// flow at the steady levels).
   explicit SaintVenantCanal(const Canal& canal);
 
   /// Advances by dt_s with the inputs set now taken as the values at the end of the step.
@@ -72,6 +73,12 @@ class SaintVenantCanal final {
   int last_iterations() const { return last_iterations_; }
 
  private:
+  struct BoundaryFlows {
+    double inflow_m3s = 0.0;
+    double offtake_m3s = 0.0;
+    double outflow_m3s = 0.0;
+  };
+  BoundaryFlows CurrentBoundaryFlows() const;
   void BuildSteadyState();
   void Assemble(const Eigen::VectorXd& old_x, double dt_s);
   void Add(int row, int col, double value);
@@ -98,6 +105,7 @@ class SaintVenantCanal final {
   int last_iterations_ = 0;
   double initial_volume_m3_ = 0.0;
   MassBalance mass_;
+  BoundaryFlows boundary_;
 };
 
 }  // namespace canalid::sim

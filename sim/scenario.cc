@@ -109,7 +109,7 @@ Scenario LoadScenario(const std::string& path, const Canal& full) {
   sc.duration_s = reader.Number(root, "duration_s", "", std::nullopt, 1e-3, 1e9);
   sc.output_period_s = reader.Number(root, "output_period_s", "", std::nullopt, 1e-3, 1e7);
   sc.time_step_s = reader.Number(root, "time_step_s", "", sc.output_period_s, 1e-3, 1e5);
-  sc.seed = static_cast<std::uint64_t>(reader.Number(root, "seed", "", 1.0, 0.0, 4e9));
+  sc.seed = static_cast<std::uint64_t>(reader.Integer(root, "seed", "", 1, 0, 4000000000));
   if (sc.output_period_s > 0.0 && sc.time_step_s > 0.0) {
     const double ratio = sc.output_period_s / sc.time_step_s;
     if (std::abs(ratio - std::round(ratio)) > 1e-9 * ratio || std::round(ratio) < 1.0) {
@@ -200,12 +200,12 @@ Scenario LoadScenario(const std::string& path, const Canal& full) {
         e.kind = Event::Kind::kPrbs;
         e.amplitude = reader.Number(*t, "amplitude", where, std::nullopt, 0.0, kBig);
         e.clock_s = reader.Number(*t, "clock_s", where, std::nullopt, 1e-3, kBig);
-        e.order = static_cast<int>(reader.Number(*t, "order", where, 7.0, 2.0, 16.0));
+        e.order = static_cast<int>(reader.Integer(*t, "order", where, 7, 2, 16));
         e.seed = static_cast<std::uint64_t>(
-            reader.Number(*t, "seed", where, static_cast<double>(sc.seed), 0.0, 4e9));
+            reader.Integer(*t, "seed", where, static_cast<std::int64_t>(sc.seed), 0, 4000000000));
         e.end_s = reader.Number(*t, "end_s", where, std::numeric_limits<double>::infinity(),
                                 e.time_s, std::numeric_limits<double>::infinity());
-      } else {
+      } else if (kind == "set" || kind == "step") {
         e.kind = kind == "set" ? Event::Kind::kSet : Event::Kind::kStep;
         e.value = reader.Number(*t, "value", where, std::nullopt, -kBig, kBig);
       }
