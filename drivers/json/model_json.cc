@@ -43,7 +43,7 @@ nlohmann::json ToJson(const core::IdPipelineResult& result) {
   }
   if (result.correlation.num_samples > 0) {
     const int lag = result.correlation.first_significant_lag;
-    json["cross_check"]["correlation_delay_s"] =
+    json["cross_check"]["correlation_first_significant_delay_s"] =
         lag >= 0 ? nlohmann::json(lag * ts) : nlohmann::json();
     json["cross_check"]["correlation_peak_delay_s"] = result.correlation.peak_lag * ts;
   }

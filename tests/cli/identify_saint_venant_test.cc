@@ -13,6 +13,7 @@ namespace {
 
 constexpr double kIdzDelay = 682.0;
 constexpr double kIdzArea = 34113.0;
+constexpr double kSwmmLateSlopeArea = 41616.0;
 
 nlohmann::json IdentifyRecord(const std::string& name) {
   const auto dir = TestDirectory("sv-" + name);
@@ -47,8 +48,12 @@ TEST(IdentifySaintVenant, FixedDownstreamGateIsDetectedAsClosedLoop) {
   const auto model = IdentifyRecord("asce2-pool2-prbs-fixed-gate");
   ExpectIssueTolerances(model);
   EXPECT_TRUE(model["closed_loop"].get<bool>()) << model["closed_loop_reason"];
-  // The instrumental-variable cross-check must tell the same story.
-  EXPECT_NEAR(model["cross_check"]["iv_area_m2"].get<double>(), kIdzArea, 0.15 * kIdzArea);
+  // The instrumental-variable cross-check is a different estimator of the same storage: it must
+  // land between the backwater area (IDZ, 34113 m2) and the whole pool's surface (the late slope
+  // of a step, 41616 m2 by SWMM 5), each with the issue's 15 % margin.
+  const double iv_area = model["cross_check"]["iv_area_m2"].get<double>();
+  EXPECT_GE(iv_area, 0.85 * kIdzArea);
+  EXPECT_LE(iv_area, 1.15 * kSwmmLateSlopeArea);
 }
 
 }  // namespace
