@@ -151,6 +151,26 @@ LeastSquaresSolution FitWaveFrontNonNegative(const Eigen::MatrixXd& x, const Eig
   return fit;
 }
 
+// Mean squared residual of y_d on [q_d, w_d] (all detrended) with the coefficient of w >= 0, by
+// modified Gram-Schmidt: e1 = q/|q|, e2 = (w - (e1.w) e1)/|...|.
+double ScanLoss(const Eigen::VectorXd& y_d, const Eigen::VectorXd& q_d,
+                const Eigen::VectorXd& w_d) {
+  const double n = static_cast<double>(y_d.size());
+  const double q_norm = q_d.norm();
+  if (q_norm == 0.0) return y_d.squaredNorm() / n;
+  const Eigen::VectorXd e1 = q_d / q_norm;
+  const double y1 = e1.dot(y_d);
+  const double one_column_rss = y_d.squaredNorm() - y1 * y1;
+  Eigen::VectorXd r = w_d - e1.dot(w_d) * e1;
+  const double r_norm = r.norm();
+  if (r_norm <= 1e-12 * w_d.norm()) return one_column_rss / n;
+  r /= r_norm;
+  const double y2 = r.dot(y_d);
+  // Coefficient of w: y2 / r_norm; a negative one is refitted without w (the constraint).
+  if (y2 < 0.0) return one_column_rss / n;
+  return (one_column_rss - y2 * y2) / n;
+}
+
 Eigen::VectorXd CumulativeSum(const Eigen::VectorXd& v) {
   Eigen::VectorXd s(v.size());
   double total = 0.0;
@@ -231,24 +251,26 @@ IdFitResult FitIdModel(const Eigen::Ref<const Eigen::VectorXd>& q_in,
   // Delay scan.  The wave front reaches the level sensor as a jump (IDZ's p21), which an
   // integrator alone fits by pulling the delay short and the area small; the inflow term
   // p21 q_in(k - nk) takes the jump, so nk and b describe the integrating part.
+  // Each candidate's loss comes from the Frisch-Waugh-Lovell reduction: with y and both varying
+  // columns detrended (projected off [1, k]), the residual is that of a 2-column least-squares
+  // problem, solved by modified Gram-Schmidt QR.  The chosen nk is then refitted in full.
   result.loss_by_nk.resize(max_nk - options.min_nk + 1);
   const Eigen::VectorXd y_fit = level.tail(n - k0);
   double best_loss = std::numeric_limits<double>::infinity();
-  Eigen::VectorXd best_theta;
   for (int nk = options.min_nk; nk <= max_nk; ++nk) {
-    const LeastSquaresSolution fit =
-        FitWaveFrontNonNegative(OpenLoopRegressors(q_in, q_out, nk, k0), y_fit);
-    const double loss = fit.residual_sum_of_squares / static_cast<double>(y_fit.size());
+    const double loss = ScanLoss(y_d, Detrended(IntegratedTotalFlow(q_in, q_out, nk, k0)),
+                                 Detrended(q_in.segment(k0 - nk, n - k0)));
     result.loss_by_nk(nk - options.min_nk) = loss;
     if (loss < best_loss) {
       best_loss = loss;
       result.model.nk = nk;
-      best_theta = fit.theta;
     }
   }
   const int nk = result.model.nk;
-  result.model.b = best_theta(0);
-  result.wave_front_gain_s_per_m2 = best_theta(1);
+  const LeastSquaresSolution open_loop =
+      FitWaveFrontNonNegative(OpenLoopRegressors(q_in, q_out, nk, k0), y_fit);
+  result.model.b = open_loop.theta(0);
+  result.wave_front_gain_s_per_m2 = open_loop.theta(1);
   result.open_loop_area_m2 = sample_time_s / result.model.b;
 
   // Closed-loop detection: does the outflow follow the level?

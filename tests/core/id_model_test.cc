@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/QR>
+
 #include <cmath>
 #include <random>
 
@@ -99,6 +101,33 @@ TEST(IdModel, ThreeStepMethodHandlesAFixedDownstreamGate) {
   EXPECT_NEAR(r.model.nk, nk, 1);
   EXPECT_NEAR(r.model.area_m2(), area, 0.05 * area);
   EXPECT_NEAR(r.iv_area_m2, area, 0.10 * area);
+}
+
+TEST(IdModel, ScanLossesEqualFullQrFitsOfEachCandidate) {
+  // The scan reduces each candidate to two detrended columns (Frisch-Waugh-Lovell); its losses
+  // must equal the full 4-column QR fit wherever the wave-front coefficient is non-negative.
+  const double ts = 60.0;
+  const int n = 600;
+  const Eigen::VectorXd q_in = BinaryInflow(n, 10.0, 0.8, 6, 21);
+  const Eigen::VectorXd q_out = Eigen::VectorXd::Constant(n, 10.0);
+  Eigen::VectorXd y = IdLevel(q_in, q_out, ts / 30000.0, 9, 2.0);
+  std::mt19937 rng(2);
+  std::normal_distribution<double> noise(0.0, 0.003);
+  for (auto& v : y) v += noise(rng);
+  IdFitOptions options;
+  options.max_nk = 30;
+  const IdFitResult r = FitIdModel(q_in, q_out, y, ts, options);
+  int checked = 0;
+  for (int nk = 0; nk <= 30; ++nk) {
+    const Eigen::MatrixXd x = OpenLoopRegressors(q_in, q_out, nk, 31);
+    const Eigen::VectorXd target = y.tail(n - 31);
+    const Eigen::VectorXd theta = x.colPivHouseholderQr().solve(target);
+    if (theta(1) < 0.0) continue;
+    const double loss = (x * theta - target).squaredNorm() / static_cast<double>(target.size());
+    EXPECT_NEAR(r.loss_by_nk(nk), loss, 1e-9 * loss) << "nk=" << nk;
+    ++checked;
+  }
+  EXPECT_GT(checked, 5);
 }
 
 TEST(IdModel, RejectsBadInput) {
