@@ -177,6 +177,21 @@ int DefaultGlSubsteps(const FractionalFoptdParams& params, double sample_time_s)
   return std::max(1, static_cast<int>(std::ceil(sample_time_s / h - 1e-9)));
 }
 
+int GlMemoryLength(const FractionalFoptdParams& params, double sample_time_s, int samples,
+                   const FractionalSimOptions& options) {
+  Validate(params);
+  CheckSampleTime(sample_time_s, "GlMemoryLength");
+  if (options.gl_memory_length > 0) return options.gl_memory_length;
+  const int substeps =
+      options.gl_substeps > 0 ? options.gl_substeps : DefaultGlSubsteps(params, sample_time_s);
+  const int full = std::max(1, samples * substeps);
+  if (!(options.gl_static_gain_tolerance > 0.0)) return full;
+  const double h = sample_time_s / substeps;
+  const double tail =
+      options.gl_static_gain_tolerance * std::pow(h, params.alpha) / params.time_constant_s;
+  return GrunwaldLetnikovMemoryLength(params.alpha, tail, full);
+}
+
 Eigen::VectorXd SimulateFractionalFoptd(const FractionalFoptdParams& params,
                                         const Eigen::Ref<const Eigen::VectorXd>& input,
                                         double sample_time_s, const FractionalSimOptions& options) {

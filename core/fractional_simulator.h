@@ -99,8 +99,16 @@ struct FractionalSimOptions {
   /// Oustaloup band; when low_frequency_rad_s <= 0 DefaultOustaloupOptions is used.
   OustaloupOptions oustaloup{0.0, 0.0, 3.0};
   int gl_substeps = 0;       ///< 0: DefaultGlSubsteps
-  int gl_memory_length = 0;  ///< 0: the whole record (exact GL1, O(N^2))
+  int gl_memory_length = 0;  ///< 0: the whole record (exact GL1, O(N^2)), or see below
+  /// When > 0 (and gl_memory_length = 0): short memory L from the GL tail bound so that the
+  /// static gain error |T h^-alpha S(L)| / (1 + ...) stays below this relative tolerance
+  /// (GrunwaldLetnikovMemoryLength with tail_tolerance = tol h^alpha / T), capped at the record.
+  double gl_static_gain_tolerance = 0.0;
 };
+
+/// The GL memory (internal steps) that SimulateFractionalFoptd uses for a record of `samples`.
+int GlMemoryLength(const FractionalFoptdParams& params, double sample_time_s, int samples,
+                   const FractionalSimOptions& options);
 
 /// Simulates y (same length as u) with the chosen method; see the sampling convention above.
 /// @throws std::invalid_argument on invalid params, sample_time_s <= 0 or an empty u.

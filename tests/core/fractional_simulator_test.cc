@@ -165,6 +165,25 @@ TEST(FractionalSimulatorTest, StreamingEqualsBatch) {
   EXPECT_EQ(sim.output(), 0.0);
 }
 
+TEST(FractionalSimulatorTest, ShortMemoryFollowsTheTailBound) {
+  // alpha = 1.5: the GL tail decays like L^-1.5, so a 1 % static-gain tolerance needs a short
+  // memory; the settled value must then sit within that tolerance of K (exact value: K).
+  const FractionalFoptdParams p{1.0, 2.0, 1.5, 0.0};
+  FractionalSimOptions options = Method(FractionalSimMethod::kGrunwaldLetnikov);
+  options.gl_static_gain_tolerance = 1e-2;
+  const int samples = 2000;
+  const int memory = GlMemoryLength(p, 0.15, samples, options);
+  const int full = samples * DefaultGlSubsteps(p, 0.15);
+  EXPECT_LT(memory, full / 4);
+  const Eigen::VectorXd y =
+      SimulateFractionalFoptd(p, Eigen::VectorXd::Ones(samples), 0.15, options);
+  EXPECT_NEAR(y(samples - 1), 1.0, 1e-2);
+  // alpha = 0.6 cannot reach 1e-3 within the record: the memory is capped at the full record.
+  options.gl_static_gain_tolerance = 1e-3;
+  EXPECT_EQ(GlMemoryLength({1.0, 10.0, 0.6, 0.0}, 0.15, 100, options),
+            100 * DefaultGlSubsteps({1.0, 10.0, 0.6, 0.0}, 0.15));
+}
+
 TEST(FractionalSimulatorTest, RejectsBadArguments) {
   const Eigen::VectorXd u = Eigen::VectorXd::Ones(10);
   EXPECT_THROW(SimulateFractionalFoptd({1.0, 1.0, 2.0, 0.0}, u, 0.1), std::invalid_argument);
