@@ -5,6 +5,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "core/grunwald_letnikov.h"
 #include "core/levenberg_marquardt.h"
@@ -90,54 +91,36 @@ Eigen::VectorXd SimulateCommensurate(const CommensurateModel& model,
   return output;
 }
 
-CommensurateFitResult FitCommensurate(const Eigen::Ref<const Eigen::VectorXd>& input,
-                                      const Eigen::Ref<const Eigen::VectorXd>& output, int q,
-                                      int delay_samples, double sample_time_s,
-                                      const CommensurateFitOptions& options) {
-  if (q < 1) {
-    throw std::invalid_argument("FitCommensurate: q = " + std::to_string(q) + " must be >= 1");
-  }
-  if (delay_samples < 0) {
-    throw std::invalid_argument(
-        "FitCommensurate: delay_samples = " + std::to_string(delay_samples) + " must be >= 0");
-  }
-  if (!(sample_time_s > 0.0)) {
-    throw std::invalid_argument(
-        "FitCommensurate: sample_time_s = " + std::to_string(sample_time_s) + " must be > 0");
-  }
-  const Eigen::Index steps = input.size();
-  const int n = 2 * q;
-  if (output.size() != steps) {
-    throw std::invalid_argument("FitCommensurate: input has " + std::to_string(steps) +
-                                " samples but output has " + std::to_string(output.size()));
-  }
-  if (steps < 10 * n + delay_samples) {
-    throw std::invalid_argument("FitCommensurate: " + std::to_string(steps) +
-                                " samples, need at least " +
-                                std::to_string(10 * n + delay_samples));
-  }
-  CommensurateFitResult result;
-  result.input_offset = input(0);
-  result.output_offset = output(0);
-  const Eigen::VectorXd du = input.array() - input(0);
-  const Eigen::VectorXd dy = output.array() - output(0);
-  const double alpha = 1.0 / q;
+namespace {
 
-  // Stage 1: equation-error least squares.  Columns: a_1..a_n, g_1..g_{n-1} (g_m = a_n c_m).
-  std::vector<Eigen::VectorXd> dy_orders(static_cast<size_t>(n + 1));
-  std::vector<Eigen::VectorXd> du_orders(static_cast<size_t>(n));
-  for (int i = 0; i <= n; ++i)
-    dy_orders[static_cast<size_t>(i)] = FractionalDifference(dy, i * alpha);
-  for (int m = 0; m < n; ++m)
-    du_orders[static_cast<size_t>(m)] = FractionalDifference(du, m * alpha);
+// The GL differences of du and dy needed by the least-squares recursion (independent of nk).
+struct Differences {
+  Eigen::VectorXd du, dy;
+  std::vector<Eigen::VectorXd> dy_orders;  // [D^{i alpha} dy], i = 0..n
+  std::vector<Eigen::VectorXd> du_orders;  // [D^{m alpha} du], m = 0..n-1
+};
+
+Differences ComputeDifferences(const Eigen::VectorXd& du, const Eigen::VectorXd& dy, int q) {
+  const int n = 2 * q;
+  const double alpha = 1.0 / q;
+  Differences d{du, dy, {}, {}};
+  for (int i = 0; i <= n; ++i) d.dy_orders.push_back(FractionalDifference(dy, i * alpha));
+  for (int m = 0; m < n; ++m) d.du_orders.push_back(FractionalDifference(du, m * alpha));
+  return d;
+}
+
+// Equation-error least squares.  Columns: a_1..a_n, g_1..g_{n-1} (g_m = a_n c_m).
+CommensurateModel LeastSquaresModel(const Differences& d, int q, int delay_samples) {
+  const int n = 2 * q;
+  const Eigen::Index steps = d.du.size();
   Eigen::MatrixXd phi(steps, 2 * n - 1);
   Eigen::VectorXd target(steps);
   for (Eigen::Index k = 0; k < steps; ++k) {
-    target(k) = -dy_orders[static_cast<size_t>(n)](k);
-    for (int i = 1; i < n; ++i) phi(k, i - 1) = At(dy_orders[static_cast<size_t>(n - i)], k - i);
-    phi(k, n - 1) = At(dy, k - n) - At(du, k - n - delay_samples);
+    target(k) = -d.dy_orders[static_cast<size_t>(n)](k);
+    for (int i = 1; i < n; ++i) phi(k, i - 1) = At(d.dy_orders[static_cast<size_t>(n - i)], k - i);
+    phi(k, n - 1) = At(d.dy, k - n) - At(d.du, k - n - delay_samples);
     for (int m = 1; m < n; ++m) {
-      phi(k, n - 1 + m) = -At(du_orders[static_cast<size_t>(m)], k - n + m - delay_samples);
+      phi(k, n - 1 + m) = -At(d.du_orders[static_cast<size_t>(m)], k - n + m - delay_samples);
     }
   }
   const Eigen::VectorXd theta = phi.colPivHouseholderQr().solve(target);
@@ -147,11 +130,22 @@ CommensurateFitResult FitCommensurate(const Eigen::Ref<const Eigen::VectorXd>& i
   model.a = theta.head(n);
   const double a_n = model.a(n - 1);
   model.c = a_n != 0.0 ? Eigen::VectorXd(theta.tail(n - 1) / a_n) : Eigen::VectorXd::Zero(n - 1);
+  return model;
+}
+
+// Stage 2 (seed 1): LM on the simulation error, and the result's bookkeeping.
+CommensurateFitResult Refine(const CommensurateModel& model, const Eigen::VectorXd& du,
+                             const Eigen::VectorXd& dy,
+                             const Eigen::Ref<const Eigen::VectorXd>& input,
+                             const Eigen::Ref<const Eigen::VectorXd>& output, double sample_time_s,
+                             const CommensurateFitOptions& options) {
+  const int n = model.order();
+  CommensurateFitResult result;
+  result.input_offset = input(0);
+  result.output_offset = output(0);
   result.initial = model;
   result.model = model;
   result.converged = true;
-
-  // Stage 2: simulation error.
   Eigen::VectorXd simulated = SimulateCommensurate(model, du, options.memory_length);
   // An unstable least-squares model cannot start the refinement; it is returned as it is.
   if (options.refine && simulated.allFinite() && (simulated - dy).squaredNorm() < 1e100) {
@@ -179,6 +173,66 @@ CommensurateFitResult FitCommensurate(const Eigen::Ref<const Eigen::VectorXd>& i
   result.simulated = simulated.array() + result.output_offset;
   result.metrics = ComputeMetrics(output, result.simulated, sample_time_s);
   return result;
+}
+
+void CheckFitArguments(const char* where, Eigen::Index input_size, Eigen::Index output_size, int q,
+                       int delay_samples, double sample_time_s) {
+  const std::string w(where);
+  if (q < 1) throw std::invalid_argument(w + ": q = " + std::to_string(q) + " must be >= 1");
+  if (delay_samples < 0) {
+    throw std::invalid_argument(w + ": delay_samples = " + std::to_string(delay_samples) +
+                                " must be >= 0");
+  }
+  if (!(sample_time_s > 0.0)) {
+    throw std::invalid_argument(w + ": sample_time_s = " + std::to_string(sample_time_s) +
+                                " must be > 0");
+  }
+  if (output_size != input_size) {
+    throw std::invalid_argument(w + ": input has " + std::to_string(input_size) +
+                                " samples but output has " + std::to_string(output_size));
+  }
+  if (input_size < 20 * q + delay_samples) {
+    throw std::invalid_argument(w + ": " + std::to_string(input_size) + " samples, need at least " +
+                                std::to_string(20 * q + delay_samples));
+  }
+}
+
+}  // namespace
+
+CommensurateFitResult FitCommensurate(const Eigen::Ref<const Eigen::VectorXd>& input,
+                                      const Eigen::Ref<const Eigen::VectorXd>& output, int q,
+                                      int delay_samples, double sample_time_s,
+                                      const CommensurateFitOptions& options) {
+  CheckFitArguments("FitCommensurate", input.size(), output.size(), q, delay_samples,
+                    sample_time_s);
+  const Eigen::VectorXd du = input.array() - input(0);
+  const Eigen::VectorXd dy = output.array() - output(0);
+  const Differences d = ComputeDifferences(du, dy, q);
+  return Refine(LeastSquaresModel(d, q, delay_samples), du, dy, input, output, sample_time_s,
+                options);
+}
+
+CommensurateFitResult FitCommensurateScanDelay(const Eigen::Ref<const Eigen::VectorXd>& input,
+                                               const Eigen::Ref<const Eigen::VectorXd>& output,
+                                               int q, int max_delay_samples, double sample_time_s,
+                                               const CommensurateFitOptions& options) {
+  CheckFitArguments("FitCommensurateScanDelay", input.size(), output.size(), q, max_delay_samples,
+                    sample_time_s);
+  const Eigen::VectorXd du = input.array() - input(0);
+  const Eigen::VectorXd dy = output.array() - output(0);
+  const Differences d = ComputeDifferences(du, dy, q);
+  double best = std::numeric_limits<double>::infinity();
+  CommensurateModel chosen = LeastSquaresModel(d, q, 0);
+  for (int nk = 0; nk <= max_delay_samples; ++nk) {
+    const CommensurateModel m = LeastSquaresModel(d, q, nk);
+    const Eigen::VectorXd s = SimulateCommensurate(m, du, options.memory_length);
+    const double cost = (s - dy).squaredNorm();
+    if (std::isfinite(cost) && cost < best) {
+      best = cost;
+      chosen = m;
+    }
+  }
+  return Refine(chosen, du, dy, input, output, sample_time_s, options);
 }
 
 }  // namespace canalid::core

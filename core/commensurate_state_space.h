@@ -61,10 +61,19 @@ struct CommensurateFitResult {
 /// with [D^b s](k) = sum_{j=0..k} w_j^(b) s(k-j) (full-memory GL), linear in (a, a_n c).
 /// Stage 2 (seed 1): Levenberg-Marquardt of (a, c) on the simulation error, started there.
 /// @throws std::invalid_argument on sizes, q < 1, delay < 0, sample_time_s <= 0, or too few
-///         samples (< 10 n + delay).
+///         samples (< 10 n + delay, n = 2q).
 CommensurateFitResult FitCommensurate(const Eigen::Ref<const Eigen::VectorXd>& input,
                                       const Eigen::Ref<const Eigen::VectorXd>& output, int q,
                                       int delay_samples, double sample_time_s,
                                       const CommensurateFitOptions& options = {});
+
+/// As FitCommensurate with the delay unknown: the least-squares model is fitted for every nk in
+/// 0..max_delay_samples (the GL differences are computed once), the one whose simulation error
+/// is smallest is kept and refined.  Cost: one O(N^2 n) simulation per candidate delay.
+/// @throws std::invalid_argument as FitCommensurate (with max_delay_samples for the delay).
+CommensurateFitResult FitCommensurateScanDelay(const Eigen::Ref<const Eigen::VectorXd>& input,
+                                               const Eigen::Ref<const Eigen::VectorXd>& output,
+                                               int q, int max_delay_samples, double sample_time_s,
+                                               const CommensurateFitOptions& options = {});
 
 }  // namespace canalid::core

@@ -158,6 +158,18 @@ TEST(CommensurateStateSpaceTest, LevenbergMarquardtImprovesANoisyFit) {
   }
 }
 
+TEST(CommensurateStateSpaceTest, DelayScanFindsTheDelay) {
+  for (const CommensurateModel& m : {SeedOneHalf(), IntegerSecondOrder()}) {
+    const Eigen::VectorXd u = Prbs(500, 6);
+    const Eigen::VectorXd y = NaiveSimulation(m, u);
+    CommensurateFitOptions options;
+    options.refine = false;
+    const CommensurateFitResult r = FitCommensurateScanDelay(u, y, m.q, 25, 0.5, options);
+    EXPECT_EQ(r.model.delay_samples, m.delay_samples) << "q " << m.q;
+    EXPECT_GT(r.metrics.fit_percent, 99.99);
+  }
+}
+
 TEST(CommensurateStateSpaceTest, RejectsBadArguments) {
   CommensurateModel m = SeedOneHalf();
   m.c.resize(2);
