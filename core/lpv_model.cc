@@ -89,6 +89,57 @@ LocalModelKind FractionalFoptdKind(const FractionalFoptdFitOptions& options) {
   return kind;
 }
 
+LocalModelKind CommensurateKind(int q, int max_delay_samples,
+                                const CommensurateFitOptions& options) {
+  if (q < 1 || max_delay_samples < 0) {
+    throw std::invalid_argument(
+        "CommensurateKind: q = " + std::to_string(q) +
+        " must be >= 1 and max_delay_samples = " + std::to_string(max_delay_samples) + " >= 0");
+  }
+  const int n = 2 * q;
+  LocalModelKind kind;
+  kind.name = "frac_ss_q" + std::to_string(q);
+  for (int i = 1; i <= n; ++i) kind.parameter_names.push_back("a" + std::to_string(i));
+  for (int i = 1; i < n; ++i) kind.parameter_names.push_back("c" + std::to_string(i));
+  kind.parameter_names.push_back("nk");
+  kind.fit = [q, n, max_delay_samples, options](const Eigen::VectorXd& u, const Eigen::VectorXd& y,
+                                                double ts) {
+    const CommensurateFitResult r =
+        FitCommensurateScanDelay(u, y, q, max_delay_samples, ts, options);
+    Eigen::VectorXd p(2 * n);
+    p << r.model.a, r.model.c, r.model.delay_samples;
+    return p;
+  };
+  kind.simulate = [q, n, options](const Eigen::VectorXd& p, const Eigen::VectorXd& du, double) {
+    CommensurateModel m;
+    m.q = q;
+    m.a = p.head(n);
+    m.c = p.segment(n, n - 1);
+    m.delay_samples = static_cast<int>(std::max(0L, std::lround(p(2 * n - 1))));
+    return SimulateCommensurate(m, du, options.memory_length);
+  };
+  return kind;
+}
+
+LocalModelKind IntegerSeed1Kind(const IntegerSeed1FitOptions& options) {
+  LocalModelKind kind;
+  kind.name = "integer_seed1";
+  kind.parameter_names = {"gain", "s_coeff_s2", "m_coeff_s", "delay_s"};
+  kind.fit = [options](const Eigen::VectorXd& u, const Eigen::VectorXd& y, double ts) {
+    const IntegerSeed1FitResult r = FitIntegerSeed1(u, y, ts, options);
+    Eigen::VectorXd p(4);
+    p << r.model.gain, r.model.s_coeff_s2, r.model.m_coeff_s, r.model.delay_s;
+    return p;
+  };
+  kind.simulate = [](const Eigen::VectorXd& p, const Eigen::VectorXd& du, double ts) {
+    // Interpolated parameters may leave the model's domain; clamp to it.
+    const IntegerSeed1Model m{p(0), std::max(p(1), 1e-9), std::max(p(2), 1e-9),
+                              std::max(p(3), 0.0)};
+    return SimulateIntegerSeed1(m, du, ts);
+  };
+  return kind;
+}
+
 double EvaluatePolynomial(const Eigen::Ref<const Eigen::VectorXd>& coefficients, double theta) {
   double value = 0.0;
   for (Eigen::Index i = 0; i < coefficients.size(); ++i) value = value * theta + coefficients(i);

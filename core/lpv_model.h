@@ -4,7 +4,9 @@
 #include <string>
 #include <vector>
 
+#include "core/commensurate_state_space.h"
 #include "core/fractional_foptd_fit.h"
+#include "core/integer_seed1_model.h"
 
 namespace canalid::core {
 
@@ -32,6 +34,17 @@ LocalModelKind FirstOrderArxKind(int max_delay_samples);
 /// Fractional FOPTD (fractional_foptd_fit.h).  Parameters [gain, time_constant_s, alpha,
 /// delay_s].  Simulation with the Oustaloup simulator.
 LocalModelKind FractionalFoptdKind(const FractionalFoptdFitOptions& options = {});
+
+/// Seed 1's commensurate fractional state space of order alpha = 1/q
+/// (commensurate_state_space.h), the delay chosen in 0..max_delay_samples
+/// (FitCommensurateScanDelay).  Parameters [a_1..a_n, c_1..c_{n-1}, nk].
+/// @throws std::invalid_argument if q < 1 or max_delay_samples < 0.
+LocalModelKind CommensurateKind(int q, int max_delay_samples,
+                                const CommensurateFitOptions& options = {});
+
+/// Seed 1's integer model k e^{-tau s}/(s (S s^2 + M s + 1)) (integer_seed1_model.h).
+/// Parameters [gain, s_coeff_s2, m_coeff_s, delay_s].
+LocalModelKind IntegerSeed1Kind(const IntegerSeed1FitOptions& options = {});
 
 /// Values of the polynomial p_1 theta^d + ... + p_d theta + p_{d+1} (coefficients highest degree
 /// first, as in seed 1: p1 theta^2 + p2 theta + p3).

@@ -135,6 +135,44 @@ TEST(LpvModelTest, FractionalLocalModelsAndMaePerOperatingPoint) {
   }
 }
 
+TEST(LpvModelTest, CommensurateLocalModelsRecoverQuadraticLaws) {
+  // q = 1 (integer commensurate) local models whose a_1, a_2, c_1 follow quadratic laws and whose
+  // delay falls with theta; each operating point is a separate experiment from rest.
+  const Eigen::Vector3d a1(0.01, -0.05, 0.55), a2(0.0, 0.01, 0.08), c1(-0.02, 0.1, 0.3);
+  const int per_point = 400;
+  Eigen::VectorXd u(4 * per_point), y(4 * per_point), theta(4 * per_point);
+  std::mt19937 rng(8);
+  for (int i = 0; i < 4; ++i) {
+    const double t = 1.0 + i;
+    CommensurateModel m;
+    m.q = 1;
+    m.a = Eigen::Vector2d(Poly(a1, t), Poly(a2, t));
+    m.c = Eigen::VectorXd::Constant(1, Poly(c1, t));
+    m.delay_samples = 8 - 2 * i;
+    Eigen::VectorXd ui = Eigen::VectorXd::Zero(per_point);
+    double level = 1.0;
+    for (int k = 10; k < per_point; ++k) {
+      if (k % 12 == 0) level = (rng() % 2) ? 1.0 : -1.0;
+      ui(k) = level;
+    }
+    u.segment(i * per_point, per_point) = ui;
+    y.segment(i * per_point, per_point) = SimulateCommensurate(m, ui).array() + 5.0;
+    theta.segment(i * per_point, per_point).setConstant(t);
+  }
+  CommensurateFitOptions options;
+  options.refine = false;  // noise free: the least squares is exact
+  const LpvIdentification id =
+      IdentifyLpv(u, y, theta, 0.5, {0.5, 1.5, 2.5, 3.5, 4.5}, CommensurateKind(1, 12, options));
+  ASSERT_EQ(id.points.size(), 4u);
+  for (int j = 0; j < 3; ++j) {
+    EXPECT_NEAR(id.model.coefficients(0, j), a1(j), 1e-7);
+    EXPECT_NEAR(id.model.coefficients(1, j), a2(j), 1e-7);
+    EXPECT_NEAR(id.model.coefficients(2, j), c1(j), 1e-7);
+  }
+  EXPECT_NEAR(EvaluatePolynomial(id.model.coefficients.row(3).transpose(), 2.5), 5.0, 1e-7);
+  for (const LpvOperatingPoint& p : id.points) EXPECT_LT(p.lpv_mae, 1e-7);
+}
+
 TEST(LpvModelTest, RejectsBadArguments) {
   const ArxRecord r = MakeArxRecord();
   EXPECT_THROW(IdentifyLpv(r.u, r.y, r.theta, 0.5, {0.5, 1.5}, FirstOrderArxKind(15)),
