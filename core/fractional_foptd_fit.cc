@@ -209,26 +209,28 @@ FractionalFoptdFitResult FitFractionalFoptd(const Eigen::Ref<const Eigen::Vector
   // Stage 4: joint refinement; K is the linear least-squares gain for each (T, alpha, tau).
   if (options.refine) {
     auto residual = [&](const Eigen::VectorXd& p, Eigen::VectorXd& r) {
-      const Eigen::VectorXd& s = unit.Simulate(std::exp(p(0)), p(1), p(2));
+      const Eigen::VectorXd& s = unit.Simulate(std::exp(p(1) * p(0)), p(1), p(2));
       const OffsetGain og = LeastSquaresOffsetGain(s, dy);
       r = (og.gain * s - dy).array() + og.offset;
       return r.allFinite();
     };
     Eigen::VectorXd start(3), lower(3), upper(3);
-    start << std::log(best_tc), best_alpha, delay;
-    lower << std::log(1e-3 * std::pow(ts, best_alpha)) - 10.0, options.alpha_min, 0.0;
-    upper << std::log(std::pow(10.0 * record_s, options.alpha_max)) + 5.0, options.alpha_max,
-        max_delay;
+    // p(0) = log of the time scale T^(1/alpha): bounded to [Ts / 100, 10 x record], which keeps
+    // unidentifiable records (a response far from settled) from running off to absurd T.
+    start << std::log(best_tc) / best_alpha, best_alpha, delay;
+    lower << std::log(0.01 * ts), options.alpha_min, 0.0;
+    upper << std::log(10.0 * record_s), options.alpha_max, max_delay;
     LmOptions lm;
     lm.max_iterations = options.max_iterations;
     lm.relative_step_tolerance = 1e-7;
     lm.relative_cost_tolerance = 1e-9;
     lm.jacobian_step = 1e-5;
     const LmResult fit = LevenbergMarquardt(residual, start, lower, upper, lm);
-    const Eigen::VectorXd& s = unit.Simulate(std::exp(fit.params(0)), fit.params(1), fit.params(2));
+    const double tc = std::exp(fit.params(1) * fit.params(0));
+    const Eigen::VectorXd& s = unit.Simulate(tc, fit.params(1), fit.params(2));
     const OffsetGain og = LeastSquaresOffsetGain(s, dy);
     result.output_offset += og.offset;
-    result.params = {og.gain, std::exp(fit.params(0)), fit.params(1), fit.params(2)};
+    result.params = {og.gain, tc, fit.params(1), fit.params(2)};
     result.converged = fit.converged;
   }
 

@@ -44,7 +44,8 @@ struct FractionalFoptdFitResult {
 ///     absolute first difference;
 ///  3. T and alpha minimising the ISE (grid over alpha in 0.5..1.5 and the time scale
 ///     T^(1/alpha) in [Ts, record], with K re-estimated by least squares at each point);
-///  4. joint LM refinement (core/levenberg_marquardt.h) of (log T, alpha, tau) on the simulation
+///  4. joint LM refinement (core/levenberg_marquardt.h) of (log T^(1/alpha) bounded to
+///     [Ts/100, 10 x record], alpha, tau) on the simulation
 ///     error, K and the rest value y0 eliminated by linear least squares for each (T, alpha,
 ///     tau) (so a record that starts at the step does not hang on its single rest sample).
 /// Simulation uses the Oustaloup simulator (exact ZOH of the rational approximation, sub-sample
