@@ -42,17 +42,20 @@ void BankSelector::Reset() {
 }
 
 void BankSelector::Record(int i, double prediction_error) {
-  if (!std::isfinite(prediction_error)) return;
+  // The warm-up errors (estimators still converging from theta = 0) would dominate the average
+  // for many memory lengths: they are not recorded.
+  if (!std::isfinite(prediction_error) || samples_ < options_.warmup_samples) return;
   double& l = loss_[static_cast<std::size_t>(i)];
   // Start the average at the first error so that early samples are not weighted toward zero.
-  l = samples_ == 0 ? prediction_error * prediction_error
-                    : options_.loss_forgetting * l +
-                          (1.0 - options_.loss_forgetting) * prediction_error * prediction_error;
+  l = samples_ == options_.warmup_samples
+          ? prediction_error * prediction_error
+          : options_.loss_forgetting * l +
+                (1.0 - options_.loss_forgetting) * prediction_error * prediction_error;
 }
 
 int BankSelector::Commit() {
   ++samples_;
-  if (samples_ < options_.warmup_samples) return selected_;
+  if (samples_ <= options_.warmup_samples) return selected_;
   int best = 0;
   for (int i = 1; i < num_candidates(); ++i) {
     if (loss(i) < loss(best)) best = i;

@@ -8,7 +8,7 @@ struct BankSelectorOptions {
   double loss_forgetting = 0.99;  ///< gamma of the loss J_i <- gamma J_i + (1 - gamma) e_i^2
   double switch_margin = 0.1;     ///< a challenger must have J < (1 - margin) J_selected ...
   int switch_hold_samples = 20;   ///< ... on this many consecutive samples to take over
-  int warmup_samples = 20;        ///< no choice before this many losses were recorded
+  int warmup_samples = 20;        ///< errors of the first samples are not recorded
 
   /// @throws std::invalid_argument naming the option out of range.
   void Validate() const;

@@ -82,10 +82,11 @@ class Rls final {
   double ConditionNumber() const;
 
  private:
-  bool UsesUd() const { return options_.method == RlsMethod::kBiermanUd; }
-  bool UsesCovariance() const {
-    return options_.method != RlsMethod::kBiermanUd && options_.method != RlsMethod::kNlms;
+  bool UsesUd() const {
+    return options_.method == RlsMethod::kUdDirectional ||
+           options_.method == RlsMethod::kUdExponential;
   }
+  bool UsesCovariance() const { return !UsesUd() && options_.method != RlsMethod::kNlms; }
   double GainForgetting() const {
     return (options_.method == RlsMethod::kKalman || options_.method == RlsMethod::kNlms ||
             options_.method == RlsMethod::kConstantTrace)
@@ -94,8 +95,7 @@ class Rls final {
   }
   template <typename Derived>
   double Excitation(const Eigen::MatrixBase<Derived>& phi);
-  template <typename Derived>
-  void UpdateUd(const Eigen::MatrixBase<Derived>& phi, double e, double lambda);
+  void UpdateUdFactors(double measurement_variance);
   void UpdateNoise(double e, double scale);
   void Symmetrise();
   double Trace() const;
@@ -116,6 +116,7 @@ class Rls final {
   Vector f_;  // work: U' phi (UD)
   Vector g_;  // work: D f (UD) or P phi
   Vector k_;  // work: gain accumulator
+  Vector h_;  // work: P phi (UD directional)
   Matrix w_;  // work matrices (stabilised, transform)
   Matrix w2_;
   Eigen::LLT<Matrix> llt_;
@@ -159,6 +160,7 @@ Rls<N>::Rls(const RlsOptions& options, int num_params)
   f_.setZero(n_);
   g_.setZero(n_);
   k_.setZero(n_);
+  h_.setZero(n_);
   w_.setZero(n_, n_);
   w2_.setZero(n_, n_);
   if (options_.noise_forgetting > 0.0) {
@@ -289,12 +291,10 @@ double Rls<N>::Excitation(const Eigen::MatrixBase<Derived>& phi) {
 }
 
 template <int N>
-template <typename Derived>
-void Rls<N>::UpdateUd(const Eigen::MatrixBase<Derived>& phi, double e, double lambda) {
-  (void)phi;  // f_ = U' phi and g_ = D f were computed by Excitation
-  // Bierman's measurement update with measurement variance lambda, then D / lambda: the UD form
-  // of P <- (P - P phi phi' P / (lambda + r)) / lambda.
-  double alpha = lambda;
+void Rls<N>::UpdateUdFactors(double measurement_variance) {
+  // Bierman's measurement update of U and D with f_ = U' phi and g_ = D f (from Excitation):
+  // P <- P - P phi phi' P / (R + r).  k_ accumulates P phi for the gain P phi / (R + r).
+  double alpha = measurement_variance;
   for (int j = 0; j < n_; ++j) {
     const double alpha_prev = alpha;
     alpha += f_(j) * g_(j);
@@ -307,9 +307,6 @@ void Rls<N>::UpdateUd(const Eigen::MatrixBase<Derived>& phi, double e, double la
       k_(i) += uij * g_(j);
     }
   }
-  const double step = e / alpha;
-  for (int i = 0; i < n_; ++i) theta_(i) += k_(i) * step;
-  if (lambda != 1.0) d_ /= lambda;
 }
 
 template <int N>
@@ -382,9 +379,25 @@ typename Rls<N>::Result Rls<N>::Update(const Eigen::MatrixBase<Derived>& phi, do
     return {e, RlsOutcome::kFrozen};
   }
   switch (options_.method) {
-    case RlsMethod::kBiermanUd:
-      UpdateUd(phi, e_used, lambda);
+    case RlsMethod::kUdExponential: {
+      // P <- (P - P phi phi' P / (lambda + r)) / lambda: Bierman with R = lambda, then D / lambda.
+      UpdateUdFactors(lambda);
+      theta_ += k_ * (e_used / (lambda + r));
+      if (lambda != 1.0) d_ /= lambda;
       break;
+    }
+    case RlsMethod::kUdDirectional: {
+      // P phi = U D U' phi = U g_, needed before the factors change.
+      for (int i = 0; i < n_; ++i) {
+        double s = 0.0;
+        for (int j = i; j < n_; ++j) s += u_(i, j) * g_(j);
+        h_(i) = s;
+      }
+      const double forget = 1.0 - lambda;
+      if (r > forget) UpdateUdFactors(r / (r - forget));
+      theta_ += h_ * (e_used / (lambda + r));
+      break;
+    }
     case RlsMethod::kExponential:
     case RlsMethod::kDirectional:
     case RlsMethod::kStabilised: {

@@ -8,9 +8,16 @@ namespace canalid::core {
 /// The update law of an Rls estimator.  All share the guards of RlsOptions.  With forgetting 1 and
 /// a large initial covariance every least-squares variant equals batch least squares.
 enum class RlsMethod {
-  /// Default.  Bierman's UD-factorised update, P = U D U' (U unit upper triangular): P stays
-  /// symmetric and positive definite by construction.  Exponential forgetting divides D by lambda.
-  kBiermanUd,
+  /// Default.  Bierman's UD-factorised update, P = U D U' (U unit upper triangular, D > 0: P
+  /// stays symmetric positive definite by construction) with Kulhavy's directional forgetting:
+  /// P <- P - beta P phi phi' P / (lambda + r), beta = 1 - (1 - lambda) / r, which is Bierman's
+  /// measurement update with the variance R = r / (r - (1 - lambda)); gain P phi / (lambda + r).
+  /// When r <= 1 - lambda (phi already known better than the memory allows) beta is taken as 0:
+  /// theta is updated, P is left alone.  Information is forgotten only in excited directions,
+  /// so P stays bounded when excitation stops (no windup).
+  kUdDirectional,
+  /// Bierman's UD update with exponential forgetting (D divided by lambda).
+  kUdExponential,
   /// Covariance form with exponential forgetting, P <- (P - P phi phi' P / (lambda + r)) / lambda,
   /// r = phi' P phi, symmetrised after each step.  Winds up when excitation stops.
   kExponential,
@@ -37,7 +44,7 @@ enum class RlsMethod {
 /// z = e / sqrt(sigma2 (1 + phi' P phi / lambda)), sigma2 the running innovation variance estimate;
 /// they are active once the weighted sample count exceeds n + warmup_samples.
 struct RlsOptions {
-  RlsMethod method = RlsMethod::kBiermanUd;
+  RlsMethod method = RlsMethod::kUdDirectional;
   double forgetting = 1.0;                                     ///< lambda, 0 < lambda <= 1
   double initial_covariance = 1e6;                             ///< P0 = p0 I, > 0
   double trace_max = std::numeric_limits<double>::infinity();  ///< P scaled down above it

@@ -176,6 +176,96 @@ TEST(OnlineIdBank, SameSamplesGiveBitIdenticalSnapshots) {
   EXPECT_EQ(a.selected_delay_samples(), b.selected_delay_samples());
 }
 
+// Windup: both flows held constant for 1000 samples = 20 memory lengths of lambda = 0.98 (the
+// issue asks for ten), then excitation resumes.  Numbers observed with this seed (the assertions
+// leave margin):
+//   default (UD, directional forgetting): max area error 0.25 % while held, 0.26 % after;
+//     trace(P) never exceeds its value at the end of the excitation (0.026);
+//   plain exponential forgetting: trace(P) grows from 0.074 to 2.7e6 (lambda^-k), the area wanders
+//     by 8 % while held and bursts to 83 % error when excitation resumes.
+TEST(OnlineIdBank, DefaultMethodDoesNotWindUpWhenExcitationStops) {
+  PoolSpec spec;
+  spec.samples = 2600;
+  spec.hold_from = 1000;
+  spec.hold_to = 2000;
+  const PoolData d = MakePool(spec);
+  struct Run {
+    double max_error_held = 0.0;
+    double max_error_after = 0.0;
+    double trace_before = 0.0;
+    double max_trace_held = 0.0;
+  };
+  auto run = [&](RlsMethod method) {
+    OnlineIdOptions o = BankOptions(7, 7, 0.98);
+    o.rls.method = method;
+    o.rls.initial_covariance = 1e4;
+    OnlineIdBank bank(o);
+    Run r;
+    for (std::size_t k = 0; k < d.level.size(); ++k) {
+      bank.Update(d.q_in[k], d.q_out[k], d.level[k]);
+      const IdSnapshot s = bank.CandidateSnapshot(7);
+      const double error = std::abs(s.area_m2 / 6000.0 - 1.0);
+      if (k == 999) r.trace_before = s.health.trace_p;
+      if (k >= 1000 && k < 2000) {
+        r.max_error_held = std::max(r.max_error_held, error);
+        r.max_trace_held = std::max(r.max_trace_held, s.health.trace_p);
+      }
+      if (k >= 2000) r.max_error_after = std::max(r.max_error_after, error);
+    }
+    return r;
+  };
+  const Run robust = run(RlsOptions{}.method);
+  const Run plain = run(RlsMethod::kExponential);
+  std::printf("default: held %.4f after %.4f trace %.3g -> %.3g\n", robust.max_error_held,
+              robust.max_error_after, robust.trace_before, robust.max_trace_held);
+  std::printf("exponential: held %.4f after %.4f trace %.3g -> %.3g\n", plain.max_error_held,
+              plain.max_error_after, plain.trace_before, plain.max_trace_held);
+  EXPECT_LT(robust.max_error_held, 0.01);
+  EXPECT_LT(robust.max_error_after, 0.01);
+  EXPECT_LE(robust.max_trace_held, 1.01 * robust.trace_before);
+  EXPECT_GT(plain.max_trace_held, 1e4 * plain.trace_before);
+  EXPECT_GT(plain.max_error_after, 0.2);
+}
+
+// Tracking with lambda = 0.98 and CUSUM resets (threshold 10): after a 20 % step in the backwater
+// area (6000 -> 7200 m^2) the selected model is within 5 % of the new area with the right delay
+// from 100 samples after the step on (observed: 59); after a change of delay 7 -> 10 samples the
+// selection is 10 with the area within 5 % from 300 samples on (observed: 163).
+int SamplesToSettle(const PoolSpec& spec, double area_after, int nk_after) {
+  const PoolData d = MakePool(spec);
+  OnlineIdOptions o = BankOptions(0, 15, 0.98);
+  o.rls.initial_covariance = 1e4;
+  o.rls.cusum_threshold = 10.0;
+  OnlineIdBank bank(o);
+  int last_bad = -1;
+  const int change = std::max(spec.change_b_at, spec.change_nk_at);
+  for (std::size_t k = 0; k < d.level.size(); ++k) {
+    bank.Update(d.q_in[k], d.q_out[k], d.level[k]);
+    const IdSnapshot s = bank.Snapshot();
+    const bool settled =
+        s.delay_samples == nk_after && std::abs(s.area_m2 / area_after - 1.0) < 0.05;
+    if (static_cast<int>(k) >= change && !settled) last_bad = static_cast<int>(k);
+  }
+  return last_bad + 1 - change;
+}
+
+TEST(OnlineIdBank, TracksAreaStepAndDelayChange) {
+  PoolSpec area_step;
+  area_step.samples = 3000;
+  area_step.change_b_at = 1500;
+  area_step.b_after = area_step.b / 1.2;
+  const int area_samples = SamplesToSettle(area_step, 7200.0, 7);
+  PoolSpec delay_step;
+  delay_step.samples = 3000;
+  delay_step.change_nk_at = 1500;
+  delay_step.nk_after = 10;
+  const int delay_samples = SamplesToSettle(delay_step, 6000.0, 10);
+  std::printf("settled after %d samples (area step), %d samples (delay change)\n", area_samples,
+              delay_samples);
+  EXPECT_LE(area_samples, 100);
+  EXPECT_LE(delay_samples, 300);
+}
+
 TEST(OnlineIdBank, BadOptionsThrow) {
   OnlineIdOptions o;
   o.max_delay_samples = -1;

@@ -83,9 +83,9 @@ TEST_P(RlsBatchTest, ForgettingOneEqualsBatchLeastSquares) {
 }
 
 INSTANTIATE_TEST_SUITE_P(LeastSquaresMethods, RlsBatchTest,
-                         ::testing::Values(RlsMethod::kBiermanUd, RlsMethod::kExponential,
-                                           RlsMethod::kDirectional, RlsMethod::kStabilised,
-                                           RlsMethod::kKalman));
+                         ::testing::Values(RlsMethod::kUdDirectional, RlsMethod::kUdExponential,
+                                           RlsMethod::kExponential, RlsMethod::kDirectional,
+                                           RlsMethod::kStabilised, RlsMethod::kKalman));
 
 TEST(Rls, DynamicSizeMatchesFixedSizeBitForBit) {
   Eigen::VectorXd truth(3);
