@@ -1,0 +1,47 @@
+#pragma once
+#include <vector>
+
+namespace canalid::core {
+
+/// Options of BankSelector.
+struct BankSelectorOptions {
+  double loss_forgetting = 0.99;  ///< gamma of the loss J_i <- gamma J_i + (1 - gamma) e_i^2
+  double switch_margin = 0.1;     ///< a challenger must have J < (1 - margin) J_selected ...
+  int switch_hold_samples = 20;   ///< ... on this many consecutive samples to take over
+  int warmup_samples = 20;        ///< errors of the first samples are not recorded
+
+  /// @throws std::invalid_argument naming the option out of range.
+  void Validate() const;
+};
+
+/// Chooses one of a bank of estimators by the exponentially weighted squared a-priori prediction
+/// error, with hysteresis: the selection changes only when the best candidate beats the selected
+/// one by the margin on switch_hold_samples consecutive samples (the first choice after the
+/// warm-up is simply the best).  Allocates only in the constructor.  Pure, not thread-safe.
+class BankSelector final {
+ public:
+  /// @throws std::invalid_argument if num_candidates < 1 or an option is out of range.
+  BankSelector(int num_candidates, const BankSelectorOptions& options);
+
+  /// Records candidate i's a-priori error of the current sample (non-finite errors are ignored).
+  void Record(int i, double prediction_error);
+  /// Closes the sample: updates the choice.  Returns the selected index (-1 during the warm-up).
+  int Commit();
+
+  int selected() const { return selected_; }
+  double loss(int i) const { return loss_[static_cast<std::size_t>(i)]; }
+  int num_candidates() const { return static_cast<int>(loss_.size()); }
+  int switches() const { return switches_; }
+  void Reset();
+
+ private:
+  BankSelectorOptions options_;
+  std::vector<double> loss_;
+  int samples_ = 0;
+  int selected_ = -1;
+  int challenger_ = -1;
+  int challenger_count_ = 0;
+  int switches_ = 0;
+};
+
+}  // namespace canalid::core
