@@ -205,14 +205,18 @@ void PlcPoller::PollOnce() {
     const ReadBlock& block = plan_.blocks[b];
     std::span<uint16_t> out(block_registers_.data() + block_offsets_[b],
                             static_cast<std::size_t>(block.count));
-    PlcStatus r = port_->connected() ? port_->ReadRegisters(block.kind, block.start, out)
-                                     : PlcStatus{PlcErrorKind::kDisconnected, 0, 0};
+    // Blocks after a lost link are not attempted, so not counted as read errors either.
+    const bool attempted = port_->connected();
+    const PlcStatus r = attempted ? port_->ReadRegisters(block.kind, block.start, out)
+                                  : PlcStatus{PlcErrorKind::kDisconnected, 0, 0};
     if (r.ok()) {
       counters_.block_reads_ok.fetch_add(1, std::memory_order_relaxed);
       consecutive_timeouts_ = 0;
     } else {
-      counters_.read_errors[static_cast<std::size_t>(r.kind)].fetch_add(1,
-                                                                        std::memory_order_relaxed);
+      if (attempted) {
+        counters_.read_errors[static_cast<std::size_t>(r.kind)].fetch_add(
+            1, std::memory_order_relaxed);
+      }
       if (s.status.ok()) s.status = r;
       // Zero the block so a failed read can never be decoded as data.
       std::fill(out.begin(), out.end(), uint16_t{0});
