@@ -1,0 +1,76 @@
+#include "drivers/lcm/lcm_bus.h"
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace canalid::drivers {
+
+LcmBus::LcmBus(const std::string& url) : url_(url), lcm_(std::make_unique<lcm::LCM>(url)) {
+  if (!lcm_->good()) {
+    throw std::runtime_error("lcm: cannot open url '" + url +
+                             "' (empty means $LCM_DEFAULT_URL or udpm default; udpm needs a "
+                             "multicast route, e.g. ip route add 224.0.0.0/4 dev lo)");
+  }
+}
+
+LcmBus::~LcmBus() = default;
+
+bool LcmBus::Publish(const std::string& channel, std::span<const uint8_t> data) noexcept {
+  return lcm_->publish(channel, data.data(), static_cast<unsigned int>(data.size())) == 0;
+}
+
+int LcmBus::Subscribe(const std::string& channel_regex, RawHandler handler, int queue_capacity) {
+  auto entry = std::make_unique<Entry>();
+  entry->id = next_id_++;
+  entry->handler = std::move(handler);
+  entry->bus = this;
+  entry->subscription = lcm_->subscribeFunction(channel_regex, &LcmBus::Dispatch, entry.get());
+  if (entry->subscription == nullptr) {
+    throw std::runtime_error("lcm: cannot subscribe to '" + channel_regex + "' on '" + url_ + "'");
+  }
+  entry->subscription->setQueueCapacity(std::max(queue_capacity, 1));
+  entries_.push_back(std::move(entry));
+  return entries_.back()->id;
+}
+
+void LcmBus::Unsubscribe(int id) noexcept {
+  const auto it =
+      std::find_if(entries_.begin(), entries_.end(), [id](const auto& e) { return e->id == id; });
+  if (it == entries_.end()) return;
+  lcm_->unsubscribe((*it)->subscription);
+  entries_.erase(it);
+}
+
+void LcmBus::Dispatch(const lcm::ReceiveBuffer* buffer, const std::string& channel, Entry* entry) {
+  // LCM calls this from C; nothing may escape.
+  try {
+    const std::span<const uint8_t> data(static_cast<const uint8_t*>(buffer->data),
+                                        buffer->data_size);
+    if (!entry->handler(channel, data)) entry->bus->failures_.fetch_add(1);
+  } catch (...) {
+    entry->bus->failures_.fetch_add(1);
+  }
+}
+
+int LcmBus::Handle(double timeout_s) noexcept {
+  const int timeout_ms =
+      static_cast<int>(std::clamp(std::ceil(std::max(timeout_s, 0.0) * 1e3), 0.0, 2e9));
+  const int first = lcm_->handleTimeout(timeout_ms);
+  if (first < 0) return -1;
+  if (first == 0) return 0;
+  int handled = 1;
+  while (handled < 10000) {
+    const int rc = lcm_->handleTimeout(0);
+    if (rc < 0) return -1;
+    if (rc == 0) break;
+    ++handled;
+  }
+  return handled;
+}
+
+int LcmBus::fileno() noexcept { return lcm_->getFileno(); }
+
+}  // namespace canalid::drivers

@@ -1,0 +1,189 @@
+#include "drivers/modbus/modbus_port.h"
+
+#include <modbus/modbus.h>
+
+#include <cerrno>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "drivers/modbus/modbus_errors.h"
+
+namespace canalid::drivers {
+namespace {
+
+void CheckRange(const char* what, double value, double low, double high) {
+  if (!(value >= low && value <= high)) {
+    throw std::invalid_argument(std::string("modbus: ") + what + " = " + std::to_string(value) +
+                                " outside [" + std::to_string(low) + ", " + std::to_string(high) +
+                                "]");
+  }
+}
+
+void CheckTimeout(const char* what, double seconds) {
+  if (!(seconds > 0.0 && seconds <= 60.0)) {
+    throw std::invalid_argument(std::string("modbus: ") + what + " = " + std::to_string(seconds) +
+                                " s outside (0, 60]");
+  }
+}
+
+// libmodbus takes timeouts as (seconds, microseconds) with microseconds < 1e6.
+void SetTimeout(modbus_t* ctx, double seconds, bool byte_timeout) {
+  const auto total_us = static_cast<uint64_t>(std::llround(seconds * 1e6));
+  const auto sec = static_cast<uint32_t>(total_us / 1000000);
+  const auto usec = static_cast<uint32_t>(total_us % 1000000);
+  if (byte_timeout) {
+    modbus_set_byte_timeout(ctx, sec, usec);
+  } else {
+    modbus_set_response_timeout(ctx, sec, usec);
+  }
+}
+
+PlcStatus ConfigError(int errnum) {
+  PlcStatus s;
+  s.kind = PlcErrorKind::kConfig;
+  s.sys_errno = errnum;
+  return s;
+}
+
+}  // namespace
+
+void ValidateModbusConfig(const ModbusTcpConfig& c) {
+  if (c.host.empty()) throw std::invalid_argument("modbus: host is empty");
+  CheckRange("port", c.port, 1, 65535);
+  CheckRange("unit_id", c.unit_id, 0, 255);
+  CheckTimeout("response_timeout_s", c.response_timeout_s);
+  CheckTimeout("connect_timeout_s", c.connect_timeout_s);
+}
+
+void ValidateModbusConfig(const ModbusRtuConfig& c) {
+  if (c.device.empty()) throw std::invalid_argument("modbus: device is empty");
+  CheckRange("baud", c.baud, 1, 4000000);
+  if (c.parity != 'N' && c.parity != 'E' && c.parity != 'O') {
+    throw std::invalid_argument(std::string("modbus: parity = '") + c.parity +
+                                "' is not one of 'N', 'E', 'O'");
+  }
+  CheckRange("data_bits", c.data_bits, 5, 8);
+  CheckRange("stop_bits", c.stop_bits, 1, 2);
+  CheckRange("unit_id", c.unit_id, 1, 247);
+  CheckTimeout("response_timeout_s", c.response_timeout_s);
+}
+
+ModbusPort::ModbusPort(const ModbusTcpConfig& config) : config_(config) {
+  ValidateModbusConfig(config);
+}
+
+ModbusPort::ModbusPort(const ModbusRtuConfig& config) : config_(config) {
+  ValidateModbusConfig(config);
+}
+
+ModbusPort::~ModbusPort() {
+  Close();
+  if (ctx_ != nullptr) modbus_free(ctx_);
+}
+
+double ModbusPort::response_timeout_s() const noexcept {
+  return std::visit([](const auto& c) { return c.response_timeout_s; }, config_);
+}
+
+PlcStatus ModbusPort::CreateContext() noexcept {
+  if (const auto* tcp = std::get_if<ModbusTcpConfig>(&config_)) {
+    const std::string service = std::to_string(tcp->port);
+    ctx_ = modbus_new_tcp_pi(tcp->host.c_str(), service.c_str());
+  } else {
+    const auto& rtu = std::get<ModbusRtuConfig>(config_);
+    ctx_ = modbus_new_rtu(rtu.device.c_str(), rtu.baud, rtu.parity, rtu.data_bits, rtu.stop_bits);
+  }
+  if (ctx_ == nullptr) return ConfigError(errno);
+  const int unit = std::visit([](const auto& c) { return c.unit_id; }, config_);
+  if (modbus_set_slave(ctx_, unit) != 0) return ConfigError(errno);
+  return PlcStatus::Ok();
+}
+
+PlcStatus ModbusPort::Connect() noexcept {
+  if (connected_) return PlcStatus::Ok();
+  if (ctx_ == nullptr) {
+    const PlcStatus created = CreateContext();
+    if (!created.ok()) {
+      if (ctx_ != nullptr) modbus_free(ctx_);
+      ctx_ = nullptr;
+      return created;
+    }
+  }
+  // libmodbus bounds a TCP connect by the response timeout, so it is set to the connect timeout
+  // for the connect and back afterwards.
+  if (const auto* tcp = std::get_if<ModbusTcpConfig>(&config_)) {
+    SetTimeout(ctx_, tcp->connect_timeout_s, false);
+  }
+  const int rc = modbus_connect(ctx_);
+  const int connect_errno = errno;
+  const double response = response_timeout_s();
+  SetTimeout(ctx_, response, false);
+  SetTimeout(ctx_, response, true);
+  if (rc != 0) {
+    // A refused or unreachable peer is a link problem (retry), never a config one.
+    PlcStatus s = TranslateModbusErrno(connect_errno);
+    if (s.kind != PlcErrorKind::kTimeout) s.kind = PlcErrorKind::kDisconnected;
+    return s;
+  }
+  connected_ = true;
+  return PlcStatus::Ok();
+}
+
+void ModbusPort::Close() noexcept {
+  if (ctx_ != nullptr && connected_) modbus_close(ctx_);
+  connected_ = false;
+}
+
+PlcStatus ModbusPort::Failed() noexcept {
+  PlcStatus s = TranslateModbusErrno(errno);
+  // A failure without errno leaves the link state unknown: treat it as lost.
+  if (s.ok()) s.kind = PlcErrorKind::kDisconnected;
+  if (s.kind == PlcErrorKind::kDisconnected) {
+    Close();
+  } else if (s.kind == PlcErrorKind::kTimeout || s.kind == PlcErrorKind::kBadData) {
+    modbus_flush(ctx_);
+  }
+  return s;
+}
+
+PlcStatus ModbusPort::ReadRegisters(RegisterKind kind, int address,
+                                    std::span<uint16_t> out) noexcept {
+  const int count = static_cast<int>(out.size());
+  if (count < 1 || count > kMaxReadRegisters || address < 0 || address + count > 65536) {
+    return ConfigError(EINVAL);
+  }
+  if (!connected_) return TranslateModbusErrno(ENOTCONN);
+  errno = 0;
+  const int rc = kind == RegisterKind::kHolding
+                     ? modbus_read_registers(ctx_, address, count, out.data())
+                     : modbus_read_input_registers(ctx_, address, count, out.data());
+  if (rc < 0) return Failed();
+  if (rc != count) {
+    PlcStatus s;
+    s.kind = PlcErrorKind::kBadData;
+    return s;
+  }
+  return PlcStatus::Ok();
+}
+
+PlcStatus ModbusPort::WriteRegister(int address, uint16_t value) noexcept {
+  if (address < 0 || address > 65535) return ConfigError(EINVAL);
+  if (!connected_) return TranslateModbusErrno(ENOTCONN);
+  errno = 0;
+  if (modbus_write_register(ctx_, address, value) != 1) return Failed();
+  return PlcStatus::Ok();
+}
+
+PlcStatus ModbusPort::WriteRegisters(int address, std::span<const uint16_t> values) noexcept {
+  const int count = static_cast<int>(values.size());
+  if (count < 1 || count > kMaxWriteRegisters || address < 0 || address + count > 65536) {
+    return ConfigError(EINVAL);
+  }
+  if (!connected_) return TranslateModbusErrno(ENOTCONN);
+  errno = 0;
+  if (modbus_write_registers(ctx_, address, count, values.data()) != count) return Failed();
+  return PlcStatus::Ok();
+}
+
+}  // namespace canalid::drivers

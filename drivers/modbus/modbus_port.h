@@ -1,0 +1,67 @@
+#pragma once
+#include <string>
+#include <variant>
+
+#include "drivers/modbus/plc_port.h"
+
+// libmodbus's context type, kept out of our headers.
+struct _modbus;
+
+namespace canalid::drivers {
+
+/// Modbus TCP link settings.
+struct ModbusTcpConfig {
+  std::string host = "127.0.0.1";   ///< name or address (resolved at each connect)
+  int port = 502;                   ///< 1..65535
+  int unit_id = 1;                  ///< 0..255 (TCP gateways route on it; plain servers ignore it)
+  double response_timeout_s = 0.2;  ///< per request, (0, 60]
+  double connect_timeout_s = 1.0;   ///< TCP connect, (0, 60]
+};
+
+/// Modbus RTU (serial) link settings.
+struct ModbusRtuConfig {
+  std::string device;               ///< e.g. /dev/ttyUSB0
+  int baud = 19200;                 ///< > 0
+  char parity = 'E';                ///< 'N', 'E' or 'O'
+  int data_bits = 8;                ///< 5..8
+  int stop_bits = 1;                ///< 1 or 2
+  int unit_id = 1;                  ///< 1..247
+  double response_timeout_s = 0.2;  ///< per request, (0, 60]
+};
+
+/// @throws std::invalid_argument naming the field, its value and the allowed range.
+void ValidateModbusConfig(const ModbusTcpConfig& config);
+void ValidateModbusConfig(const ModbusRtuConfig& config);
+
+/// PlcPort over libmodbus (TCP or RTU). The libmodbus context is created by the first Connect()
+/// (so on the thread that will use it) and freed by the destructor. Not thread-safe. Errors go
+/// through TranslateModbusErrno; after kDisconnected the link is closed, after kTimeout or
+/// kBadData pending bytes are flushed so a late reply is not taken for the next one.
+class ModbusPort final : public PlcPort {
+ public:
+  /// @throws std::invalid_argument on a bad config (see ValidateModbusConfig).
+  explicit ModbusPort(const ModbusTcpConfig& config);
+  explicit ModbusPort(const ModbusRtuConfig& config);
+  ~ModbusPort() override;
+  ModbusPort(const ModbusPort&) = delete;
+  ModbusPort& operator=(const ModbusPort&) = delete;
+
+  PlcStatus Connect() noexcept override;
+  void Close() noexcept override;
+  bool connected() const noexcept override { return connected_; }
+  double response_timeout_s() const noexcept override;
+  PlcStatus ReadRegisters(RegisterKind kind, int address,
+                          std::span<uint16_t> out) noexcept override;
+  PlcStatus WriteRegister(int address, uint16_t value) noexcept override;
+  PlcStatus WriteRegisters(int address, std::span<const uint16_t> values) noexcept override;
+
+ private:
+  PlcStatus CreateContext() noexcept;
+  PlcStatus Failed() noexcept;  // translates errno and applies the recovery described above
+
+  std::variant<ModbusTcpConfig, ModbusRtuConfig> config_;
+  _modbus* ctx_ = nullptr;
+  bool connected_ = false;
+};
+
+}  // namespace canalid::drivers

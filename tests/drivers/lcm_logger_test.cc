@@ -1,0 +1,121 @@
+// lcm-logger (Debian's liblcm-bin) records what LcmBus publishes on udpm, so operators can log
+// the daemon with the stock tool and replay the file. Needs a multicast route; the test never
+// changes routes and skips when there is none.
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
+
+#include <array>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <optional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "drivers/lcm/lcm_bus.h"
+#include "lcm_test_messages.h"
+
+namespace canalid::drivers {
+namespace {
+
+bool HasMulticastRoute() {
+  FILE* pipe = popen("ip route show 2>/dev/null", "r");
+  if (pipe == nullptr) return false;
+  std::string text;
+  std::array<char, 256> chunk{};
+  while (fgets(chunk.data(), static_cast<int>(chunk.size()), pipe) != nullptr) text += chunk.data();
+  pclose(pipe);
+  return text.find("224.0.0.0/4") != std::string::npos;
+}
+
+/// The events of `path` on `channel` so far (the logger may be writing it; a partial last event
+/// just ends the read).
+std::vector<std::vector<uint8_t>> Events(const std::filesystem::path& path,
+                                         const std::string& channel) {
+  std::vector<std::vector<uint8_t>> out;
+  if (!std::filesystem::exists(path)) return out;
+  lcm::LogFile log(path.string(), "r");
+  if (!log.good()) return out;
+  while (const lcm::LogEvent* e = log.readNextEvent()) {
+    if (e->channel == channel) {
+      const auto* bytes = static_cast<const uint8_t*>(e->data);
+      out.emplace_back(bytes, bytes + e->datalen);
+    }
+  }
+  return out;
+}
+
+TEST(LcmLogger, RecordsASamplePublishedOnUdpm) {
+  if (!HasMulticastRoute()) {
+    GTEST_SKIP() << "no 224.0.0.0/4 route in `ip route`: udpm cannot work here (on a host with "
+                    "only lo: `ip route add 224.0.0.0/4 dev lo`, which this test will not do)";
+  }
+  // A private port so concurrent runs and real daemons on the default group do not mix in.
+  std::mt19937 rng(static_cast<unsigned>(getpid()));
+  const int port = 20000 + static_cast<int>(rng() % 20000);
+  const std::string url = "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0";
+  const auto dir = std::filesystem::path(CANALID_BINARY_DIR) / "test-output" / "lcm_logger";
+  std::filesystem::create_directories(dir);
+  const auto log_path = dir / ("logger-" + std::to_string(port) + ".lcmlog");
+  std::filesystem::remove(log_path);
+
+  int out_pipe[2];
+  ASSERT_EQ(pipe(out_pipe), 0);
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    dup2(out_pipe[1], STDOUT_FILENO);
+    dup2(out_pipe[1], STDERR_FILENO);
+    close(out_pipe[0]);
+    const std::string url_arg = "--lcm-url=" + url;
+    execlp("lcm-logger", "lcm-logger", "-f", "--flush-interval=10", url_arg.c_str(),
+           log_path.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  close(out_pipe[1]);
+
+  LcmBus bus(url);
+  std::vector<uint8_t> buffer;
+  // The logger is ready once a probe published here shows up in its file. Bounded (30 s); the
+  // pause between probes is a poll on the logger's output, which ends early if it exits.
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  bool ready = false;
+  while (!ready && std::chrono::steady_clock::now() < deadline) {
+    ASSERT_TRUE(PublishMessage(bus, "CANALID_PROBE", testing::MakeHealth(), buffer));
+    pollfd p{out_pipe[0], POLLIN, 0};
+    if (poll(&p, 1, 50) > 0) {
+      std::array<char, 512> text{};
+      if (read(out_pipe[0], text.data(), text.size()) == 0) break;  // logger exited
+    }
+    ready = !Events(log_path, "CANALID_PROBE").empty();
+  }
+  ASSERT_TRUE(ready) << "lcm-logger did not record a probe within 30 s";
+
+  const canalid::sample_t sent = testing::MakeSample(7);
+  ASSERT_TRUE(PublishMessage(bus, "CANALID_SAMPLE_pool2", sent, buffer));
+  std::vector<std::vector<uint8_t>> recorded;
+  while (recorded.empty() && std::chrono::steady_clock::now() < deadline) {
+    pollfd p{out_pipe[0], POLLIN, 0};
+    poll(&p, 1, 20);
+    recorded = Events(log_path, "CANALID_SAMPLE_pool2");
+  }
+  kill(pid, SIGINT);
+  waitpid(pid, nullptr, 0);
+  close(out_pipe[0]);
+
+  ASSERT_EQ(recorded.size(), 1u);
+  canalid::sample_t got;
+  ASSERT_EQ(got.decode(recorded[0].data(), 0, static_cast<int>(recorded[0].size())),
+            static_cast<int>(recorded[0].size()));
+  testing::ExpectEqual(sent, got);
+}
+
+}  // namespace
+}  // namespace canalid::drivers

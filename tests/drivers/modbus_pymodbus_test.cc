@@ -1,0 +1,299 @@
+// The libmodbus adapter and the poller against an independent Modbus TCP server: pymodbus 3.0
+// from Debian, run by /usr/bin/python3 (the PATH python3 may lack Debian's packages) as a child
+// process on a free loopback port, stopped by its pid.
+#include <arpa/inet.h>
+#include <fcntl.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+
+#include "drivers/modbus/modbus_port.h"
+#include "drivers/modbus/plc_poller.h"
+
+namespace canalid::drivers {
+namespace {
+
+using enum RegisterKind;
+
+const char* const kPython = "/usr/bin/python3";
+
+int FreeLoopbackPort() {
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  addr.sin_port = 0;
+  bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr);
+  socklen_t len = sizeof addr;
+  getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len);
+  close(fd);
+  return ntohs(addr.sin_port);
+}
+
+bool Accepts(int port) {
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  addr.sin_port = htons(static_cast<uint16_t>(port));
+  const bool ok = connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) == 0;
+  close(fd);
+  return ok;
+}
+
+/// The pymodbus server child process.
+class PymodbusServer {
+ public:
+  explicit PymodbusServer(int port) : port_(port) {}
+  ~PymodbusServer() { Kill(); }
+
+  /// Starts the server and waits until its port accepts a connection. The wait is a bounded
+  /// connect loop (at most 30 s); between attempts it blocks on the child's stdout pipe for up to
+  /// 20 ms, which returns at once if the child exits (then the start has failed).
+  ::testing::AssertionResult Start() {
+    const std::string script =
+        std::string(CANALID_SOURCE_DIR) + "/tests/drivers/modbus_test_server.py";
+    const auto dir = std::filesystem::path(CANALID_BINARY_DIR) / "test-output" / "modbus_pymodbus";
+    std::filesystem::create_directories(dir);
+    const std::string log = (dir / ("server-" + std::to_string(port_) + ".log")).string();
+    int pipe_fds[2];
+    if (pipe(pipe_fds) != 0) return ::testing::AssertionFailure() << "pipe failed";
+    pid_ = fork();
+    if (pid_ == 0) {
+      dup2(pipe_fds[1], STDOUT_FILENO);
+      const int err = open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+      if (err >= 0) dup2(err, STDERR_FILENO);
+      close(pipe_fds[0]);
+      const std::string port = std::to_string(port_);
+      execl(kPython, kPython, script.c_str(), port.c_str(), static_cast<char*>(nullptr));
+      _exit(127);
+    }
+    close(pipe_fds[1]);
+    stdout_fd_ = pipe_fds[0];
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+    while (std::chrono::steady_clock::now() < deadline) {
+      if (Accepts(port_)) return ::testing::AssertionSuccess();
+      int status = 0;
+      if (waitpid(pid_, &status, WNOHANG) == pid_) {
+        pid_ = -1;
+        return ::testing::AssertionFailure() << "pymodbus server exited early, see " << log;
+      }
+      pollfd p{stdout_fd_, POLLIN, 0};
+      poll(&p, 1, 20);
+    }
+    return ::testing::AssertionFailure() << "pymodbus server not accepting within 30 s";
+  }
+
+  void Kill() {
+    if (pid_ > 0) {
+      kill(pid_, SIGKILL);
+      waitpid(pid_, nullptr, 0);
+      pid_ = -1;
+    }
+    if (stdout_fd_ >= 0) close(stdout_fd_);
+    stdout_fd_ = -1;
+  }
+
+ private:
+  int port_;
+  pid_t pid_ = -1;
+  int stdout_fd_ = -1;
+};
+
+class Waiter {
+ public:
+  std::function<void()> Callback() {
+    return [this] {
+      std::lock_guard lock(mutex_);
+      ++events_;
+      cv_.notify_all();
+    };
+  }
+  /// Waits for notifications until `done` holds (bounded: 30 s).
+  bool Until(const std::function<bool()>& done) {
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+    std::unique_lock lock(mutex_);
+    while (true) {
+      lock.unlock();
+      if (done()) return true;
+      lock.lock();
+      const long seen = events_;
+      if (!cv_.wait_until(lock, deadline, [&] { return events_ != seen; })) return done();
+    }
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  long events_ = 0;
+};
+
+ModbusTcpConfig TcpConfig(int port) {
+  ModbusTcpConfig c;
+  c.port = port;
+  c.response_timeout_s = 1.0;
+  c.connect_timeout_s = 1.0;
+  return c;
+}
+
+PollChannel Channel(RegisterKind kind, int address, core::RegisterType type, core::WordOrder order,
+                    double scale) {
+  PollChannel c;
+  c.name = "ch" + std::to_string(address);
+  c.kind = kind;
+  c.address = address;
+  c.scaling.type = type;
+  c.scaling.word_order = order;
+  c.scaling.scale = scale;
+  return c;
+}
+
+PollerConfig ServerMapConfig() {
+  using enum core::RegisterType;
+  using enum core::WordOrder;
+  PollerConfig c;
+  c.plc_name = "pymodbus";
+  c.period_s = 2.0;  // > response timeout; waits end on events, so this costs no test time
+  c.backoff_initial_s = 0.05;
+  c.backoff_max_s = 0.4;
+  c.channels = {Channel(kHolding, 0, kU16, kHighWordFirst, 0.001),
+                Channel(kHolding, 1, kF32, kHighWordFirst, 1.0),
+                Channel(kHolding, 3, kI32, kLowWordFirst, 1.0),
+                Channel(kHolding, 5, kI16, kHighWordFirst, 1.0),
+                Channel(kInput, 0, kF32, kHighWordFirst, 1.0)};
+  return c;
+}
+
+TEST(ModbusPymodbus, PortReadsWritesAndTypesExceptions) {
+  const int port = FreeLoopbackPort();
+  PymodbusServer server(port);
+  ASSERT_TRUE(server.Start());
+  ModbusPort plc(TcpConfig(port));
+  ASSERT_TRUE(plc.Connect().ok());
+  std::array<uint16_t, 6> regs{};
+  ASSERT_TRUE(plc.ReadRegisters(kHolding, 0, regs).ok());
+  EXPECT_EQ(regs[0], 1234);
+  EXPECT_EQ(regs[1], 0x4050);  // 3.25f = 0x40500000
+  EXPECT_EQ(regs[5], 0xFFD6);  // -42
+
+  const std::array<uint16_t, 2> pair = {0xBEEF, 0x0102};
+  ASSERT_TRUE(plc.WriteRegister(10, 777).ok());
+  ASSERT_TRUE(plc.WriteRegisters(11, pair).ok());
+  std::array<uint16_t, 3> back{};
+  ASSERT_TRUE(plc.ReadRegisters(kHolding, 10, back).ok());
+  EXPECT_EQ(back[0], 777);
+  EXPECT_EQ(back[1], 0xBEEF);
+  EXPECT_EQ(back[2], 0x0102);
+
+  std::array<uint16_t, 4> beyond{};
+  const PlcStatus exception = plc.ReadRegisters(kHolding, 150, beyond);
+  EXPECT_EQ(exception.kind, PlcErrorKind::kException);
+  EXPECT_EQ(exception.exception_code, 2) << "illegal data address";
+  EXPECT_TRUE(plc.connected()) << "an exception reply keeps the link";
+
+  std::array<uint16_t, 126> too_many{};
+  EXPECT_EQ(plc.ReadRegisters(kHolding, 0, too_many).kind, PlcErrorKind::kConfig);
+  ASSERT_TRUE(plc.ReadRegisters(kInput, 0, std::span(regs).first(2)).ok());
+  EXPECT_EQ(regs[0], 0xBF00);  // -0.5f = 0xBF000000
+}
+
+TEST(ModbusPymodbus, RefusedConnectIsDisconnected) {
+  ModbusPort plc(TcpConfig(FreeLoopbackPort()));
+  const PlcStatus s = plc.Connect();
+  EXPECT_EQ(s.kind, PlcErrorKind::kDisconnected);
+  std::array<uint16_t, 1> r{};
+  EXPECT_EQ(plc.ReadRegisters(kHolding, 0, r).kind, PlcErrorKind::kDisconnected);
+}
+
+TEST(ModbusPymodbus, PollerDecodesTheServerMapAndTypesExceptionBlocks) {
+  const int port = FreeLoopbackPort();
+  PymodbusServer server(port);
+  ASSERT_TRUE(server.Start());
+  PollerConfig config = ServerMapConfig();
+  config.channels.push_back(
+      Channel(kHolding, 150, core::RegisterType::kU16, core::WordOrder::kHighWordFirst, 1.0));
+  Waiter waiter;
+  PlcPoller poller(config, std::make_unique<ModbusPort>(TcpConfig(port)), waiter.Callback());
+  ASSERT_EQ(poller.plan().blocks.size(), 3u);
+  poller.Start();
+  std::optional<PollSample> sample;
+  ASSERT_TRUE(waiter.Until([&] {
+    poller.DrainSamples([&](const PollSample& s) { sample = s; });
+    return sample.has_value();
+  }));
+  // Values the server computed with Python's struct module.
+  EXPECT_DOUBLE_EQ(sample->values[0], 1.234);
+  EXPECT_DOUBLE_EQ(sample->values[1], 3.25);
+  EXPECT_DOUBLE_EQ(sample->values[2], -123456.0);
+  EXPECT_DOUBLE_EQ(sample->values[3], -42.0);
+  EXPECT_DOUBLE_EQ(sample->values[4], -0.5);
+  for (std::size_t i = 0; i < 5; ++i) EXPECT_TRUE(sample->valid(i)) << i;
+  EXPECT_EQ(sample->quality[5], SampleQuality::kReadFailed);
+  EXPECT_EQ(sample->status.kind, PlcErrorKind::kException);
+  EXPECT_EQ(sample->status.exception_code, 2);
+  const PollerCounters c = poller.counters();
+  EXPECT_EQ(c.read_errors[static_cast<int>(PlcErrorKind::kException)], 1);
+  EXPECT_GT(c.last_round_trip_s, 0.0);
+}
+
+TEST(ModbusPymodbus, KilledServerIsDisconnectedThenReconnectedWithBackoff) {
+  const int port = FreeLoopbackPort();
+  PymodbusServer server(port);
+  ASSERT_TRUE(server.Start());
+  PollerConfig config = ServerMapConfig();
+  config.period_s = 1.1;
+  Waiter waiter;
+  PlcPoller poller(config, std::make_unique<ModbusPort>(TcpConfig(port)), waiter.Callback());
+  poller.Start();
+  std::optional<PollSample> last;
+  auto drain = [&] { poller.DrainSamples([&](const PollSample& s) { last = s; }); };
+  ASSERT_TRUE(waiter.Until([&] {
+    drain();
+    return last && last->status.ok();
+  }));
+
+  server.Kill();
+  ASSERT_TRUE(waiter.Until([&] {
+    drain();
+    return last->status.kind == PlcErrorKind::kDisconnected;
+  }));
+  // Refused reconnects back off 0.05 s, 0.1 s, 0.2 s ...
+  ASSERT_TRUE(waiter.Until([&] { return poller.counters().connect_failures >= 3; }));
+  PollerCounters c = poller.counters();
+  EXPECT_FALSE(c.connected);
+  EXPECT_GE(c.current_backoff_s, 0.2);
+  EXPECT_LE(c.current_backoff_s, 0.4);
+  EXPECT_EQ(c.reconnects, 0);
+
+  PymodbusServer again(port);
+  ASSERT_TRUE(again.Start());
+  ASSERT_TRUE(waiter.Until([&] { return poller.counters().reconnects == 1; }));
+  ASSERT_TRUE(waiter.Until([&] {
+    drain();
+    return last->status.ok();
+  }));
+  EXPECT_DOUBLE_EQ(last->values[1], 3.25);
+  c = poller.counters();
+  EXPECT_TRUE(c.connected);
+  EXPECT_EQ(c.current_backoff_s, 0.0);
+  EXPECT_GE(c.read_errors[static_cast<int>(PlcErrorKind::kDisconnected)], 1);
+}
+
+}  // namespace
+}  // namespace canalid::drivers
