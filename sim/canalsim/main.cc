@@ -9,6 +9,7 @@
 #include <string>
 
 #include "sim/canal_config.h"
+#include "sim/canalsim/serve_command.h"
 #include "sim/config_reader.h"
 #include "sim/scenario.h"
 #include "sim/scenario_runner.h"
@@ -102,11 +103,13 @@ int main(int argc, char** argv) {
   run->add_option("--seed", seed, "Seed of the sensor models (default: the scenario's seed)");
   run->add_flag("--check-config", check_only, "Validate both files and exit (0 or 78)");
   run->add_flag("-q,--quiet", quiet, "No progress or summary on stderr");
+  const canalid::sim::ServeCommand serve(app);
   try {
     app.parse(argc, argv);
-    if (!check_only && out_path.empty()) throw CLI::RequiredError("--out");
+    if (run->parsed() && !check_only && out_path.empty()) throw CLI::RequiredError("--out");
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   }
+  if (serve.selected()) return serve.Run();
   return Run(canal_path, scenario_path, out_path, seed, check_only, quiet);
 }

@@ -1,0 +1,137 @@
+#include "sim/canalsim/serve_command.h"
+
+#include <signal.h>
+
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <stdexcept>
+
+#include "sim/canal_config.h"
+#include "sim/config_reader.h"
+#include "sim/plc/modbus_tcp_slave.h"
+#include "sim/plc/plc_config.h"
+#include "sim/plc/plc_simulation.h"
+
+namespace canalid::sim {
+namespace {
+
+constexpr int kExitUnavailable = 69;  // EX_UNAVAILABLE
+constexpr int kExitSoftware = 70;     // EX_SOFTWARE
+constexpr int kExitConfig = 78;       // EX_CONFIG
+
+volatile std::sig_atomic_t g_stop = 0;
+
+extern "C" void OnStopSignal(int) { g_stop = 1; }
+
+// "host:port", "[v6]:port"; false if there is no port.
+bool SplitListen(const std::string& text, std::string* host, std::string* port) {
+  const std::size_t colon = text.rfind(':');
+  if (colon == std::string::npos || colon + 1 == text.size()) return false;
+  *host = text.substr(0, colon);
+  *port = text.substr(colon + 1);
+  if (host->size() >= 2 && host->front() == '[' && host->back() == ']') {
+    *host = host->substr(1, host->size() - 2);
+  }
+  if (host->empty()) return false;
+  for (char c : *port) {
+    if (c < '0' || c > '9') return false;
+  }
+  return port->size() <= 5 && std::stoi(*port) <= 65535;
+}
+
+}  // namespace
+
+ServeCommand::ServeCommand(CLI::App& app) {
+  command_ = app.add_subcommand(
+      "serve",
+      "Run the canal in real or scaled time (or lockstep) behind an emulated PLC on a Modbus TCP "
+      "slave; register map: docs/register-map.md");
+  command_->add_option("--canal", canal_path_, "Canal TOML file (geometry, structures)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  command_
+      ->add_option("--plc", plc_path_,
+                   "PLC TOML file (pools, limits, rates, watchdog, encodings); default: every "
+                   "pool, wide limits, no rate limit, no watchdog")
+      ->check(CLI::ExistingFile);
+  command_->add_option("--listen", listen_, "HOST:PORT to listen on (port 0 picks a free one)")
+      ->capture_default_str();
+  auto* scale =
+      command_->add_option("--time-scale", time_scale_, "Plant seconds per wall-clock second")
+          ->capture_default_str()
+          ->check(CLI::PositiveNumber);
+  command_
+      ->add_flag("--lockstep", lockstep_,
+                 "Step the plant only when a master writes the step register (holding 1)")
+      ->excludes(scale);
+  command_->add_flag("--check-config", check_only_, "Validate the files and exit (0 or 78)");
+}
+
+int ServeCommand::Run() const {
+  std::string host, port;
+  if (!SplitListen(listen_, &host, &port)) {
+    std::cerr << "canalsim: --listen '" << listen_
+              << "' must be HOST:PORT with PORT in [0, 65535]\n";
+    return kExitConfig;
+  }
+  Canal canal;
+  plc::PlcConfig config;
+  try {
+    canal = LoadCanal(canal_path_);
+    config =
+        plc_path_.empty() ? plc::DefaultPlcConfig(canal) : plc::LoadPlcConfig(plc_path_, canal);
+  } catch (const ConfigError& e) {
+    for (const std::string& p : e.problems()) std::cerr << p << '\n';
+    return kExitConfig;
+  }
+  std::unique_ptr<plc::PlcSimulation> simulation;
+  try {
+    simulation = std::make_unique<plc::PlcSimulation>(canal, config, lockstep_);
+  } catch (const std::exception& e) {
+    // An infeasible steady state or a PLC inconsistent with the canal is a configuration error.
+    std::cerr << (plc_path_.empty() ? canal_path_ : plc_path_) << ": " << e.what() << '\n';
+    return kExitConfig;
+  }
+  if (check_only_) {
+    std::cerr << "canalsim: " << canal_path_ << (plc_path_.empty() ? "" : " and " + plc_path_)
+              << " are valid\n";
+    return 0;
+  }
+  // SIGTERM/SIGINT stay blocked except inside the wait, so none is lost between checks.
+  sigset_t block, wait_mask;
+  sigemptyset(&block);
+  sigaddset(&block, SIGTERM);
+  sigaddset(&block, SIGINT);
+  sigprocmask(SIG_BLOCK, &block, &wait_mask);
+  sigdelset(&wait_mask, SIGTERM);
+  sigdelset(&wait_mask, SIGINT);
+  struct sigaction action {};
+  action.sa_handler = OnStopSignal;
+  sigemptyset(&action.sa_mask);
+  sigaction(SIGTERM, &action, nullptr);
+  sigaction(SIGINT, &action, nullptr);
+  signal(SIGPIPE, SIG_IGN);
+  try {
+    plc::ModbusTcpSlave slave(simulation.get(), host, port, plc::ClockOptions{time_scale_});
+    const bool v6 = host.find(':') != std::string::npos;
+    char mode[64];
+    std::snprintf(mode, sizeof(mode), lockstep_ ? "lockstep" : "time scale %g", time_scale_);
+    std::printf("canalsim: listening on %s%s%s:%d (%s, plant step %g s, %zu pools)\n",
+                v6 ? "[" : "", host.c_str(), v6 ? "]" : "", slave.port(), mode, config.plant_step_s,
+                config.pools.size());
+    std::fflush(stdout);
+    slave.Run(&g_stop, &wait_mask);
+  } catch (const std::runtime_error& e) {
+    std::cerr << "canalsim: " << e.what() << '\n';
+    return g_stop != 0 ? 0 : kExitUnavailable;
+  } catch (const std::exception& e) {
+    std::cerr << "canalsim: " << e.what() << '\n';
+    return kExitSoftware;
+  }
+  std::fprintf(stderr, "canalsim: stopped at plant time %.0f s after %ld steps\n",
+               simulation->plant().time_s(), simulation->steps());
+  return 0;
+}
+
+}  // namespace canalid::sim

@@ -1,0 +1,240 @@
+#include "sim/plc/modbus_tcp_slave.h"
+
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <sys/select.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <stdexcept>
+
+#include "sim/plc/register_map.h"
+
+namespace canalid::sim::plc {
+namespace {
+
+int Word(const std::uint8_t* p) { return (p[0] << 8) | p[1]; }
+
+bool IsRead(int function) {
+  return function == MODBUS_FC_READ_COILS || function == MODBUS_FC_READ_DISCRETE_INPUTS ||
+         function == MODBUS_FC_READ_HOLDING_REGISTERS ||
+         function == MODBUS_FC_READ_INPUT_REGISTERS ||
+         function == MODBUS_FC_WRITE_AND_READ_REGISTERS;
+}
+
+timespec ToTimespec(std::chrono::nanoseconds d) {
+  if (d.count() < 0) d = std::chrono::nanoseconds(0);
+  timespec ts{};
+  ts.tv_sec = static_cast<time_t>(d.count() / 1000000000);
+  ts.tv_nsec = static_cast<long>(d.count() % 1000000000);
+  return ts;
+}
+
+}  // namespace
+
+ModbusTcpSlave::ModbusTcpSlave(PlcSimulation* simulation, const std::string& host,
+                               const std::string& port, ClockOptions clock)
+    : simulation_(simulation), clock_(clock) {
+  if (!(clock_.time_scale > 0.0)) {
+    throw std::invalid_argument("time_scale = " + std::to_string(clock_.time_scale) +
+                                " must be > 0");
+  }
+  ctx_ = modbus_new_tcp_pi(host.c_str(), port.c_str());
+  if (ctx_ == nullptr) {
+    throw std::runtime_error("cannot create a Modbus TCP context for " + host + ":" + port + ": " +
+                             modbus_strerror(errno));
+  }
+  listen_fd_ = modbus_tcp_pi_listen(ctx_, 32);
+  if (listen_fd_ < 0) {
+    const std::string why = modbus_strerror(errno);
+    modbus_free(ctx_);
+    throw std::runtime_error("cannot listen on " + host + ":" + port + ": " + why);
+  }
+  sockaddr_storage address{};
+  socklen_t length = sizeof(address);
+  if (getsockname(listen_fd_, reinterpret_cast<sockaddr*>(&address), &length) == 0) {
+    if (address.ss_family == AF_INET) {
+      port_ = ntohs(reinterpret_cast<const sockaddr_in*>(&address)->sin_port);
+    } else if (address.ss_family == AF_INET6) {
+      port_ = ntohs(reinterpret_cast<const sockaddr_in6*>(&address)->sin6_port);
+    }
+  }
+  header_length_ = modbus_get_header_length(ctx_);
+  // The mapping points into the simulation's register image (never freed by libmodbus).
+  auto& input = simulation_->input_registers();
+  auto& holding = simulation_->holding_registers();
+  mapping_.nb_input_registers = static_cast<int>(input.size());
+  mapping_.tab_input_registers = input.data();
+  mapping_.nb_registers = static_cast<int>(holding.size());
+  mapping_.tab_registers = holding.data();
+  start_ = Clock::now();
+}
+
+ModbusTcpSlave::~ModbusTcpSlave() {
+  for (Client& c : clients_) {
+    if (c.fd >= 0) close(c.fd);
+  }
+  if (listen_fd_ >= 0) close(listen_fd_);
+  modbus_free(ctx_);
+}
+
+void ModbusTcpSlave::Accept() {
+  const int fd = accept(listen_fd_, nullptr, nullptr);
+  if (fd < 0) return;  // the peer went away before we accepted: nothing to serve
+  if (fd >= FD_SETSIZE) {
+    close(fd);
+    return;
+  }
+  const int one = 1;
+  setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof(one));
+  Client c;
+  c.fd = fd;
+  c.request.resize(MODBUS_TCP_MAX_ADU_LENGTH);
+  clients_.push_back(std::move(c));
+}
+
+void ModbusTcpSlave::Receive(Client* client) {
+  modbus_set_socket(ctx_, client->fd);
+  const int rc = modbus_receive(ctx_, client->request.data());
+  if (rc < 0) {
+    close(client->fd);  // peer closed or sent garbage: a PLC drops such a connection
+    client->fd = -1;
+    return;
+  }
+  if (rc == 0) return;  // not for this unit
+  client->request_length = rc;
+  if (simulation_->TakeDrop()) {
+    close(client->fd);
+    client->fd = -1;
+    return;
+  }
+  const int delay_ms = simulation_->response_delay_ms();
+  if (delay_ms > 0) {
+    client->pending = true;
+    client->due = Clock::now() + std::chrono::milliseconds(delay_ms);
+    return;
+  }
+  if (!Answer(client)) {
+    close(client->fd);
+    client->fd = -1;
+  }
+}
+
+bool ModbusTcpSlave::Answer(Client* client) {
+  client->pending = false;
+  modbus_set_socket(ctx_, client->fd);
+  const std::uint8_t* req = client->request.data();
+  const std::uint8_t* pdu = req + header_length_;
+  const int function = pdu[0];
+  const int exception = simulation_->read_exception_code();
+  if (exception != 0 && IsRead(function)) {
+    return modbus_reply_exception(ctx_, req, static_cast<unsigned>(exception)) >= 0;
+  }
+  auto& holding = simulation_->holding_registers();
+  const int size = static_cast<int>(holding.size());
+  int first = -1;
+  int count = 0;
+  // Writes go into the image and through the PLC logic before the reply, so that a master that
+  // got the reply sees their effect (lockstep steps included).
+  if (function == MODBUS_FC_WRITE_SINGLE_REGISTER) {
+    first = Word(pdu + 1);
+    count = 1;
+    if (first < size) holding[first] = static_cast<std::uint16_t>(Word(pdu + 3));
+  } else if (function == MODBUS_FC_WRITE_MULTIPLE_REGISTERS) {
+    first = Word(pdu + 1);
+    count = Word(pdu + 3);
+    if (count >= 1 && count <= MODBUS_MAX_WRITE_REGISTERS && first + count <= size &&
+        pdu[5] == 2 * count && client->request_length >= header_length_ + 6 + 2 * count) {
+      for (int i = 0; i < count; ++i) {
+        holding[first + i] = static_cast<std::uint16_t>(Word(pdu + 6 + 2 * i));
+      }
+    }
+  } else if (function == MODBUS_FC_MASK_WRITE_REGISTER) {
+    first = Word(pdu + 1);
+    count = 1;
+    if (first < size) {
+      const int and_mask = Word(pdu + 3);
+      const int or_mask = Word(pdu + 5);
+      holding[first] =
+          static_cast<std::uint16_t>((holding[first] & and_mask) | (or_mask & ~and_mask & 0xFFFF));
+    }
+  }
+  const bool write_ok = first >= 0 && count >= 1 && first + count <= size;
+  if (write_ok) simulation_->OnHoldingWrite(first, count);
+  const int rc = modbus_reply(ctx_, req, client->request_length, &mapping_);
+  // modbus_reply stored the raw written values again: put back what the PLC made of them.
+  if (write_ok) simulation_->PublishHoldings();
+  return rc >= 0;
+}
+
+void ModbusTcpSlave::StepClock(Clock::time_point now) {
+  if (simulation_->lockstep()) return;
+  const std::chrono::duration<double> period(simulation_->config().plant_step_s /
+                                             clock_.time_scale);
+  int done = 0;
+  while (now >= start_ + (clock_steps_ + 1) * period) {
+    if (done == 1) {
+      // Behind by more than a step: count it and skip ahead instead of a burst of steps.
+      ++overruns_;
+      simulation_->set_overruns(overruns_);
+      start_ = now - std::chrono::duration_cast<Clock::duration>(clock_steps_ * period);
+      break;
+    }
+    simulation_->Step();
+    ++clock_steps_;
+    ++done;
+  }
+}
+
+void ModbusTcpSlave::Run(const volatile std::sig_atomic_t* stop, const sigset_t* wait_mask) {
+  while (*stop == 0) {
+    const Clock::time_point now = Clock::now();
+    StepClock(now);
+    Clock::time_point wake = now + std::chrono::seconds(1);
+    if (!simulation_->lockstep()) {
+      const std::chrono::duration<double> period(simulation_->config().plant_step_s /
+                                                 clock_.time_scale);
+      wake = std::min(
+          wake, start_ + std::chrono::duration_cast<Clock::duration>((clock_steps_ + 1) * period));
+    }
+    fd_set readable;
+    FD_ZERO(&readable);
+    FD_SET(listen_fd_, &readable);
+    int max_fd = listen_fd_;
+    for (const Client& c : clients_) {
+      if (c.pending) {
+        wake = std::min(wake, c.due);
+      } else {
+        FD_SET(c.fd, &readable);
+        max_fd = std::max(max_fd, c.fd);
+      }
+    }
+    const timespec timeout = ToTimespec(wake - Clock::now());
+    const int n = pselect(max_fd + 1, &readable, nullptr, nullptr, &timeout, wait_mask);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      throw std::runtime_error(std::string("select failed: ") + std::strerror(errno));
+    }
+    // Iterate by index: Accept appends to clients_.
+    const std::size_t existing = clients_.size();
+    if (n > 0 && FD_ISSET(listen_fd_, &readable)) Accept();
+    for (std::size_t i = 0; i < existing; ++i) {
+      Client& c = clients_[i];
+      if (c.fd < 0) continue;
+      if (c.pending) {
+        if (Clock::now() >= c.due && !Answer(&c)) {
+          close(c.fd);
+          c.fd = -1;
+        }
+      } else if (n > 0 && FD_ISSET(c.fd, &readable)) {
+        Receive(&c);
+      }
+    }
+    std::erase_if(clients_, [](const Client& c) { return c.fd < 0; });
+  }
+}
+
+}  // namespace canalid::sim::plc
