@@ -1,0 +1,104 @@
+#include "core/reach_pipeline.h"
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace canalid::core {
+
+ReachPipeline::ReachPipeline(const ReachPipelineOptions& options) : options_(options) {
+  if (!(options_.sample_time_s > 0.0))
+    throw std::invalid_argument("reach sample_time_s must be > 0");
+  if (options_.online_id_enabled) {
+    options_.online_id.sample_time_s = options_.sample_time_s;
+    online_id_.emplace(options_.online_id);
+  }
+  if (options_.experiment) {
+    options_.experiment->Validate();
+    const auto n = static_cast<Eigen::Index>(options_.experiment->excite_samples);
+    record_q_in_.resize(n);
+    record_q_out_.resize(n);
+    record_level_.resize(n);
+  }
+}
+
+ReachActions ReachPipeline::Apply(const ExperimentEvent& event) {
+  ReachActions actions;
+  if (!options_.experiment) return actions;
+  ExperimentTransition t = Step(*options_.experiment, experiment_state_, event);
+  const bool starting = event.kind == ExperimentEventKind::kStart && t.actions.phase_changed;
+  experiment_state_ = std::move(t.state);
+  if (starting) recorded_ = 0;
+  actions.write_setpoint = t.actions.write_setpoint;
+  actions.restore_nominal = t.actions.restore_nominal;
+  actions.experiment_phase_changed = t.actions.phase_changed;
+  actions.experiment_record_complete = t.actions.start_identification;
+  record_this_sample_ = t.actions.record_sample;
+  return actions;
+}
+
+ReachActions ReachPipeline::OnSample(const ReachSample& s) {
+  ++samples_;
+  bool online_updated = false;
+  if (online_id_) {
+    // Invalid values go in as NaN: the bank holds the integrators on the last good flows and
+    // skips the regression on a bad level, and counts both.
+    constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
+    online_updated =
+        online_id_->Update(s.q_in_valid ? s.q_in_m3s : kNan, s.q_out_valid ? s.q_out_m3s : kNan,
+                           s.level_valid ? s.level_m : kNan);
+  }
+  ExperimentEvent event;
+  event.kind = ExperimentEventKind::kSample;
+  // Flows feed the record too, so the experiment needs them as much as the level.
+  event.sample = {s.level_m, s.level_valid && s.q_in_valid && s.q_out_valid, s.link_ok};
+  ReachActions actions = Apply(event);
+  if (record_this_sample_) {
+    // A tolerated invalid sample (max_invalid_samples) repeats the previous values.
+    const Eigen::Index i = recorded_++;
+    const bool valid = s.level_valid && s.q_in_valid && s.q_out_valid;
+    record_q_in_(i) = valid || i == 0 ? s.q_in_m3s : record_q_in_(i - 1);
+    record_q_out_(i) = valid || i == 0 ? s.q_out_m3s : record_q_out_(i - 1);
+    record_level_(i) = valid || i == 0 ? s.level_m : record_level_(i - 1);
+  }
+  actions.online_updated = online_updated;
+  return actions;
+}
+
+ReachActions ReachPipeline::StartExperiment() {
+  ExperimentEvent event;
+  event.kind = ExperimentEventKind::kStart;
+  return Apply(event);
+}
+
+ReachActions ReachPipeline::StopExperiment() {
+  ExperimentEvent event;
+  event.kind = ExperimentEventKind::kStop;
+  return Apply(event);
+}
+
+ReachActions ReachPipeline::OnWriteFailed() {
+  ExperimentEvent event;
+  event.kind = ExperimentEventKind::kWriteFailed;
+  return Apply(event);
+}
+
+std::optional<IdPipelineResult> ReachPipeline::IdentifyRecord(ReachActions* actions) {
+  ExperimentEvent event;
+  std::optional<IdPipelineResult> result;
+  try {
+    result = IdentifyPool(record_q_in_.head(recorded_), record_q_out_.head(recorded_),
+                          record_level_.head(recorded_), options_.sample_time_s, options_.batch);
+    const bool usable = result->fit.model.b > 0.0 && std::isfinite(result->fit.model.b);
+    event.kind = usable ? ExperimentEventKind::kIdentificationSucceeded
+                        : ExperimentEventKind::kIdentificationFailed;
+  } catch (const std::invalid_argument&) {
+    result.reset();
+    event.kind = ExperimentEventKind::kIdentificationFailed;
+  }
+  const ReachActions done = Apply(event);
+  if (actions != nullptr) *actions = done;
+  return result;
+}
+
+}  // namespace canalid::core

@@ -1,0 +1,77 @@
+#pragma once
+#include <Eigen/Core>
+#include <optional>
+
+#include "core/experiment.h"
+#include "core/id_pipeline.h"
+#include "core/online_id.h"
+
+namespace canalid::core {
+
+/// One poll's values for one reach, already scaled to engineering units.
+struct ReachSample {
+  double q_in_m3s = 0.0;
+  double q_out_m3s = 0.0;
+  double level_m = 0.0;
+  bool q_in_valid = false;
+  bool q_out_valid = false;
+  bool level_valid = false;
+  bool link_ok = true;  ///< the PLC answered this poll
+};
+
+struct ReachPipelineOptions {
+  double sample_time_s = 1.0;  ///< plant seconds between samples
+  OnlineIdOptions online_id;   ///< sample_time_s is overwritten with the one above
+  bool online_id_enabled = true;
+  std::optional<ExperimentPlan> experiment;  ///< none: this reach never excites its actuator
+  IdPipelineOptions batch;                   ///< identification at the end of each experiment
+};
+
+/// What the daemon must do after a sample or a command.
+struct ReachActions {
+  std::optional<double> write_setpoint;  ///< to the reach's actuator, now
+  bool restore_nominal = false;
+  bool experiment_phase_changed = false;
+  bool experiment_record_complete = false;  ///< call IdentifyRecord()
+  bool online_updated = false;              ///< the online estimate moved: publish it
+};
+
+/// Everything one reach does per sample, as plain data in and out (no I/O, no clocks): the online
+/// ID estimator bank, the experiment state machine with its safety rules, and the record of the
+/// running experiment (preallocated for the plan's length: nothing is allocated per sample).
+/// Deterministic: the same samples and commands give the same actions and estimates, which is
+/// what lets `canalid replay` reproduce a live run from its log.
+class ReachPipeline final {
+ public:
+  /// @throws std::invalid_argument on bad options.
+  explicit ReachPipeline(const ReachPipelineOptions& options);
+
+  ReachActions OnSample(const ReachSample& sample);
+  ReachActions StartExperiment();
+  ReachActions StopExperiment();
+  /// A setpoint write of this reach failed: abort if exciting.
+  ReachActions OnWriteFailed();
+
+  /// Batch identification of the completed record (ID model pipeline); then the experiment
+  /// ends done (a model) or aborted (kIdentificationFailed).  @pre a record is complete.
+  std::optional<IdPipelineResult> IdentifyRecord(ReachActions* actions);
+
+  const ExperimentState& experiment_state() const { return experiment_state_; }
+  const std::optional<ExperimentPlan>& experiment_plan() const { return options_.experiment; }
+  const OnlineIdBank* online_id() const { return online_id_ ? &*online_id_ : nullptr; }
+  Eigen::Index recorded_samples() const { return recorded_; }
+  std::int64_t samples() const { return samples_; }
+
+ private:
+  ReachActions Apply(const ExperimentEvent& event);
+
+  ReachPipelineOptions options_;
+  std::optional<OnlineIdBank> online_id_;
+  ExperimentState experiment_state_;
+  Eigen::VectorXd record_q_in_, record_q_out_, record_level_;
+  Eigen::Index recorded_ = 0;
+  bool record_this_sample_ = false;
+  std::int64_t samples_ = 0;
+};
+
+}  // namespace canalid::core

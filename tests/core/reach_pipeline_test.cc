@@ -1,0 +1,97 @@
+#include "core/reach_pipeline.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace canalid::core {
+namespace {
+
+// A pool obeying the discrete ID model (A = 34113 m2, nk = 11 at Ts = 60 s) whose inflow follows
+// the actuator: q_in = 20 * setpoint (an undershot gate at fixed heads, linearised).
+class IdPool {
+ public:
+  double Step(double setpoint) {
+    inflow_history_.push_back(20.0 * setpoint);
+    const std::size_t n = inflow_history_.size();
+    const double delayed = n > 11 ? inflow_history_[n - 1 - 11] : 10.0;
+    level_ += 60.0 / 34113.0 * (delayed - 10.0);
+    return level_;
+  }
+  double inflow() const { return inflow_history_.back(); }
+
+ private:
+  std::vector<double> inflow_history_;
+  double level_ = 2.1;
+};
+
+ReachPipelineOptions Options() {
+  ReachPipelineOptions o;
+  o.sample_time_s = 60.0;
+  o.online_id.min_delay_samples = 0;
+  o.online_id.max_delay_samples = 30;
+  ExperimentPlan plan;
+  plan.prbs.nominal = 0.5;
+  plan.prbs.amplitude = 0.0375;  // 7.5 %
+  plan.prbs.clock_period_samples = 6;
+  plan.prbs.order = 7;
+  plan.settle_samples = 5;
+  plan.excite_samples = 600;
+  plan.level_min_m = 1.5;
+  plan.level_max_m = 2.7;
+  o.experiment = plan;
+  o.batch.fit.max_nk = 30;
+  return o;
+}
+
+TEST(ReachPipeline, AnExperimentOnAnIdPoolIdentifiesItsDelayAndArea) {
+  ReachPipeline pipeline(Options());
+  IdPool pool;
+  double setpoint = 0.5;
+  ReachActions a = pipeline.StartExperiment();
+  ASSERT_TRUE(a.write_setpoint.has_value());
+  setpoint = *a.write_setpoint;
+  for (int k = 0; k < 700 && !a.experiment_record_complete; ++k) {
+    const double level = pool.Step(setpoint);
+    a = pipeline.OnSample({pool.inflow(), 10.0, level, true, true, true, true});
+    if (a.write_setpoint) setpoint = *a.write_setpoint;
+  }
+  ASSERT_TRUE(a.experiment_record_complete);
+  EXPECT_TRUE(a.restore_nominal);
+  EXPECT_DOUBLE_EQ(setpoint, 0.5);
+  EXPECT_EQ(pipeline.recorded_samples(), 600);
+  ReachActions done;
+  const auto result = pipeline.IdentifyRecord(&done);
+  ASSERT_TRUE(result.has_value());
+  EXPECT_EQ(pipeline.experiment_state().phase, ExperimentPhase::kDone);
+  EXPECT_EQ(result->fit.model.nk, 11);
+  EXPECT_NEAR(result->fit.model.area_m2(), 34113.0, 1e-6 * 34113.0);
+  // The online bank saw the same samples (plus the settling ones).
+  const IdSnapshot online = pipeline.online_id()->Snapshot();
+  EXPECT_TRUE(online.valid);
+  EXPECT_EQ(online.delay_samples, 11);
+  EXPECT_NEAR(online.area_m2, 34113.0, 0.01 * 34113.0);
+}
+
+TEST(ReachPipeline, ALevelOutOfBandAbortsAndRestoresNominalOnTheSameSample) {
+  ReachPipeline pipeline(Options());
+  pipeline.StartExperiment();
+  for (int k = 0; k < 10; ++k) pipeline.OnSample({10.0, 10.0, 2.1, true, true, true, true});
+  const ReachActions a = pipeline.OnSample({10.0, 10.0, 2.75, true, true, true, true});
+  EXPECT_EQ(pipeline.experiment_state().phase, ExperimentPhase::kAborted);
+  EXPECT_TRUE(a.restore_nominal);
+  ASSERT_TRUE(a.write_setpoint.has_value());
+  EXPECT_DOUBLE_EQ(*a.write_setpoint, 0.5);
+}
+
+TEST(ReachPipeline, InvalidSamplesNeitherCorruptTheEstimateNorCrash) {
+  ReachPipeline pipeline(Options());
+  const double nan = std::nan("");
+  pipeline.OnSample({nan, 10.0, 2.1, false, true, true, true});
+  pipeline.OnSample({10.0, nan, nan, true, false, false, true});
+  EXPECT_EQ(pipeline.samples(), 2);
+  EXPECT_EQ(pipeline.experiment_state().phase, ExperimentPhase::kIdle);
+}
+
+}  // namespace
+}  // namespace canalid::core
