@@ -168,38 +168,47 @@ bool ModbusSlave::Answer(Client* client) {
   }
   auto& holding = simulation_->holding_registers();
   const int size = static_cast<int>(holding.size());
-  int first = -1;
+  int first = 0;
   int count = 0;
+  bool wrote = false;
+  // Copies `n` registers of the request starting at byte `values` into the image, if the
+  // request is well formed (otherwise modbus_reply answers it with an exception).
+  auto store = [&](int address, int n, int byte_count, int values) {
+    if (n < 1 || n > MODBUS_MAX_WRITE_REGISTERS || address + n > size || byte_count != 2 * n ||
+        client->request_length < header_length + values + 2 * n) {
+      return;
+    }
+    for (int i = 0; i < n; ++i) {
+      holding[address + i] = static_cast<std::uint16_t>(Word(pdu + values + 2 * i));
+    }
+    first = address;
+    count = n;
+    wrote = true;
+  };
   // Writes go into the image and through the PLC logic before the reply, so that a master that
   // got the reply sees their effect (lockstep steps included).
   if (function == MODBUS_FC_WRITE_SINGLE_REGISTER) {
-    first = Word(pdu + 1);
-    count = 1;
-    if (first < size) holding[first] = static_cast<std::uint16_t>(Word(pdu + 3));
+    store(Word(pdu + 1), 1, 2, 3);
   } else if (function == MODBUS_FC_WRITE_MULTIPLE_REGISTERS) {
-    first = Word(pdu + 1);
-    count = Word(pdu + 3);
-    if (count >= 1 && count <= MODBUS_MAX_WRITE_REGISTERS && first + count <= size &&
-        pdu[5] == 2 * count && client->request_length >= header_length + 6 + 2 * count) {
-      for (int i = 0; i < count; ++i) {
-        holding[first + i] = static_cast<std::uint16_t>(Word(pdu + 6 + 2 * i));
-      }
-    }
+    store(Word(pdu + 1), Word(pdu + 3), pdu[5], 6);
+  } else if (function == MODBUS_FC_WRITE_AND_READ_REGISTERS) {
+    store(Word(pdu + 5), Word(pdu + 7), pdu[9], 10);
   } else if (function == MODBUS_FC_MASK_WRITE_REGISTER) {
-    first = Word(pdu + 1);
-    count = 1;
-    if (first < size) {
+    const int address = Word(pdu + 1);
+    if (address < size) {
       const int and_mask = Word(pdu + 3);
       const int or_mask = Word(pdu + 5);
-      holding[first] =
-          static_cast<std::uint16_t>((holding[first] & and_mask) | (or_mask & ~and_mask & 0xFFFF));
+      holding[address] = static_cast<std::uint16_t>((holding[address] & and_mask) |
+                                                    (or_mask & ~and_mask & 0xFFFF));
+      first = address;
+      count = 1;
+      wrote = true;
     }
   }
-  const bool write_ok = first >= 0 && count >= 1 && first + count <= size;
-  if (write_ok) simulation_->OnHoldingWrite(first, count);
+  if (wrote) simulation_->OnHoldingWrite(first, count);
   const int rc = modbus_reply(ctx, req, client->request_length, &mapping_);
   // modbus_reply stored the raw written values again: put back what the PLC made of them.
-  if (write_ok) simulation_->PublishHoldings();
+  if (wrote) simulation_->PublishHoldings();
   return rc >= 0;
 }
 

@@ -173,6 +173,21 @@ TEST_F(ServeTest, SetpointsAreClampedToThePlcLimits) {
   EXPECT_EQ(m.Holding(kHrPool2Gate), 50);
 }
 
+TEST_F(ServeTest, WriteAndReadInOneRequestReachesThePlc) {
+  Start();
+  Master m(port());
+  const std::uint16_t value = 1400;
+  std::uint16_t read[2];
+  // Function code 23: write the gate setpoint, read the system status back.
+  ASSERT_EQ(modbus_write_and_read_registers(m.ctx(), kHrPool2Gate, 1, &value, 0, 2, read), 2)
+      << modbus_strerror(errno);
+  EXPECT_EQ(m.Input(kIrPool2Setpoint), 1400);
+  // Function code 22: mask write keeps the bits of the and-mask, sets the or-mask's others.
+  m.Write(kHrFaultSpikePeriod, 0x00F0);
+  ASSERT_EQ(modbus_mask_write_register(m.ctx(), kHrFaultSpikePeriod, 0x0030, 0x0001), 1);
+  EXPECT_EQ(m.Holding(kHrFaultSpikePeriod), 0x0031);
+}
+
 TEST_F(ServeTest, HeartbeatTimeoutReturnsSetpointsToNominal) {
   Start();
   Master m(port());
