@@ -355,6 +355,16 @@ TEST(ServeCommand, ConfigErrorsExit78WithTheirLocation) {
       CanalsimProgram() + " serve --canal " + kCanal + " --listen 127.0.0.1 --lockstep", dir);
   EXPECT_EQ(listen.exit_code, 78);
   EXPECT_NE(listen.err.find("--listen"), std::string::npos) << listen.err;
+  const auto both = RunProgram(CanalsimProgram() + " serve --canal " + kCanal +
+                                   " --listen 127.0.0.1:0 --lockstep --time-scale 60",
+                               dir);
+  EXPECT_NE(both.exit_code, 0);
+  EXPECT_NE(both.err.find("excludes"), std::string::npos) << both.err;
+  const auto format = RunProgram(CanalsimProgram() + " serve --canal " + kCanal +
+                                     " --listen 127.0.0.1:0 --rtu /dev/null --rtu-format 9X3",
+                                 dir);
+  EXPECT_EQ(format.exit_code, 78);
+  EXPECT_NE(format.err.find("--rtu-format"), std::string::npos) << format.err;
   const auto check = RunProgram(
       CanalsimProgram() + " serve --canal " + kCanal + " --plc " + kPlc + " --check-config", dir);
   EXPECT_EQ(check.exit_code, 0) << check.err;
