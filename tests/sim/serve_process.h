@@ -74,11 +74,11 @@ class ServeProcess {
   int port() const { return port_; }
   const std::string& ready_line() const { return ready_line_; }
 
-  /// SIGTERM, then a wait of at most 20 s (SIGKILL after that).  Returns the exit code, or
-  /// 128 + signal if it was killed.
-  int Stop() {
+  /// Sends `signal` (SIGTERM by default), then waits at most 20 s (SIGKILL after that).
+  /// Returns the exit code, or 128 + signal if it was killed by one.
+  int Stop(int signal = SIGTERM) {
     if (pid_ <= 0) return exit_code_;
-    kill(pid_, SIGTERM);
+    kill(pid_, signal);
     const int pidfd = static_cast<int>(syscall(SYS_pidfd_open, pid_, 0));
     if (pidfd >= 0) {
       pollfd p{pidfd, POLLIN, 0};

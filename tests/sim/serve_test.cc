@@ -84,6 +84,13 @@ TEST_F(ServeTest, PrintsTheReadyLineAndStopsCleanlyOnSigterm) {
   EXPECT_NE(ReadFile(dir_ / "stderr.txt").find("stopped at plant time 0 s"), std::string::npos);
 }
 
+TEST_F(ServeTest, StopsCleanlyOnSigintWithMastersConnected) {
+  Start({"--time-scale", "60"});
+  Master m(port());
+  EXPECT_EQ(m.TryReadInputs(0, 10), 0);
+  EXPECT_EQ(server_->Stop(SIGINT), 0);
+}
+
 TEST_F(ServeTest, RegistersHoldTheSteadyState) {
   Start();
   Master m(port());
