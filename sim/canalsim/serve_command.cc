@@ -9,7 +9,7 @@
 
 #include "sim/canal_config.h"
 #include "sim/config_reader.h"
-#include "sim/plc/modbus_tcp_slave.h"
+#include "sim/plc/modbus_slave.h"
 #include "sim/plc/plc_config.h"
 #include "sim/plc/plc_simulation.h"
 
@@ -65,6 +65,18 @@ ServeCommand::ServeCommand(CLI::App& app) {
       ->add_flag("--lockstep", lockstep_,
                  "Step the plant only when a master writes the step register (holding 1)")
       ->excludes(scale);
+  command_->add_option("--rtu", rtu_device_,
+                       "Also serve Modbus RTU on this serial device (a tty or a pty)");
+  command_->add_option("--rtu-baud", rtu_baud_, "RTU baud rate")
+      ->capture_default_str()
+      ->check(CLI::Range(300, 4000000));
+  command_
+      ->add_option("--rtu-format", rtu_format_,
+                   "RTU data bits, parity (N, E, O) and stop bits, e.g. 8E1 or 8N2")
+      ->capture_default_str();
+  command_->add_option("--unit-id", unit_id_, "RTU slave address (TCP answers any unit id)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 247));
   command_->add_flag("--check-config", check_only_, "Validate the files and exit (0 or 78)");
 }
 
@@ -75,6 +87,20 @@ int ServeCommand::Run() const {
               << "' must be HOST:PORT with PORT in [0, 65535]\n";
     return kExitConfig;
   }
+  plc::RtuOptions rtu;
+  rtu.device = rtu_device_;
+  rtu.baud = rtu_baud_;
+  rtu.unit_id = unit_id_;
+  if (rtu_format_.size() != 3 || (rtu_format_[0] != '7' && rtu_format_[0] != '8') ||
+      std::string("NEO").find(rtu_format_[1]) == std::string::npos ||
+      (rtu_format_[2] != '1' && rtu_format_[2] != '2')) {
+    std::cerr << "canalsim: --rtu-format '" << rtu_format_
+              << "' must be data bits (7, 8), parity (N, E, O), stop bits (1, 2), e.g. 8E1\n";
+    return kExitConfig;
+  }
+  rtu.data_bits = rtu_format_[0] - '0';
+  rtu.parity = rtu_format_[1];
+  rtu.stop_bits = rtu_format_[2] - '0';
   Canal canal;
   plc::PlcConfig config;
   try {
@@ -113,13 +139,21 @@ int ServeCommand::Run() const {
   sigaction(SIGINT, &action, nullptr);
   signal(SIGPIPE, SIG_IGN);
   try {
-    plc::ModbusTcpSlave slave(simulation.get(), host, port, plc::ClockOptions{time_scale_});
+    plc::ModbusSlave slave(simulation.get(), plc::ClockOptions{time_scale_});
+    const int bound = slave.ListenTcp(host, port);
+    std::string rtu_text;
+    if (!rtu.device.empty()) {
+      slave.OpenRtu(rtu);
+      rtu_text = " and RTU " + rtu.device + " " + std::to_string(rtu.baud) + " " + rtu_format_ +
+                 " unit " + std::to_string(rtu.unit_id);
+    }
     const bool v6 = host.find(':') != std::string::npos;
     char mode[64];
     std::snprintf(mode, sizeof(mode), lockstep_ ? "lockstep" : "time scale %g", time_scale_);
-    std::printf("canalsim: listening on %s%s%s:%d (%s, plant step %g s, %zu pools)\n",
-                v6 ? "[" : "", host.c_str(), v6 ? "]" : "", slave.port(), mode, config.plant_step_s,
-                config.pools.size());
+    // The ready line: printed once every port accepts requests.
+    std::printf("canalsim: listening on %s%s%s:%d%s (%s, plant step %g s, %zu pools)\n",
+                v6 ? "[" : "", host.c_str(), v6 ? "]" : "", bound, rtu_text.c_str(), mode,
+                config.plant_step_s, config.pools.size());
     std::fflush(stdout);
     slave.Run(&g_stop, &wait_mask);
   } catch (const std::runtime_error& e) {

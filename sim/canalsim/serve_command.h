@@ -5,7 +5,8 @@
 
 namespace canalid::sim {
 
-/// `canalsim serve`: the canal behind an emulated PLC on a Modbus TCP slave (docs/register-map.md).
+/// `canalsim serve`: the canal behind an emulated PLC on a Modbus TCP slave, and optionally a
+/// Modbus RTU slave on a serial device (docs/register-map.md).
 /// Registers the sub-command and its options on construction; Run() after a successful parse.
 class ServeCommand final {
  public:
@@ -23,6 +24,10 @@ class ServeCommand final {
   double time_scale_ = 1.0;
   bool lockstep_ = false;
   bool check_only_ = false;
+  std::string rtu_device_;
+  int rtu_baud_ = 19200;
+  std::string rtu_format_ = "8E1";
+  int unit_id_ = 1;
 };
 
 }  // namespace canalid::sim

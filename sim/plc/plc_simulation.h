@@ -12,7 +12,7 @@ namespace canalid::sim::plc {
 
 /// The emulated PLC wired to the plant, without any transport: the Saint-Venant canal, the PLC
 /// logic, the sensor faults and the register image (input and holding registers, layout in
-/// register_map.h).  A transport (ModbusTcpSlave) serves the image, calls
+/// register_map.h).  A transport (ModbusSlave) serves the image, calls
 /// OnHoldingWrite after a master wrote holding registers, and Step on its clock.
 /// Not thread-safe.  Allocates only in the constructor.
 class PlcSimulation final {

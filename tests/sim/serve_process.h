@@ -31,40 +31,38 @@ class ServeProcess {
   /// Waits at most `ready_timeout_ms` for the ready line; throws if it does not come.
   ServeProcess(const std::vector<std::string>& args, const std::filesystem::path& stderr_path,
                int ready_timeout_ms = 60000) {
+    // Everything the child needs is built before fork: only async-signal-safe calls after it
+    // (the RTU test has a relay thread running).
+    std::vector<std::string> all = {CanalsimProgram(), "serve", "--listen", "127.0.0.1:0"};
+    all.insert(all.end(), args.begin(), args.end());
+    std::vector<char*> argv;
+    for (std::string& a : all) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    const std::string err_path = stderr_path.string();
     int out[2];
     if (pipe2(out, O_CLOEXEC) != 0) throw std::runtime_error("pipe failed");
     pid_ = fork();
     if (pid_ < 0) throw std::runtime_error("fork failed");
     if (pid_ == 0) {
       dup2(out[1], STDOUT_FILENO);
-      const int err = open(stderr_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+      const int err = open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
       if (err >= 0) dup2(err, STDERR_FILENO);
-      std::vector<std::string> all = {CanalsimProgram(), "serve", "--listen", "127.0.0.1:0"};
-      all.insert(all.end(), args.begin(), args.end());
-      std::vector<char*> argv;
-      for (std::string& a : all) argv.push_back(a.data());
-      argv.push_back(nullptr);
       execv(argv[0], argv.data());
       _exit(127);
     }
     close(out[1]);
     out_fd_ = out[0];
-    std::string line;
-    // Bounded wait for "canalsim: listening on 127.0.0.1:PORT (...)".
-    while (line.find('\n') == std::string::npos) {
-      pollfd p{out_fd_, POLLIN, 0};
-      const int n = poll(&p, 1, ready_timeout_ms);
-      if (n <= 0) throw std::runtime_error("canalsim serve printed no ready line in time");
-      char buffer[256];
-      const ssize_t got = read(out_fd_, buffer, sizeof(buffer));
-      if (got <= 0) throw std::runtime_error("canalsim serve exited before its ready line");
-      line.append(buffer, static_cast<std::size_t>(got));
+    try {
+      WaitForReadyLine(ready_timeout_ms);
+    } catch (...) {
+      // Do not leave the server behind when it never became ready.
+      kill(pid_, SIGKILL);
+      waitpid(pid_, nullptr, 0);
+      pid_ = -1;
+      close(out_fd_);
+      out_fd_ = -1;
+      throw;
     }
-    ready_line_ = line.substr(0, line.find('\n'));
-    const std::string key = "listening on 127.0.0.1:";
-    const std::size_t at = ready_line_.find(key);
-    if (at == std::string::npos) throw std::runtime_error("unexpected line: " + ready_line_);
-    port_ = std::stoi(ready_line_.substr(at + key.size()));
   }
   ~ServeProcess() {
     if (pid_ > 0) Stop();
@@ -76,11 +74,11 @@ class ServeProcess {
   int port() const { return port_; }
   const std::string& ready_line() const { return ready_line_; }
 
-  /// SIGTERM, then a wait of at most 20 s (SIGKILL after that).  Returns the exit code, or
-  /// 128 + signal if it was killed.
-  int Stop() {
+  /// Sends `signal` (SIGTERM by default), then waits at most 20 s (SIGKILL after that).
+  /// Returns the exit code, or 128 + signal if it was killed by one.
+  int Stop(int signal = SIGTERM) {
     if (pid_ <= 0) return exit_code_;
-    kill(pid_, SIGTERM);
+    kill(pid_, signal);
     const int pidfd = static_cast<int>(syscall(SYS_pidfd_open, pid_, 0));
     if (pidfd >= 0) {
       pollfd p{pidfd, POLLIN, 0};
@@ -95,6 +93,26 @@ class ServeProcess {
   }
 
  private:
+  void WaitForReadyLine(int timeout_ms) {
+    std::string line;
+    // Bounded wait for "canalsim: listening on 127.0.0.1:PORT (...)".
+    while (line.find('\n') == std::string::npos) {
+      pollfd p{out_fd_, POLLIN, 0};
+      if (poll(&p, 1, timeout_ms) <= 0) {
+        throw std::runtime_error("canalsim serve printed no ready line in time");
+      }
+      char buffer[256];
+      const ssize_t got = read(out_fd_, buffer, sizeof(buffer));
+      if (got <= 0) throw std::runtime_error("canalsim serve exited before its ready line");
+      line.append(buffer, static_cast<std::size_t>(got));
+    }
+    ready_line_ = line.substr(0, line.find('\n'));
+    const std::string key = "listening on 127.0.0.1:";
+    const std::size_t at = ready_line_.find(key);
+    if (at == std::string::npos) throw std::runtime_error("unexpected line: " + ready_line_);
+    port_ = std::stoi(ready_line_.substr(at + key.size()));
+  }
+
   pid_t pid_ = -1;
   int out_fd_ = -1;
   int port_ = 0;

@@ -1,4 +1,4 @@
-#include "sim/plc/modbus_tcp_slave.h"
+#include "sim/plc/modbus_slave.h"
 
 #include <netinet/in.h>
 #include <netinet/tcp.h>
@@ -35,34 +35,12 @@ timespec ToTimespec(std::chrono::nanoseconds d) {
 
 }  // namespace
 
-ModbusTcpSlave::ModbusTcpSlave(PlcSimulation* simulation, const std::string& host,
-                               const std::string& port, ClockOptions clock)
+ModbusSlave::ModbusSlave(PlcSimulation* simulation, ClockOptions clock)
     : simulation_(simulation), clock_(clock) {
   if (!(clock_.time_scale > 0.0)) {
     throw std::invalid_argument("time_scale = " + std::to_string(clock_.time_scale) +
                                 " must be > 0");
   }
-  ctx_ = modbus_new_tcp_pi(host.c_str(), port.c_str());
-  if (ctx_ == nullptr) {
-    throw std::runtime_error("cannot create a Modbus TCP context for " + host + ":" + port + ": " +
-                             modbus_strerror(errno));
-  }
-  listen_fd_ = modbus_tcp_pi_listen(ctx_, 32);
-  if (listen_fd_ < 0) {
-    const std::string why = modbus_strerror(errno);
-    modbus_free(ctx_);
-    throw std::runtime_error("cannot listen on " + host + ":" + port + ": " + why);
-  }
-  sockaddr_storage address{};
-  socklen_t length = sizeof(address);
-  if (getsockname(listen_fd_, reinterpret_cast<sockaddr*>(&address), &length) == 0) {
-    if (address.ss_family == AF_INET) {
-      port_ = ntohs(reinterpret_cast<const sockaddr_in*>(&address)->sin_port);
-    } else if (address.ss_family == AF_INET6) {
-      port_ = ntohs(reinterpret_cast<const sockaddr_in6*>(&address)->sin6_port);
-    }
-  }
-  header_length_ = modbus_get_header_length(ctx_);
   // The mapping points into the simulation's register image (never freed by libmodbus).
   auto& input = simulation_->input_registers();
   auto& holding = simulation_->holding_registers();
@@ -73,15 +51,72 @@ ModbusTcpSlave::ModbusTcpSlave(PlcSimulation* simulation, const std::string& hos
   start_ = Clock::now();
 }
 
-ModbusTcpSlave::~ModbusTcpSlave() {
-  for (Client& c : clients_) {
-    if (c.fd >= 0) close(c.fd);
+int ModbusSlave::ListenTcp(const std::string& host, const std::string& port) {
+  tcp_ = modbus_new_tcp_pi(host.c_str(), port.c_str());
+  if (tcp_ == nullptr) {
+    throw std::runtime_error("cannot create a Modbus TCP context for " + host + ":" + port + ": " +
+                             modbus_strerror(errno));
   }
-  if (listen_fd_ >= 0) close(listen_fd_);
-  modbus_free(ctx_);
+  listen_fd_ = modbus_tcp_pi_listen(tcp_, 32);
+  if (listen_fd_ < 0) {
+    throw std::runtime_error("cannot listen on " + host + ":" + port + ": " +
+                             modbus_strerror(errno));
+  }
+  sockaddr_storage address{};
+  socklen_t length = sizeof(address);
+  int bound = 0;
+  if (getsockname(listen_fd_, reinterpret_cast<sockaddr*>(&address), &length) == 0) {
+    if (address.ss_family == AF_INET) {
+      bound = ntohs(reinterpret_cast<const sockaddr_in*>(&address)->sin_port);
+    } else if (address.ss_family == AF_INET6) {
+      bound = ntohs(reinterpret_cast<const sockaddr_in6*>(&address)->sin6_port);
+    }
+  }
+  return bound;
 }
 
-void ModbusTcpSlave::Accept() {
+void ModbusSlave::OpenRtu(const RtuOptions& o) {
+  rtu_ = modbus_new_rtu(o.device.c_str(), o.baud, o.parity, o.data_bits, o.stop_bits);
+  if (rtu_ == nullptr) {
+    throw std::runtime_error("cannot create a Modbus RTU context for " + o.device + ": " +
+                             modbus_strerror(errno));
+  }
+  if (modbus_set_slave(rtu_, o.unit_id) != 0 || modbus_connect(rtu_) != 0) {
+    throw std::runtime_error("cannot open " + o.device +
+                             " for Modbus RTU: " + modbus_strerror(errno));
+  }
+  Client c;
+  c.ctx = rtu_;
+  c.fd = modbus_get_socket(rtu_);
+  c.serial = true;
+  c.request.resize(MODBUS_RTU_MAX_ADU_LENGTH);
+  clients_.push_back(std::move(c));
+}
+
+ModbusSlave::~ModbusSlave() {
+  for (Client& c : clients_) {
+    if (c.fd >= 0 && !c.serial) close(c.fd);
+  }
+  if (listen_fd_ >= 0) close(listen_fd_);
+  if (tcp_ != nullptr) modbus_free(tcp_);
+  if (rtu_ != nullptr) {
+    modbus_close(rtu_);
+    modbus_free(rtu_);
+  }
+}
+
+void ModbusSlave::Close(Client* client) {
+  if (client->serial) {
+    // A serial line stays open: forget what was received and wait for the next frame.
+    modbus_flush(client->ctx);
+    client->pending = false;
+    return;
+  }
+  close(client->fd);
+  client->fd = -1;
+}
+
+void ModbusSlave::Accept() {
   const int fd = accept(listen_fd_, nullptr, nullptr);
   if (fd < 0) return;  // the peer went away before we accepted: nothing to serve
   if (fd >= FD_SETSIZE) {
@@ -91,24 +126,23 @@ void ModbusTcpSlave::Accept() {
   const int one = 1;
   setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof(one));
   Client c;
+  c.ctx = tcp_;
   c.fd = fd;
   c.request.resize(MODBUS_TCP_MAX_ADU_LENGTH);
   clients_.push_back(std::move(c));
 }
 
-void ModbusTcpSlave::Receive(Client* client) {
-  modbus_set_socket(ctx_, client->fd);
-  const int rc = modbus_receive(ctx_, client->request.data());
+void ModbusSlave::Receive(Client* client) {
+  if (!client->serial) modbus_set_socket(client->ctx, client->fd);
+  const int rc = modbus_receive(client->ctx, client->request.data());
   if (rc < 0) {
-    close(client->fd);  // peer closed or sent garbage: a PLC drops such a connection
-    client->fd = -1;
+    Close(client);  // peer closed or sent garbage: a PLC drops such a connection
     return;
   }
-  if (rc == 0) return;  // not for this unit
+  if (rc == 0) return;  // addressed to another unit on the serial line
   client->request_length = rc;
   if (simulation_->TakeDrop()) {
-    close(client->fd);
-    client->fd = -1;
+    Close(client);
     return;
   }
   const int delay_ms = simulation_->response_delay_ms();
@@ -117,60 +151,68 @@ void ModbusTcpSlave::Receive(Client* client) {
     client->due = Clock::now() + std::chrono::milliseconds(delay_ms);
     return;
   }
-  if (!Answer(client)) {
-    close(client->fd);
-    client->fd = -1;
-  }
+  if (!Answer(client)) Close(client);
 }
 
-bool ModbusTcpSlave::Answer(Client* client) {
+bool ModbusSlave::Answer(Client* client) {
   client->pending = false;
-  modbus_set_socket(ctx_, client->fd);
+  modbus_t* ctx = client->ctx;
+  if (!client->serial) modbus_set_socket(ctx, client->fd);
   const std::uint8_t* req = client->request.data();
-  const std::uint8_t* pdu = req + header_length_;
+  const int header_length = modbus_get_header_length(ctx);
+  const std::uint8_t* pdu = req + header_length;
   const int function = pdu[0];
   const int exception = simulation_->read_exception_code();
   if (exception != 0 && IsRead(function)) {
-    return modbus_reply_exception(ctx_, req, static_cast<unsigned>(exception)) >= 0;
+    return modbus_reply_exception(ctx, req, static_cast<unsigned>(exception)) >= 0;
   }
   auto& holding = simulation_->holding_registers();
   const int size = static_cast<int>(holding.size());
-  int first = -1;
+  int first = 0;
   int count = 0;
+  bool wrote = false;
+  // Copies `n` registers of the request starting at byte `values` into the image, if the
+  // request is well formed (otherwise modbus_reply answers it with an exception).
+  auto store = [&](int address, int n, int byte_count, int values) {
+    if (n < 1 || n > MODBUS_MAX_WRITE_REGISTERS || address + n > size || byte_count != 2 * n ||
+        client->request_length < header_length + values + 2 * n) {
+      return;
+    }
+    for (int i = 0; i < n; ++i) {
+      holding[address + i] = static_cast<std::uint16_t>(Word(pdu + values + 2 * i));
+    }
+    first = address;
+    count = n;
+    wrote = true;
+  };
   // Writes go into the image and through the PLC logic before the reply, so that a master that
   // got the reply sees their effect (lockstep steps included).
   if (function == MODBUS_FC_WRITE_SINGLE_REGISTER) {
-    first = Word(pdu + 1);
-    count = 1;
-    if (first < size) holding[first] = static_cast<std::uint16_t>(Word(pdu + 3));
+    store(Word(pdu + 1), 1, 2, 3);
   } else if (function == MODBUS_FC_WRITE_MULTIPLE_REGISTERS) {
-    first = Word(pdu + 1);
-    count = Word(pdu + 3);
-    if (count >= 1 && count <= MODBUS_MAX_WRITE_REGISTERS && first + count <= size &&
-        pdu[5] == 2 * count && client->request_length >= header_length_ + 6 + 2 * count) {
-      for (int i = 0; i < count; ++i) {
-        holding[first + i] = static_cast<std::uint16_t>(Word(pdu + 6 + 2 * i));
-      }
-    }
+    store(Word(pdu + 1), Word(pdu + 3), pdu[5], 6);
+  } else if (function == MODBUS_FC_WRITE_AND_READ_REGISTERS) {
+    store(Word(pdu + 5), Word(pdu + 7), pdu[9], 10);
   } else if (function == MODBUS_FC_MASK_WRITE_REGISTER) {
-    first = Word(pdu + 1);
-    count = 1;
-    if (first < size) {
+    const int address = Word(pdu + 1);
+    if (address < size) {
       const int and_mask = Word(pdu + 3);
       const int or_mask = Word(pdu + 5);
-      holding[first] =
-          static_cast<std::uint16_t>((holding[first] & and_mask) | (or_mask & ~and_mask & 0xFFFF));
+      holding[address] = static_cast<std::uint16_t>((holding[address] & and_mask) |
+                                                    (or_mask & ~and_mask & 0xFFFF));
+      first = address;
+      count = 1;
+      wrote = true;
     }
   }
-  const bool write_ok = first >= 0 && count >= 1 && first + count <= size;
-  if (write_ok) simulation_->OnHoldingWrite(first, count);
-  const int rc = modbus_reply(ctx_, req, client->request_length, &mapping_);
+  if (wrote) simulation_->OnHoldingWrite(first, count);
+  const int rc = modbus_reply(ctx, req, client->request_length, &mapping_);
   // modbus_reply stored the raw written values again: put back what the PLC made of them.
-  if (write_ok) simulation_->PublishHoldings();
+  if (wrote) simulation_->PublishHoldings();
   return rc >= 0;
 }
 
-void ModbusTcpSlave::StepClock(Clock::time_point now) {
+void ModbusSlave::StepClock(Clock::time_point now) {
   if (simulation_->lockstep()) return;
   const std::chrono::duration<double> period(simulation_->config().plant_step_s /
                                              clock_.time_scale);
@@ -189,7 +231,7 @@ void ModbusTcpSlave::StepClock(Clock::time_point now) {
   }
 }
 
-void ModbusTcpSlave::Run(const volatile std::sig_atomic_t* stop, const sigset_t* wait_mask) {
+void ModbusSlave::Run(const volatile std::sig_atomic_t* stop, const sigset_t* wait_mask) {
   while (*stop == 0) {
     const Clock::time_point now = Clock::now();
     StepClock(now);
@@ -202,8 +244,11 @@ void ModbusTcpSlave::Run(const volatile std::sig_atomic_t* stop, const sigset_t*
     }
     fd_set readable;
     FD_ZERO(&readable);
-    FD_SET(listen_fd_, &readable);
-    int max_fd = listen_fd_;
+    int max_fd = -1;
+    if (listen_fd_ >= 0) {
+      FD_SET(listen_fd_, &readable);
+      max_fd = listen_fd_;
+    }
     for (const Client& c : clients_) {
       if (c.pending) {
         wake = std::min(wake, c.due);
@@ -220,15 +265,12 @@ void ModbusTcpSlave::Run(const volatile std::sig_atomic_t* stop, const sigset_t*
     }
     // Iterate by index: Accept appends to clients_.
     const std::size_t existing = clients_.size();
-    if (n > 0 && FD_ISSET(listen_fd_, &readable)) Accept();
+    if (n > 0 && listen_fd_ >= 0 && FD_ISSET(listen_fd_, &readable)) Accept();
     for (std::size_t i = 0; i < existing; ++i) {
       Client& c = clients_[i];
       if (c.fd < 0) continue;
       if (c.pending) {
-        if (Clock::now() >= c.due && !Answer(&c)) {
-          close(c.fd);
-          c.fd = -1;
-        }
+        if (Clock::now() >= c.due && !Answer(&c)) Close(&c);
       } else if (n > 0 && FD_ISSET(c.fd, &readable)) {
         Receive(&c);
       }
