@@ -46,6 +46,9 @@ class SetpointLimiter final {
   /// Records that the plant holds `value` at `time_s` (after a successful write, or the first
   /// reading of the channel).
   void Reset(double value, double time_s);
+  /// Drops the reference (e.g. after the link to the plant was lost, since the plant may have
+  /// restarted with another value); Apply reports kNoReference until the next Reset.
+  void Forget() { has_reference_ = false; }
 
   /// What may be written at `time_s` for `requested`; does not change the state (call Reset with
   /// the value once it has been written).

@@ -68,7 +68,7 @@ int SubscribeMessage(Bus& bus, const std::string& channel_regex, F handler,
   return bus.Subscribe(
       channel_regex,
       [handler = std::move(handler)](const std::string& channel,
-                                     std::span<const uint8_t> data) -> bool {
+                                     std::span<const uint8_t> data) mutable -> bool {
         Message message;
         const int size = static_cast<int>(data.size());
         if (message.decode(data.data(), 0, size) != size) return false;

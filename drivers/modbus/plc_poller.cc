@@ -173,6 +173,8 @@ void PlcPoller::Run() {
       }
       if (ever_connected_) counters_.reconnects.fetch_add(1, std::memory_order_relaxed);
       ever_connected_ = true;
+      // The PLC may have restarted with other setpoints: rate-limit from fresh readings.
+      for (core::SetpointLimiter& limiter : limiters_) limiter.Forget();
       backoff.Reset();
       consecutive_timeouts_ = 0;
       counters_.current_backoff_s.store(0.0);

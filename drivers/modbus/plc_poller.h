@@ -124,8 +124,8 @@ struct PollerCounters {
 ///
 /// Writes: RequestWrite may be called from any thread; the request (a fixed-size mutex-protected
 /// queue) runs on the poller thread between polls, only for writable channels, through a
-/// core::SetpointLimiter whose reference is the first valid reading of the channel and then the
-/// last written value.
+/// core::SetpointLimiter whose reference is the first valid reading of the channel after each
+/// (re)connect and then the last written value.
 class PlcPoller final {
  public:
   /// @throws std::invalid_argument on a bad config (ValidatePollerConfig, PlanReads).

@@ -13,7 +13,8 @@ inline constexpr int kMaxReadRegisters = 125;
 inline constexpr int kMaxWriteRegisters = 123;
 
 /// Why a PLC request failed. Every libmodbus errno maps to exactly one of these (see
-/// TranslateModbusErrno), so code above the port never sees errno.
+/// TranslateModbusErrno), so code above the port never sees errno. The numeric values are those
+/// of canalid.sample_t STATUS_* (checked in tests/drivers/lcm_bus_test.cc).
 enum class PlcErrorKind {
   kNone,
   kTimeout,       ///< no (complete) reply within the response timeout

@@ -57,6 +57,9 @@ TEST(SetpointLimiter, NeedsAReferenceAndDoesNotMoveItByItself) {
   EXPECT_DOUBLE_EQ(limiter.Apply(1.0, 105.0).value, 0.35);
   limiter.Reset(first.value, 105.0);
   EXPECT_DOUBLE_EQ(limiter.Apply(1.0, 106.0).value, 0.36);
+  limiter.Forget();
+  EXPECT_FALSE(limiter.has_reference());
+  EXPECT_EQ(limiter.Apply(1.0, 107.0).status, SetpointStatus::kNoReference);
 }
 
 TEST(SetpointLimiter, RejectsBadLimits) {

@@ -13,10 +13,26 @@
 #include "drivers/lcm/bus.h"
 #include "drivers/lcm/fake_bus.h"
 #include "drivers/lcm/lcm_bus.h"
+#include "drivers/modbus/plc_poller.h"
 #include "lcm_test_messages.h"
 
 namespace canalid::drivers {
 namespace {
+
+// sample_t's status and quality codes are the driver's enums, so the daemon converts by cast.
+static_assert(static_cast<int>(PlcErrorKind::kNone) == canalid::sample_t::STATUS_OK);
+static_assert(static_cast<int>(PlcErrorKind::kTimeout) == canalid::sample_t::STATUS_TIMEOUT);
+static_assert(static_cast<int>(PlcErrorKind::kException) == canalid::sample_t::STATUS_EXCEPTION);
+static_assert(static_cast<int>(PlcErrorKind::kDisconnected) ==
+              canalid::sample_t::STATUS_DISCONNECTED);
+static_assert(static_cast<int>(PlcErrorKind::kBadData) == canalid::sample_t::STATUS_BAD_DATA);
+static_assert(static_cast<int>(PlcErrorKind::kConfig) == canalid::sample_t::STATUS_CONFIG);
+static_assert(static_cast<int>(SampleQuality::kValid) == canalid::sample_t::QUALITY_VALID);
+static_assert(static_cast<int>(SampleQuality::kReadFailed) ==
+              canalid::sample_t::QUALITY_READ_FAILED);
+static_assert(static_cast<int>(SampleQuality::kOutOfRange) ==
+              canalid::sample_t::QUALITY_OUT_OF_RANGE);
+static_assert(static_cast<int>(SampleQuality::kNotFinite) == canalid::sample_t::QUALITY_NOT_FINITE);
 
 using BusFactory = std::function<std::unique_ptr<Bus>()>;
 

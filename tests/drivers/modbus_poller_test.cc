@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cmath>
 #include <condition_variable>
 #include <cstdint>
 #include <functional>
@@ -169,6 +170,31 @@ TEST(ModbusPoller, WritesOnlyWhitelistedChannelsClampedAndRateLimited) {
   EXPECT_EQ(nan_result->outcome, WriteOutcome::kNotFinite);
   EXPECT_EQ(rig.poller->counters().writes_ok, 2);
   EXPECT_EQ(rig.poller->counters().writes_failed, 1);
+}
+
+TEST(ModbusPoller, RateLimitRestartsFromAFreshReadingAfterAReconnect) {
+  Rig rig;
+  rig.Make(BaseConfig());
+  rig.fake->SetRegister(kHolding, 6, 200);
+  rig.poller->Start();
+  ASSERT_TRUE(rig.NextSample(0).has_value());
+  auto r = rig.Result(rig.poller->RequestWrite(3, 1.0).id);
+  ASSERT_TRUE(r.has_value());
+  EXPECT_NEAR(r->written, 0.2, 1e-3);
+
+  // The PLC restarts holding 0.9 m: the limiter must start from there, not from 0.2 m.
+  rig.fake->FailNextRequest({PlcErrorKind::kDisconnected, 0, 104});
+  rig.fake->SetRegister(kHolding, 6, 900);
+  ASSERT_TRUE(rig.waiter.Until([&] { return rig.poller->counters().reconnects == 1; }));
+  ASSERT_TRUE(rig.waiter.Until([&] {
+    std::optional<PollSample> s = rig.NextSample(0);
+    return s && s->valid(3) && std::abs(s->values[3] - 0.9) < 1e-9;
+  }));
+  r = rig.Result(rig.poller->RequestWrite(3, 1.0).id);
+  ASSERT_TRUE(r.has_value());
+  EXPECT_EQ(r->outcome, WriteOutcome::kWritten);
+  EXPECT_NEAR(r->written, 0.9, 1e-3);
+  EXPECT_EQ(rig.fake->GetRegister(kHolding, 6), 900);
 }
 
 TEST(ModbusPoller, RefusesAWriteWithoutAValidReading) {

@@ -21,6 +21,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <stdexcept>
 #include <string>
 
 #include "drivers/modbus/modbus_port.h"
@@ -219,6 +220,53 @@ TEST(ModbusPymodbus, RefusedConnectIsDisconnected) {
   EXPECT_EQ(s.kind, PlcErrorKind::kDisconnected);
   std::array<uint16_t, 1> r{};
   EXPECT_EQ(plc.ReadRegisters(kHolding, 0, r).kind, PlcErrorKind::kDisconnected);
+}
+
+// A peer whose kernel completes the TCP handshake (listen backlog) but never answers.
+TEST(ModbusPymodbus, SilentPeerIsATimeoutAndConnectionsToNowhereAreDisconnected) {
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+  socklen_t len = sizeof addr;
+  getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len);
+  ASSERT_EQ(listen(fd, 4), 0);
+  ModbusTcpConfig config = TcpConfig(ntohs(addr.sin_port));
+  config.response_timeout_s = 0.05;
+  ModbusPort plc(config);
+  ASSERT_TRUE(plc.Connect().ok());
+  std::array<uint16_t, 10> regs{};
+  const PlcStatus s = plc.ReadRegisters(kHolding, 0, regs);
+  EXPECT_EQ(s.kind, PlcErrorKind::kTimeout);
+  EXPECT_TRUE(plc.connected()) << "a timeout alone keeps the link; the poller decides";
+  close(fd);
+
+  ModbusRtuConfig rtu;
+  rtu.device = "/nonexistent/ttyCANALID";
+  ModbusPort serial(rtu);
+  EXPECT_EQ(serial.Connect().kind, PlcErrorKind::kDisconnected);
+}
+
+TEST(ModbusPymodbus, ConfigValidationNamesTheField) {
+  ModbusTcpConfig tcp;
+  tcp.port = 0;
+  try {
+    ModbusPort bad(tcp);
+    FAIL() << "no throw";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("port"), std::string::npos) << e.what();
+  }
+  ModbusRtuConfig rtu;
+  rtu.device = "/dev/ttyUSB0";
+  rtu.parity = 'X';
+  EXPECT_THROW(ModbusPort{rtu}, std::invalid_argument);
+  rtu.parity = 'N';
+  rtu.unit_id = 0;  // broadcast: no replies, so no reads
+  EXPECT_THROW(ModbusPort{rtu}, std::invalid_argument);
+  tcp = ModbusTcpConfig{};
+  tcp.response_timeout_s = 0.0;
+  EXPECT_THROW(ModbusPort{tcp}, std::invalid_argument);
 }
 
 TEST(ModbusPymodbus, PollerDecodesTheServerMapAndTypesExceptionBlocks) {
