@@ -9,7 +9,7 @@ namespace canalid::core {
 /// Sampling convention of every simulator here: u[k] is held over [k Ts, (k+1) Ts) (ZOH), y[k]
 /// is the output at t = k Ts, the system is at rest with u = 0 before t = 0 (feed deviations
 /// from the initial values).  A sub-sample delay tau = (d + f) Ts is applied exactly to the held
-/// input: during [k Ts, k Ts + f Ts) the plant sees u[k-d-1], afterwards u[k-d] (DelaySplit).
+/// input: during [k Ts, k Ts + f Ts) the plant sees u[k-d-1], afterwards u[k-d] (ZohDelaySplit).
 /// Streaming use: read output() (y[k]) then Advance(u[k]).  Allocation only in constructors.
 
 /// Band and density of the Oustaloup approximation.  G = K/(1 + T s^alpha) is realised as
@@ -51,7 +51,7 @@ class OustaloupFoptdSimulator final {
   Eigen::RowVectorXd c_;
   Eigen::VectorXd state_;
   Eigen::VectorXd next_;
-  DelayLine delay_;
+  ZohDelayLine delay_;
   double output_ = 0.0;
 };
 
@@ -81,7 +81,7 @@ class GlFoptdSimulator final {
   Eigen::VectorXd history_;          // mirrored: 2 L entries
   Eigen::VectorXd previous_weight_;  // share of u_previous in each substep's input mean
   int head_ = 0;
-  DelayLine delay_;
+  ZohDelayLine delay_;
   double output_ = 0.0;
   // alpha = 1: exact ZOH with split
   bool exact_first_order_ = false;
