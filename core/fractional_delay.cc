@@ -6,17 +6,17 @@
 
 namespace canalid::core {
 
-DelaySplit SplitDelay(double delay_s, double sample_time_s) {
+ZohDelaySplit SplitZohDelay(double delay_s, double sample_time_s) {
   if (!(sample_time_s > 0.0) || !std::isfinite(sample_time_s)) {
-    throw std::invalid_argument("SplitDelay: sample_time_s = " + std::to_string(sample_time_s) +
+    throw std::invalid_argument("SplitZohDelay: sample_time_s = " + std::to_string(sample_time_s) +
                                 " must be > 0");
   }
   if (!(delay_s >= 0.0) || !std::isfinite(delay_s) || delay_s / sample_time_s > 1e7) {
-    throw std::invalid_argument("SplitDelay: delay_s = " + std::to_string(delay_s) +
+    throw std::invalid_argument("SplitZohDelay: delay_s = " + std::to_string(delay_s) +
                                 " must be in [0, 1e7 sample times]");
   }
   const double samples = delay_s / sample_time_s;
-  DelaySplit split;
+  ZohDelaySplit split;
   split.whole_samples = static_cast<int>(std::floor(samples));
   split.fraction = samples - split.whole_samples;
   // A delay a rounding error short of a whole number of samples is that whole number.
@@ -30,14 +30,14 @@ DelaySplit SplitDelay(double delay_s, double sample_time_s) {
 namespace {
 int CheckedSize(int whole_samples) {
   if (whole_samples < 0) {
-    throw std::invalid_argument("DelayLine: whole_samples = " + std::to_string(whole_samples) +
+    throw std::invalid_argument("ZohDelayLine: whole_samples = " + std::to_string(whole_samples) +
                                 " must be >= 0");
   }
   return whole_samples + 2;
 }
 }  // namespace
 
-DelayLine::DelayLine(int whole_samples)
+ZohDelayLine::ZohDelayLine(int whole_samples)
     : buffer_(Eigen::VectorXd::Zero(CheckedSize(whole_samples))), size_(whole_samples + 2) {}
 
 }  // namespace canalid::core

@@ -6,20 +6,20 @@ namespace canalid::core {
 /// A delay tau = (whole_samples + fraction) Ts, 0 <= fraction < 1.  Over the sample interval
 /// [k Ts, (k+1) Ts) a zero-order-held input u delayed by tau equals u[k - whole - 1] during the
 /// first fraction * Ts and u[k - whole] afterwards (the "delayed ZOH split").
-struct DelaySplit {
+struct ZohDelaySplit {
   int whole_samples = 0;
   double fraction = 0.0;
 };
 
 /// @throws std::invalid_argument unless delay_s >= 0 and sample_time_s > 0 (finite), or when the
 ///         delay exceeds 1e7 samples.
-DelaySplit SplitDelay(double delay_s, double sample_time_s);
+ZohDelaySplit SplitZohDelay(double delay_s, double sample_time_s);
 
 /// Ring buffer of the last whole_samples + 2 inputs (zero before the first Push), giving the two
 /// inputs of the delayed ZOH split.  Allocates only in the constructor.
-class DelayLine final {
+class ZohDelayLine final {
  public:
-  explicit DelayLine(int whole_samples);
+  explicit ZohDelayLine(int whole_samples);
   /// Stores u[k]; afterwards previous() = u[k - d - 1] and current() = u[k - d].
   void Push(double input) {
     head_ = head_ + 1 == size_ ? 0 : head_ + 1;

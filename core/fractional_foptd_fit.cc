@@ -120,11 +120,14 @@ FractionalFoptdFitResult FitFractionalFoptd(const Eigen::Ref<const Eigen::Vector
   result.output_offset = output.head(first_change + 1).mean();
   const Eigen::VectorXd dy = output.array() - result.output_offset;
 
-  // Stage 1: static gain from the final value.
+  // Stage 1: static gain from the final value, for a single step only (a PRBS record does not
+  // end in a steady state; its gain comes from least squares).
   const Eigen::Index tail = std::max<Eigen::Index>(1, n / 20);
   const double du_final = du.tail(tail).mean();
   const double dy_final = dy.tail(tail).mean();
-  const bool ends_away = std::abs(du_final) > 0.2 * du_range;
+  int changes = 0;
+  for (Eigen::Index k = 1; k < n; ++k) changes += std::abs(du(k) - du(k - 1)) > 1e-9 * du_range;
+  const bool ends_away = changes == 1 && std::abs(du_final) > 0.2 * du_range;
   double gain = ends_away ? dy_final / du_final : std::numeric_limits<double>::quiet_NaN();
 
   // Stage 2: delay from the response start.
@@ -139,7 +142,6 @@ FractionalFoptdFitResult FitFractionalFoptd(const Eigen::Ref<const Eigen::Vector
     dy.cwiseAbs().maxCoeff(&at);
     final_change = dy(at);
   }
-  const double direction = final_change >= 0.0 ? 1.0 : -1.0;
   // A centred 7-sample mean lowers the noise by sqrt(7) so low-SNR steps are still detected
   // near their start; the 2 % floor keeps noise-free records from triggering on rounding.
   constexpr Eigen::Index kHalfWindow = 3;
@@ -154,7 +156,7 @@ FractionalFoptdFitResult FitFractionalFoptd(const Eigen::Ref<const Eigen::Vector
   double delay = 0.0;
   for (Eigen::Index k = first_change + 1; k + 4 < n; ++k) {
     bool beyond = true;
-    for (Eigen::Index j = k; j < k + 5 && beyond; ++j) beyond = direction * smoothed(j) > threshold;
+    for (Eigen::Index j = k; j < k + 5 && beyond; ++j) beyond = std::abs(smoothed(j)) > threshold;
     if (beyond) {
       // y[k] is the first output past the threshold; the response started before it.
       delay = std::max(0.0, (k - 1 - first_change) * ts);

@@ -37,11 +37,12 @@ struct FractionalFoptdFitResult {
 /// of fractional_simulator.h (u[k] held over [k Ts, (k+1) Ts)).
 /// Deviations: u0 = u[0], y0 = mean of y up to the first input change (at rest before it).
 /// Stages, as seed 2 does them:
-///  1. K from the final value (means of the last 5 % of du and dy) when the input ends away from
-///     u0; otherwise by least squares in stage 2;
-///  2. tau from the response start: the first of 5 consecutive samples beyond max(4 sigma, 2 %
-///     of the final change) after the input change, sigma the noise level from the median
-///     absolute first difference;
+///  1. K from the final value (means of the last 5 % of du and dy) for a single step that ends
+///     away from u0; otherwise (PRBS, pulses) by least squares in stage 3;
+///  2. tau from the response start: the first of 5 consecutive samples whose centred 7-sample
+///     mean of |dy| exceeds max(4 sigma / sqrt 7, 2 % of the final change) after the first input
+///     change, sigma the noise level from the median absolute first difference; earlier
+///     delays down to 0 are then scanned on the ISE (the detection lags for small steps);
 ///  3. T and alpha minimising the ISE (grid over alpha in 0.5..1.5 and the time scale
 ///     T^(1/alpha) in [Ts, record], with K re-estimated by least squares at each point);
 ///  4. joint LM refinement (core/levenberg_marquardt.h) of (log T^(1/alpha) bounded to

@@ -22,11 +22,11 @@ void CheckSampleTime(double sample_time_s, const char* where) {
 // K/(1 + T s R(s)), R ~ s^(alpha - 1) realised by RealizeOustaloup (states xi, feedthrough g):
 // with w = R(y) = C_R xi + g y and T w' = K u - y, the output is y = (w - C_R xi) / g, which
 // closes the loop without an algebraic constraint.  States [xi; w].
-ContinuousStateSpace FractionalFoptdModel(const FractionalFoptdParams& params, double sample_time_s,
+OustaloupRealization FractionalFoptdModel(const FractionalFoptdParams& params, double sample_time_s,
                                           const OustaloupOptions& band) {
   const double k = params.gain;
   const double t = params.time_constant_s;
-  ContinuousStateSpace model;
+  OustaloupRealization model;
   if (params.alpha == 1.0) {
     model.a = Eigen::MatrixXd::Constant(1, 1, -1.0 / t);
     model.b = Eigen::VectorXd::Constant(1, k / t);
@@ -41,7 +41,7 @@ ContinuousStateSpace FractionalFoptdModel(const FractionalFoptdParams& params, d
   }
   const double decades = std::log10(o.high_frequency_rad_s / o.low_frequency_rad_s);
   const int sections = std::max(1, static_cast<int>(std::ceil(o.sections_per_decade * decades)));
-  const ContinuousStateSpace r = RealizeOustaloup(OustaloupApproximation(
+  const OustaloupRealization r = RealizeOustaloup(OustaloupApproximation(
       params.alpha - 1.0, o.low_frequency_rad_s, o.high_frequency_rad_s, sections));
   const Eigen::Index n = r.a.rows();
   const double g = r.d;
@@ -76,9 +76,9 @@ OustaloupOptions DefaultOustaloupOptions(const FractionalFoptdParams& params, do
 OustaloupFoptdSimulator::OustaloupFoptdSimulator(const FractionalFoptdParams& params,
                                                  double sample_time_s,
                                                  const OustaloupOptions& options)
-    : delay_((Validate(params), SplitDelay(params.delay_s, sample_time_s).whole_samples)) {
-  const DelaySplit split = SplitDelay(params.delay_s, sample_time_s);
-  const ContinuousStateSpace model = FractionalFoptdModel(params, sample_time_s, options);
+    : delay_((Validate(params), SplitZohDelay(params.delay_s, sample_time_s).whole_samples)) {
+  const ZohDelaySplit split = SplitZohDelay(params.delay_s, sample_time_s);
+  const OustaloupRealization model = FractionalFoptdModel(params, sample_time_s, options);
   ZohSplitModel zoh = DiscretizeZohSplit(model.a, model.b, sample_time_s, split.fraction);
   phi_ = std::move(zoh.phi);
   gamma_previous_ = std::move(zoh.gamma_previous);
@@ -107,7 +107,7 @@ GlFoptdSimulator::GlFoptdSimulator(const FractionalFoptdParams& params, double s
     : params_(params),
       substeps_(substeps),
       memory_length_(memory_length),
-      delay_((Validate(params), SplitDelay(params.delay_s, sample_time_s).whole_samples)) {
+      delay_((Validate(params), SplitZohDelay(params.delay_s, sample_time_s).whole_samples)) {
   CheckSampleTime(sample_time_s, "GlFoptdSimulator");
   if (substeps < 1) {
     throw std::invalid_argument("GlFoptdSimulator: substeps = " + std::to_string(substeps) +
@@ -117,7 +117,7 @@ GlFoptdSimulator::GlFoptdSimulator(const FractionalFoptdParams& params, double s
     throw std::invalid_argument(
         "GlFoptdSimulator: memory_length = " + std::to_string(memory_length) + " must be >= 1");
   }
-  const double f = SplitDelay(params.delay_s, sample_time_s).fraction;
+  const double f = SplitZohDelay(params.delay_s, sample_time_s).fraction;
   if (params.alpha == 1.0) {
     exact_first_order_ = true;
     a_early_ = std::exp(-f * sample_time_s / params.time_constant_s);

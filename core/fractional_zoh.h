@@ -4,7 +4,7 @@
 namespace canalid::core {
 
 /// Exact zero-order-hold discretisation of x' = A x + B v with the delayed ZOH split (see
-/// DelaySplit): over one sample interval v = u_previous during the first fraction * Ts and
+/// ZohDelaySplit): over one sample interval v = u_previous during the first fraction * Ts and
 /// u_current afterwards, so
 ///   x[k+1] = phi x[k] + gamma_previous u_previous + gamma_current u_current,
 ///   phi = e^{A Ts},  gamma_current = int_0^{(1-f) Ts} e^{A s} ds B,

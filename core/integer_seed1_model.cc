@@ -18,12 +18,12 @@ Eigen::VectorXd UnitResponse(double s2, double m, double delay_s, const Eigen::V
   Eigen::Matrix3d a;
   a << 0.0, 1.0, 0.0, -1.0 / s2, -m / s2, 0.0, 1.0, 0.0, 0.0;
   const Eigen::Vector3d b(0.0, 1.0 / s2, 0.0);
-  const DelaySplit split = SplitDelay(delay_s, ts);
+  const ZohDelaySplit split = SplitZohDelay(delay_s, ts);
   const ZohSplitModel zoh = DiscretizeZohSplit(a, b, ts, split.fraction);
   const Eigen::Matrix3d phi = zoh.phi;
   const Eigen::Vector3d gp = zoh.gamma_previous;
   const Eigen::Vector3d gc = zoh.gamma_current;
-  DelayLine line(split.whole_samples);
+  ZohDelayLine line(split.whole_samples);
   Eigen::Vector3d x = Eigen::Vector3d::Zero();
   Eigen::VectorXd y(u.size());
   for (Eigen::Index k = 0; k < u.size(); ++k) {

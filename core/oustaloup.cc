@@ -33,9 +33,9 @@ OustaloupFilter OustaloupApproximation(double gamma, double low_rad_s, double hi
   return filter;
 }
 
-ContinuousStateSpace RealizeOustaloup(const OustaloupFilter& filter) {
+OustaloupRealization RealizeOustaloup(const OustaloupFilter& filter) {
   const Eigen::Index n = filter.poles_rad_s.size();
-  ContinuousStateSpace ss;
+  OustaloupRealization ss;
   ss.a = Eigen::MatrixXd::Zero(n, n);
   ss.b.resize(n);
   ss.c.resize(n);

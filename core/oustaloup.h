@@ -21,7 +21,7 @@ OustaloupFilter OustaloupApproximation(double gamma, double low_rad_s, double hi
                                        int sections);
 
 /// Continuous single-input single-output state space x' = A x + B u, y = C x + D u.
-struct ContinuousStateSpace {
+struct OustaloupRealization {
   Eigen::MatrixXd a;
   Eigen::VectorXd b;
   Eigen::RowVectorXd c;
@@ -31,6 +31,6 @@ struct ContinuousStateSpace {
 /// The filter as a cascade of first-order sections with scaled states xi_k (xi_k' = -p_k xi_k +
 /// p_k v_k, section output v_k + ((z_k - p_k)/p_k) xi_k): lower triangular A, well conditioned
 /// even over many decades.
-ContinuousStateSpace RealizeOustaloup(const OustaloupFilter& filter);
+OustaloupRealization RealizeOustaloup(const OustaloupFilter& filter);
 
 }  // namespace canalid::core

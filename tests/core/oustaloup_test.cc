@@ -14,7 +14,7 @@
 namespace canalid::core {
 namespace {
 
-std::complex<double> StateSpaceResponse(const ContinuousStateSpace& ss, double w) {
+std::complex<double> StateSpaceResponse(const OustaloupRealization& ss, double w) {
   const Eigen::Index n = ss.a.rows();
   const Eigen::MatrixXcd m = std::complex<double>(0.0, w) * Eigen::MatrixXcd::Identity(n, n) -
                              ss.a.cast<std::complex<double>>();
@@ -28,7 +28,7 @@ TEST(OustaloupTest, RealisationApproximatesFractionalPowerInsideTheBand) {
   // w)^gamma).
   for (double gamma : {-0.5, -0.2, 0.3, 0.7}) {
     const OustaloupFilter filter = OustaloupApproximation(gamma, 1e-3, 1e3, 18);
-    const ContinuousStateSpace ss = RealizeOustaloup(filter);
+    const OustaloupRealization ss = RealizeOustaloup(filter);
     for (double w = 1e-1; w <= 1e1; w *= 1.7) {
       const std::complex<double> h = StateSpaceResponse(ss, w);
       EXPECT_NEAR(std::abs(h) / std::pow(w, gamma), 1.0, 1e-2) << "gamma " << gamma << " w " << w;
@@ -47,15 +47,15 @@ TEST(OustaloupTest, RejectsBadArguments) {
   EXPECT_THROW(OustaloupApproximation(0.5, 1e-3, 1e3, 0), std::invalid_argument);
 }
 
-TEST(DelaySplitTest, SplitsWholeAndFractionalSamples) {
-  DelaySplit s = SplitDelay(4.05, 0.15);
+TEST(ZohDelaySplitTest, SplitsWholeAndFractionalSamples) {
+  ZohDelaySplit s = SplitZohDelay(4.05, 0.15);
   EXPECT_EQ(s.whole_samples, 27);
   EXPECT_NEAR(s.fraction, 0.0, 1e-9);
-  s = SplitDelay(0.4, 0.15);
+  s = SplitZohDelay(0.4, 0.15);
   EXPECT_EQ(s.whole_samples, 2);
   EXPECT_NEAR(s.fraction, 0.4 / 0.15 - 2, 1e-12);
-  EXPECT_THROW(SplitDelay(-1.0, 0.15), std::invalid_argument);
-  DelayLine line(2);
+  EXPECT_THROW(SplitZohDelay(-1.0, 0.15), std::invalid_argument);
+  ZohDelayLine line(2);
   for (int k = 0; k < 6; ++k) {
     line.Push(k);
     EXPECT_EQ(line.current(), k >= 2 ? k - 2 : 0);
