@@ -83,6 +83,13 @@ ReachActions ReachPipeline::OnWriteFailed() {
   return Apply(event);
 }
 
+void ReachPipeline::SetNominalSetpoint(double value) {
+  const ExperimentPhase phase = experiment_state_.phase;
+  const bool running = phase == ExperimentPhase::kSettling || phase == ExperimentPhase::kExciting ||
+                       phase == ExperimentPhase::kIdentifying;
+  if (options_.experiment && !running) options_.experiment->prbs.nominal = value;
+}
+
 std::optional<IdPipelineResult> ReachPipeline::IdentifyRecord(ReachActions* actions) {
   ExperimentEvent event;
   std::optional<IdPipelineResult> result;

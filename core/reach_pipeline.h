@@ -51,6 +51,10 @@ class ReachPipeline final {
   ReachActions StopExperiment();
   /// A setpoint write of this reach failed: abort if exciting.
   ReachActions OnWriteFailed();
+  /// Sets the actuator's nominal setpoint (the PRBS centre and the value every abort restores),
+  /// e.g. from the actuator's reading when the configuration leaves it open.  Ignored unless
+  /// idle, done or aborted, so a running experiment keeps its nominal.
+  void SetNominalSetpoint(double value);
 
   /// Batch identification of the completed record (ID model pipeline); then the experiment
   /// ends done (a model) or aborted (kIdentificationFailed).  @pre a record is complete.

@@ -1,0 +1,417 @@
+#include "daemon/canalidd/daemon.h"
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <sstream>
+
+#include "daemon/canalidd/log.h"
+#include "daemon/canalidd/systemd_notify.h"
+#include "drivers/json/model_json.h"
+#include "drivers/lcm/lcm_bus.h"
+#include "drivers/modbus/modbus_port.h"
+
+namespace canalid::daemon {
+namespace {
+
+double SteadyNowS() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+double WallNowS() {
+  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
+
+std::chrono::steady_clock::duration Seconds(double s) {
+  return std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(s));
+}
+
+}  // namespace
+
+struct Daemon::Plc {
+  Plc(const PlcWiring& w, boost::asio::io_context& io) : wiring(w), heartbeat_timer(io) {}
+  const PlcWiring& wiring;
+  std::unique_ptr<drivers::PlcPoller> poller;
+  std::vector<std::string> channel_names;
+  std::atomic<bool> drain_pending{false};
+  boost::asio::steady_timer heartbeat_timer;
+  std::uint16_t heartbeat = 0;
+  std::vector<int> reaches;
+};
+
+struct Daemon::Reach {
+  Reach(const ReachWiring& w) : wiring(w), pipeline(w.pipeline) {}
+  const ReachWiring& wiring;
+  core::ReachPipeline pipeline;
+  bool nominal_known = false;
+  double nominal = 0.0;
+  bool restore_pending = false;  // a nominal setpoint not yet confirmed by the PLC
+  bool started = false;          // on_start experiment already started
+  double last_time_s = 0.0;
+};
+
+Daemon::Daemon(DaemonPlan plan, std::unique_ptr<drivers::Bus> bus, PortFactory make_port,
+               ReloadFunction reload)
+    : plan_(std::move(plan)),
+      bus_(std::move(bus)),
+      make_port_(std::move(make_port)),
+      reload_(std::move(reload)),
+      signals_(io_, SIGINT, SIGTERM, SIGHUP),
+      health_timer_(io_),
+      stop_timer_(io_),
+      publisher_(*bus_, plan_.channel_prefix) {
+  for (std::size_t i = 0; i < plan_.plcs.size(); ++i) {
+    auto plc = std::make_unique<Plc>(plan_.plcs[i], io_);
+    for (const auto& channel : plan_.plcs[i].poller.channels)
+      plc->channel_names.push_back(channel.name);
+    Plc* raw = plc.get();
+    const int index = static_cast<int>(i);
+    // The poller thread only posts a drain; the flag keeps a burst of notifications to one.
+    plc->poller = std::make_unique<drivers::PlcPoller>(
+        plan_.plcs[i].poller, make_port_(plan_.plcs[i]), [this, raw, index] {
+          if (!raw->drain_pending.exchange(true))
+            boost::asio::post(io_, [this, index] { Drain(index); });
+        });
+    plcs_.push_back(std::move(plc));
+  }
+  for (std::size_t r = 0; r < plan_.reaches.size(); ++r) {
+    auto reach = std::make_unique<Reach>(plan_.reaches[r]);
+    if (!reach->wiring.nominal_from_reading && reach->pipeline.experiment_plan()) {
+      reach->nominal_known = true;
+      reach->nominal = reach->pipeline.experiment_plan()->prbs.nominal;
+    }
+    plcs_.at(static_cast<std::size_t>(reach->wiring.plc))->reaches.push_back(static_cast<int>(r));
+    reaches_.push_back(std::move(reach));
+  }
+}
+
+Daemon::~Daemon() {
+  for (auto& plc : plcs_) plc->poller->Stop();
+}
+
+std::unique_ptr<drivers::PlcPort> Daemon::MakeModbusPort(const PlcWiring& wiring) {
+  return std::visit(
+      [](const auto& link) -> std::unique_ptr<drivers::PlcPort> {
+        return std::make_unique<drivers::ModbusPort>(link);
+      },
+      wiring.link);
+}
+
+DaemonExit Daemon::Run() {
+  start_steady_s_ = SteadyNowS();
+  publisher_.PublishConfig(plan_.config_path, plan_.config_text, WallNowS());
+  StartSignals();
+  StartBusWatch();
+  StartHealthTimer();
+  StartPollers();
+  for (std::size_t i = 0; i < plcs_.size(); ++i) StartHeartbeat(static_cast<int>(i));
+  LogInfo("running: " + std::to_string(plcs_.size()) + " PLC(s), " +
+          std::to_string(reaches_.size()) + " reach(es), LCM prefix " + plan_.channel_prefix);
+  io_.run();
+  for (auto& plc : plcs_) plc->poller->Stop();
+  LogInfo(exit_ == DaemonExit::kReload ? "reloading the configuration" : "stopped");
+  return exit_;
+}
+
+void Daemon::StartPollers() {
+  for (auto& plc : plcs_) plc->poller->Start();
+}
+
+void Daemon::StartSignals() {
+  signals_.async_wait([this](const boost::system::error_code& error, int signal) {
+    if (error) return;
+    if (signal == SIGHUP) {
+      LogInfo("SIGHUP: checking the configuration");
+      std::optional<DaemonPlan> plan;
+      try {
+        plan = reload_ ? reload_() : std::nullopt;
+      } catch (const std::exception& e) {
+        LogError(std::string("reload failed: ") + e.what());
+      }
+      if (plan) {
+        reloaded_plan_ = std::move(plan);
+        NotifyReloading();
+        BeginStop(DaemonExit::kReload);
+        return;
+      }
+      LogWarning("the new configuration is not valid; carrying on with the running one");
+      StartSignals();
+      return;
+    }
+    LogInfo(signal == SIGTERM ? "SIGTERM: stopping" : "SIGINT: stopping");
+    BeginStop(DaemonExit::kStopped);
+  });
+}
+
+void Daemon::StartBusWatch() {
+  auto* lcm = dynamic_cast<drivers::LcmBus*>(bus_.get());
+  if (lcm == nullptr) return;  // a fake bus in tests is pumped by the test
+  bus_fd_ = std::make_unique<boost::asio::posix::stream_descriptor>(io_, ::dup(lcm->fileno()));
+  auto watch = std::make_shared<std::function<void()>>();
+  *watch = [this, watch] {
+    bus_fd_->async_wait(boost::asio::posix::stream_descriptor::wait_read,
+                        [this, watch](const boost::system::error_code& error) {
+                          if (error) return;
+                          bus_->Handle(0.0);
+                          if (!stopping_) (*watch)();
+                        });
+  };
+  (*watch)();
+}
+
+void Daemon::StartHealthTimer() {
+  health_timer_.expires_after(Seconds(plan_.health_period_s));
+  health_timer_.async_wait([this](const boost::system::error_code& error) {
+    if (error || stopping_) return;
+    PublishHealth();
+    // The watchdog is fed from the sample loop; with every link down there are no samples, so the
+    // health timer keeps systemd informed that the loop itself is alive.
+    NotifyWatchdog();
+    StartHealthTimer();
+  });
+}
+
+void Daemon::StartHeartbeat(int index) {
+  Plc& plc = *plcs_[static_cast<std::size_t>(index)];
+  if (plc.wiring.heartbeat_channel < 0) return;
+  plc.heartbeat_timer.expires_after(Seconds(plc.wiring.heartbeat_period_s));
+  plc.heartbeat_timer.async_wait([this, index](const boost::system::error_code& error) {
+    if (error || stopping_) return;
+    Plc& p = *plcs_[static_cast<std::size_t>(index)];
+    ++p.heartbeat;
+    p.poller->RequestWrite(p.wiring.heartbeat_channel, static_cast<double>(p.heartbeat));
+    StartHeartbeat(index);
+  });
+}
+
+void Daemon::Drain(int index) {
+  Plc& plc = *plcs_[static_cast<std::size_t>(index)];
+  plc.drain_pending = false;
+  plc.poller->DrainSamples([&](const drivers::PollSample& s) { OnPoll(index, s); });
+  plc.poller->DrainWriteResults([&](const drivers::WriteResult& r) { OnWriteResult(index, r); });
+}
+
+void Daemon::OnPoll(int index, const drivers::PollSample& s) {
+  Plc& plc = *plcs_[static_cast<std::size_t>(index)];
+  publisher_.PublishSample(plc.wiring.poller.plc_name, plc.channel_names, s);
+  const bool link_ok = s.status.kind != drivers::PlcErrorKind::kDisconnected;
+  if (s.status.ok() && !ready_) {
+    ready_ = true;
+    NotifyReady();
+    LogInfo("PLC " + plc.wiring.poller.plc_name + " answers: ready");
+  }
+  const double now = SteadyNowS();
+  const double watchdog = WatchdogPeriodS();
+  if (watchdog > 0.0 && now - last_watchdog_s_ > watchdog / 4.0) {
+    NotifyWatchdog();
+    NotifyStatus(Status());
+    last_watchdog_s_ = now;
+  }
+  for (const int r : plc.reaches) {
+    Reach& reach = *reaches_[static_cast<std::size_t>(r)];
+    const ReachWiring& w = reach.wiring;
+    auto value = [&](int channel) { return s.values[static_cast<std::size_t>(channel)]; };
+    auto valid = [&](int channel) {
+      return channel >= 0 && s.valid(static_cast<std::size_t>(channel));
+    };
+    if (!reach.nominal_known && w.actuator >= 0 && valid(w.actuator)) {
+      reach.nominal = value(w.actuator);
+      reach.nominal_known = true;
+      reach.pipeline.SetNominalSetpoint(reach.nominal);
+      LogInfo("reach " + w.name + ": nominal setpoint " + std::to_string(reach.nominal) +
+              " (read from the PLC)");
+    }
+    core::ReachSample sample;
+    sample.q_in_valid = valid(w.q_in);
+    sample.q_out_valid = valid(w.q_out);
+    sample.level_valid = valid(w.level);
+    sample.q_in_m3s = sample.q_in_valid ? value(w.q_in) : 0.0;
+    sample.q_out_m3s = sample.q_out_valid ? value(w.q_out) : 0.0;
+    sample.level_m = sample.level_valid ? value(w.level) : 0.0;
+    sample.link_ok = link_ok;
+    reach.last_time_s = s.time_s;
+    const core::ReachActions actions = reach.pipeline.OnSample(sample);
+    Handle(reach, actions, s.time_s);
+    if (actions.online_updated && reach.pipeline.online_id() != nullptr) {
+      publisher_.PublishOnlineId(w.name, reach.pipeline.online_id()->Snapshot(), s.time_s,
+                                 "rls-bank");
+    }
+    if (reach.restore_pending && link_ok && !actions.write_setpoint)
+      RequestSetpoint(reach, reach.nominal);
+    if (w.start_experiment_on_start && !reach.started && reach.nominal_known && s.status.ok() &&
+        !stopping_) {
+      reach.started = true;
+      LogInfo("reach " + w.name + ": starting the experiment");
+      Handle(reach, reach.pipeline.StartExperiment(), s.time_s);
+    }
+  }
+}
+
+void Daemon::OnWriteResult(int index, const drivers::WriteResult& result) {
+  Plc& plc = *plcs_[static_cast<std::size_t>(index)];
+  if (result.channel == plc.wiring.heartbeat_channel) {
+    if (result.outcome != drivers::WriteOutcome::kWritten) LogDebug("heartbeat write failed");
+    return;
+  }
+  for (const int r : plc.reaches) {
+    Reach& reach = *reaches_[static_cast<std::size_t>(r)];
+    if (reach.wiring.actuator != result.channel) continue;
+    const bool written = result.outcome == drivers::WriteOutcome::kWritten;
+    if (written && reach.restore_pending &&
+        std::abs(result.written - reach.nominal) <= 1e-9 * (1.0 + std::abs(reach.nominal))) {
+      reach.restore_pending = false;
+      LogInfo("reach " + reach.wiring.name + ": nominal setpoint " + std::to_string(reach.nominal) +
+              " restored");
+    }
+    if (!written) {
+      LogWarning("reach " + reach.wiring.name + ": setpoint write failed (" +
+                 drivers::PlcErrorKindName(result.plc.kind) + ")");
+      Handle(reach, reach.pipeline.OnWriteFailed(), reach.last_time_s);
+    }
+  }
+  if (stopping_) FinishStopWhenSafe();
+}
+
+void Daemon::RequestSetpoint(Reach& reach, double value) {
+  const drivers::WriteTicket ticket =
+      plcs_[static_cast<std::size_t>(reach.wiring.plc)]->poller->RequestWrite(reach.wiring.actuator,
+                                                                              value);
+  if (ticket.status != drivers::WriteQueueStatus::kQueued) {
+    LogWarning("reach " + reach.wiring.name + ": setpoint write not queued");
+  }
+}
+
+void Daemon::Handle(Reach& reach, const core::ReachActions& actions, double time_s) {
+  const ReachWiring& w = reach.wiring;
+  if (actions.write_setpoint && w.actuator >= 0) {
+    if (actions.restore_nominal) reach.restore_pending = true;
+    RequestSetpoint(reach, *actions.write_setpoint);
+  }
+  const auto& plan = reach.pipeline.experiment_plan();
+  if (actions.experiment_phase_changed && plan) {
+    const core::ExperimentState& state = reach.pipeline.experiment_state();
+    publisher_.PublishExperiment(
+        w.name, state, *plan,
+        plcs_[static_cast<std::size_t>(w.plc)]->channel_names[static_cast<std::size_t>(w.actuator)],
+        time_s);
+    std::string message =
+        "reach " + w.name + ": experiment " + core::ExperimentPhaseName(state.phase);
+    if (state.phase == core::ExperimentPhase::kAborted)
+      message += std::string(" (") + core::AbortReasonName(state.abort_reason) + ")";
+    (state.phase == core::ExperimentPhase::kAborted ? LogWarning(message) : LogInfo(message));
+    NotifyStatus(Status());
+  }
+  if (actions.experiment_record_complete) {
+    core::ReachActions after;
+    const std::optional<core::IdPipelineResult> result = reach.pipeline.IdentifyRecord(&after);
+    if (result) {
+      publisher_.PublishBatchId(w.name, *result, time_s, reach.pipeline.recorded_samples());
+      nlohmann::json json = drivers::ToJson(*result);
+      json["reach"] = w.name;
+      LogInfo("reach " + w.name + ": identified " + json.dump());
+    } else {
+      LogWarning("reach " + w.name + ": the experiment record could not be identified");
+    }
+    Handle(reach, after, time_s);
+  }
+}
+
+void Daemon::PublishHealth() {
+  const double wall = WallNowS();
+  const double uptime = SteadyNowS() - start_steady_s_;
+  for (const auto& plc : plcs_) {
+    const drivers::PollerCounters c = plc->poller->counters();
+    HealthReport report;
+    report.component = "plc." + plc->wiring.poller.plc_name;
+    report.counters = {{"polls", c.polls},
+                       {"block_reads_ok", c.block_reads_ok},
+                       {"connect_failures", c.connect_failures},
+                       {"reconnects", c.reconnects},
+                       {"samples_dropped", c.samples_dropped},
+                       {"overruns", c.overruns},
+                       {"writes_ok", c.writes_ok},
+                       {"writes_failed", c.writes_failed}};
+    for (int k = 1; k < drivers::kPlcErrorKindCount; ++k) {
+      report.counters.emplace_back(
+          std::string("read_errors.") +
+              drivers::PlcErrorKindName(static_cast<drivers::PlcErrorKind>(k)),
+          c.read_errors[static_cast<std::size_t>(k)]);
+    }
+    report.gauges = {{"last_round_trip_s", c.last_round_trip_s},
+                     {"connected", c.connected ? 1.0 : 0.0},
+                     {"current_backoff_s", c.current_backoff_s}};
+    publisher_.PublishHealth(report, uptime, wall);
+  }
+  HealthReport bus;
+  bus.component = "lcm";
+  bus.counters = {{"handler_failures", bus_->handler_failures()},
+                  {"publish_failures", publisher_.failures()}};
+  publisher_.PublishHealth(bus, uptime, wall);
+  for (const auto& reach : reaches_) {
+    HealthReport report;
+    report.component = "reach." + reach->wiring.name;
+    report.counters = {{"samples", reach->pipeline.samples()}};
+    if (const core::OnlineIdBank* bank = reach->pipeline.online_id()) {
+      const core::IdBankHealth& h = bank->health();
+      report.counters.insert(report.counters.end(), {{"bad_flow_samples", h.bad_flow_samples},
+                                                     {"bad_level_samples", h.bad_level_samples},
+                                                     {"delay_switches", h.switches}});
+    }
+    publisher_.PublishHealth(report, uptime, wall);
+    if (const auto& plan = reach->pipeline.experiment_plan()) {
+      publisher_.PublishExperiment(
+          reach->wiring.name, reach->pipeline.experiment_state(), *plan,
+          plcs_[static_cast<std::size_t>(reach->wiring.plc)]
+              ->channel_names[static_cast<std::size_t>(reach->wiring.actuator)],
+          wall);
+    }
+  }
+}
+
+void Daemon::BeginStop(DaemonExit exit) {
+  if (stopping_) return;
+  exit_ = exit;
+  NotifyStopping();
+  for (auto& reach : reaches_) Handle(*reach, reach->pipeline.StopExperiment(), reach->last_time_s);
+  stopping_ = true;
+  health_timer_.cancel();
+  for (auto& plc : plcs_) plc->heartbeat_timer.cancel();
+  stop_deadline_s_ = SteadyNowS() + stop_timeout_s;
+  FinishStopWhenSafe();
+}
+
+void Daemon::FinishStopWhenSafe() {
+  bool pending = false;
+  for (const auto& reach : reaches_) pending = pending || reach->restore_pending;
+  if (pending && SteadyNowS() < stop_deadline_s_) {
+    // Write results arrive through Drain; re-check at least every 50 ms until the deadline.
+    stop_timer_.expires_after(std::chrono::milliseconds(50));
+    stop_timer_.async_wait([this](const boost::system::error_code& error) {
+      if (!error) FinishStopWhenSafe();
+    });
+    return;
+  }
+  if (pending) LogError("stopping with a nominal setpoint not confirmed by the PLC");
+  PublishHealth();
+  signals_.cancel();
+  if (bus_fd_) bus_fd_->cancel();
+  stop_timer_.cancel();
+  io_.stop();
+}
+
+std::string Daemon::Status() const {
+  std::ostringstream s;
+  for (const auto& reach : reaches_) {
+    const core::ExperimentState& e = reach->pipeline.experiment_state();
+    s << reach->wiring.name << ": " << core::ExperimentPhaseName(e.phase);
+    if (e.phase == core::ExperimentPhase::kExciting) {
+      s << " " << e.samples_in_phase << "/" << reach->pipeline.experiment_plan()->excite_samples;
+    }
+    s << "; ";
+  }
+  return s.str();
+}
+
+}  // namespace canalid::daemon

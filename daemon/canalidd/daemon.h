@@ -1,0 +1,93 @@
+#pragma once
+#include <utility>  // before Boost.Asio under GCC 12 and C++20 (DESIGN.md)
+
+#include <boost/asio.hpp>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/reach_pipeline.h"
+#include "daemon/canalidd/daemon_plan.h"
+#include "daemon/canalidd/lcm_publisher.h"
+#include "drivers/lcm/bus.h"
+#include "drivers/modbus/plc_poller.h"
+
+namespace canalid::daemon {
+
+/// How Run() ended.
+enum class DaemonExit { kStopped, kReload, kFailed };
+
+/// The daemon's runtime: one Asio loop on the calling thread, one poller thread per PLC, one
+/// ReachPipeline per reach.  Decisions on plant data are the pipelines' (core); this class moves
+/// samples, actions and messages between them, the PLCs and the bus.
+///
+/// Safety: every restore of a nominal setpoint stays pending until the PLC confirms the nominal
+/// value was written (a write refused while the link is down, or shortened by the rate limit, is
+/// asked again on the next sample).  SIGTERM/SIGINT stop the experiments, wait (at most
+/// `stop_timeout_s`) for the nominal setpoints to be written, then stop.  SIGHUP asks `reload`
+/// for a new plan: when it returns one, Run() stops safely and returns kReload (the caller builds
+/// a new Daemon); when it returns none (invalid configuration), the daemon carries on.
+class Daemon final {
+ public:
+  using PortFactory = std::function<std::unique_ptr<drivers::PlcPort>(const PlcWiring&)>;
+  using ReloadFunction = std::function<std::optional<DaemonPlan>()>;
+
+  /// @throws std::invalid_argument / std::runtime_error on a plan the drivers refuse (start-up).
+  Daemon(DaemonPlan plan, std::unique_ptr<drivers::Bus> bus, PortFactory make_port,
+         ReloadFunction reload);
+  ~Daemon();
+  Daemon(const Daemon&) = delete;
+  Daemon& operator=(const Daemon&) = delete;
+
+  DaemonExit Run();
+  /// The plan returned by `reload` when Run() returned kReload.
+  std::optional<DaemonPlan> TakeReloadedPlan() { return std::move(reloaded_plan_); }
+
+  /// Production port factory: libmodbus TCP or RTU from the wiring.
+  static std::unique_ptr<drivers::PlcPort> MakeModbusPort(const PlcWiring& wiring);
+
+  double stop_timeout_s = 5.0;
+
+ private:
+  struct Reach;
+  struct Plc;
+
+  void StartPollers();
+  void Drain(int plc);
+  void OnPoll(int plc, const drivers::PollSample& sample);
+  void OnWriteResult(int plc, const drivers::WriteResult& result);
+  void Handle(Reach& reach, const core::ReachActions& actions, double time_s);
+  void RequestSetpoint(Reach& reach, double value);
+  void StartHeartbeat(int plc);
+  void StartHealthTimer();
+  void StartBusWatch();
+  void StartSignals();
+  void PublishHealth();
+  void BeginStop(DaemonExit exit);
+  void FinishStopWhenSafe();
+  std::string Status() const;
+
+  DaemonPlan plan_;
+  std::unique_ptr<drivers::Bus> bus_;
+  PortFactory make_port_;
+  ReloadFunction reload_;
+  boost::asio::io_context io_;
+  boost::asio::signal_set signals_;
+  boost::asio::steady_timer health_timer_;
+  boost::asio::steady_timer stop_timer_;
+  std::unique_ptr<boost::asio::posix::stream_descriptor> bus_fd_;
+  LcmPublisher publisher_;
+  std::vector<std::unique_ptr<Plc>> plcs_;
+  std::vector<std::unique_ptr<Reach>> reaches_;
+  std::optional<DaemonPlan> reloaded_plan_;
+  DaemonExit exit_ = DaemonExit::kStopped;
+  bool stopping_ = false;
+  bool ready_ = false;
+  double start_steady_s_ = 0.0;
+  double stop_deadline_s_ = 0.0;
+  double last_watchdog_s_ = 0.0;
+};
+
+}  // namespace canalid::daemon

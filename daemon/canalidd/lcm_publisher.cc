@@ -1,0 +1,166 @@
+#include "daemon/canalidd/lcm_publisher.h"
+
+#include <cmath>
+#include <limits>
+
+namespace canalid::daemon {
+namespace {
+
+constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
+
+int8_t ExperimentStateCode(core::ExperimentPhase phase) {
+  switch (phase) {
+    case core::ExperimentPhase::kIdle:
+      return canalid::experiment_state_t::STATE_IDLE;
+    case core::ExperimentPhase::kSettling:
+      return canalid::experiment_state_t::STATE_SETTLING;
+    case core::ExperimentPhase::kExciting:
+      return canalid::experiment_state_t::STATE_EXCITING;
+    case core::ExperimentPhase::kIdentifying:
+      return canalid::experiment_state_t::STATE_RECOVERING;
+    case core::ExperimentPhase::kDone:
+      return canalid::experiment_state_t::STATE_DONE;
+    case core::ExperimentPhase::kAborted:
+      return canalid::experiment_state_t::STATE_ABORTED;
+  }
+  return canalid::experiment_state_t::STATE_IDLE;
+}
+
+void SetParams(canalid::model_snapshot_t& m,
+               std::initializer_list<std::pair<const char*, std::pair<double, double>>> p) {
+  m.num_params = static_cast<int32_t>(p.size());
+  m.param_names.resize(p.size());
+  m.param_values.resize(p.size());
+  m.param_std_devs.resize(p.size());
+  std::size_t i = 0;
+  for (const auto& [name, value] : p) {
+    if (m.param_names[i] != name) m.param_names[i] = name;
+    m.param_values[i] = value.first;
+    m.param_std_devs[i] = value.second;
+    ++i;
+  }
+}
+
+}  // namespace
+
+LcmPublisher::LcmPublisher(drivers::Bus& bus, std::string prefix)
+    : bus_(bus), prefix_(std::move(prefix)) {}
+
+template <class Message>
+void LcmPublisher::Send(const std::string& channel, const Message& message) {
+  if (!drivers::PublishMessage(bus_, channel, message, buffer_)) ++failures_;
+}
+
+void LcmPublisher::PublishSample(const std::string& plc,
+                                 const std::vector<std::string>& channel_names,
+                                 const drivers::PollSample& s) {
+  sample_.utime = ToUtime(s.time_s);
+  sample_.sequence = s.sequence;
+  if (sample_.source != plc) sample_.source = plc;
+  sample_.status = static_cast<int32_t>(s.status.kind);
+  sample_.exception_code =
+      s.status.kind == drivers::PlcErrorKind::kException ? s.status.exception_code : 0;
+  sample_.round_trip_s = static_cast<float>(s.round_trip_s);
+  sample_.num_channels = static_cast<int32_t>(channel_names.size());
+  if (sample_.channel_names != channel_names) sample_.channel_names = channel_names;
+  sample_.values.assign(s.values.begin(), s.values.end());
+  sample_.quality.resize(s.quality.size());
+  for (std::size_t i = 0; i < s.quality.size(); ++i)
+    sample_.quality[i] = static_cast<int8_t>(s.quality[i]);
+  Send(prefix_ + "SAMPLE_" + plc, sample_);
+}
+
+void LcmPublisher::PublishOnlineId(const std::string& reach, const core::IdSnapshot& snapshot,
+                                   double time_s, const char* estimator) {
+  model_.utime = ToUtime(time_s);
+  model_.reach = reach;
+  model_.model_kind = "id";
+  model_.estimator = estimator;
+  model_.samples_used = snapshot.health.updates;
+  SetParams(model_, {{"delay_s", {snapshot.delay_s, kNan}},
+                     {"area_m2", {snapshot.area_m2, snapshot.area_std_m2}},
+                     {"b", {snapshot.b, snapshot.b_std}},
+                     {"offset_m", {snapshot.c_m, snapshot.c_std_m}},
+                     {"drift_m_per_sample", {snapshot.d_m, snapshot.d_std_m}}});
+  model_.trace_p = snapshot.health.trace_p;
+  model_.condition_number = snapshot.health.condition_estimate;
+  model_.excitation = snapshot.health.excitation;
+  model_.prediction_error_rms = snapshot.innovation_std_m;
+  int32_t flags = 0;
+  if (!std::isfinite(snapshot.b)) flags |= canalid::model_snapshot_t::FLAG_NAN;
+  if (snapshot.health.wound_up) flags |= canalid::model_snapshot_t::FLAG_WINDUP;
+  if (snapshot.health.frozen) flags |= canalid::model_snapshot_t::FLAG_FROZEN;
+  model_.flags = flags;
+  Send(prefix_ + "MODEL_" + reach, model_);
+}
+
+void LcmPublisher::PublishBatchId(const std::string& reach, const core::IdPipelineResult& result,
+                                  double time_s, std::int64_t samples) {
+  const core::IdFitResult& fit = result.fit;
+  model_.utime = ToUtime(time_s);
+  model_.reach = reach;
+  model_.model_kind = "id";
+  model_.estimator = "batch";
+  model_.samples_used = samples;
+  SetParams(model_, {{"delay_s", {fit.model.delay_s(), kNan}},
+                     {"area_m2", {fit.model.area_m2(), kNan}},
+                     {"b", {fit.model.b, kNan}},
+                     {"p21_s_per_m2", {fit.wave_front_gain_s_per_m2, kNan}},
+                     {"offset_m", {fit.offset_m, kNan}},
+                     {"fit_percent", {fit.metrics.fit_percent, kNan}}});
+  model_.trace_p = kNan;
+  model_.condition_number = kNan;
+  model_.excitation = kNan;
+  model_.prediction_error_rms = fit.metrics.rmse;
+  model_.flags = std::isfinite(fit.model.b) ? 0 : canalid::model_snapshot_t::FLAG_NAN;
+  Send(prefix_ + "MODEL_" + reach, model_);
+}
+
+void LcmPublisher::PublishExperiment(const std::string& reach, const core::ExperimentState& state,
+                                     const core::ExperimentPlan& plan, const std::string& actuator,
+                                     double time_s) {
+  experiment_.utime = ToUtime(time_s);
+  experiment_.reach = reach;
+  experiment_.state = ExperimentStateCode(state.phase);
+  const bool exciting = state.phase == core::ExperimentPhase::kExciting;
+  experiment_.step = exciting ? static_cast<int32_t>(state.samples_in_phase) : 0;
+  experiment_.num_steps = static_cast<int32_t>(plan.excite_samples);
+  experiment_.setpoint_channel = actuator;
+  experiment_.setpoint = state.setpoint;
+  experiment_.reason = state.phase == core::ExperimentPhase::kAborted
+                           ? core::AbortReasonName(state.abort_reason)
+                           : core::ExperimentPhaseName(state.phase);
+  Send(prefix_ + "EXPERIMENT_" + reach, experiment_);
+}
+
+void LcmPublisher::PublishHealth(const HealthReport& report, double uptime_s, double time_s) {
+  health_.utime = ToUtime(time_s);
+  health_.component = report.component;
+  health_.uptime_s = uptime_s;
+  health_.num_counters = static_cast<int32_t>(report.counters.size());
+  health_.counter_names.resize(report.counters.size());
+  health_.counter_values.resize(report.counters.size());
+  for (std::size_t i = 0; i < report.counters.size(); ++i) {
+    health_.counter_names[i] = report.counters[i].first;
+    health_.counter_values[i] = report.counters[i].second;
+  }
+  health_.num_gauges = static_cast<int32_t>(report.gauges.size());
+  health_.gauge_names.resize(report.gauges.size());
+  health_.gauge_values.resize(report.gauges.size());
+  for (std::size_t i = 0; i < report.gauges.size(); ++i) {
+    health_.gauge_names[i] = report.gauges[i].first;
+    health_.gauge_values[i] = report.gauges[i].second;
+  }
+  Send(prefix_ + "HEALTH", health_);
+}
+
+void LcmPublisher::PublishConfig(const std::string& path, const std::string& text, double time_s) {
+  canalid::config_t message;
+  message.utime = ToUtime(time_s);
+  message.path = path;
+  message.version = "0.1.0";
+  message.text = text;
+  Send(prefix_ + "CONFIG", message);
+}
+
+}  // namespace canalid::daemon

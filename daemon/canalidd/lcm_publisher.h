@@ -1,0 +1,67 @@
+#pragma once
+#include <canalid/config_t.hpp>
+#include <canalid/experiment_state_t.hpp>
+#include <canalid/health_t.hpp>
+#include <canalid/model_snapshot_t.hpp>
+#include <canalid/sample_t.hpp>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/experiment.h"
+#include "core/id_pipeline.h"
+#include "core/online_id.h"
+#include "drivers/lcm/bus.h"
+#include "drivers/modbus/plc_poller.h"
+
+namespace canalid::daemon {
+
+/// Counters and gauges of one component, for canalid.health_t.
+struct HealthReport {
+  std::string component;
+  std::vector<std::pair<std::string, int64_t>> counters;
+  std::vector<std::pair<std::string, double>> gauges;
+};
+
+/// Publishes the daemon's messages on `<prefix>SAMPLE_<plc>`, `<prefix>MODEL_<reach>`,
+/// `<prefix>EXPERIMENT_<reach>`, `<prefix>HEALTH` and `<prefix>CONFIG` (docs/lcm-channels.md).
+/// Message objects and encode buffers are kept and reused, so steady publishing does not
+/// allocate once the first message of each kind has been sent.  Counts refused publications.
+class LcmPublisher final {
+ public:
+  LcmPublisher(drivers::Bus& bus, std::string prefix);
+
+  void PublishSample(const std::string& plc, const std::vector<std::string>& channel_names,
+                     const drivers::PollSample& sample);
+  void PublishOnlineId(const std::string& reach, const core::IdSnapshot& snapshot, double time_s,
+                       const char* estimator);
+  void PublishBatchId(const std::string& reach, const core::IdPipelineResult& result, double time_s,
+                      std::int64_t samples);
+  void PublishExperiment(const std::string& reach, const core::ExperimentState& state,
+                         const core::ExperimentPlan& plan, const std::string& actuator,
+                         double time_s);
+  void PublishHealth(const HealthReport& report, double uptime_s, double time_s);
+  void PublishConfig(const std::string& path, const std::string& text, double time_s);
+
+  std::int64_t failures() const { return failures_; }
+  const std::string& prefix() const { return prefix_; }
+
+ private:
+  template <class Message>
+  void Send(const std::string& channel, const Message& message);
+
+  drivers::Bus& bus_;
+  std::string prefix_;
+  std::vector<std::uint8_t> buffer_;
+  canalid::sample_t sample_;
+  canalid::model_snapshot_t model_;
+  canalid::experiment_state_t experiment_;
+  canalid::health_t health_;
+  std::int64_t failures_ = 0;
+};
+
+/// Microseconds since the epoch from seconds.
+inline std::int64_t ToUtime(double time_s) { return static_cast<std::int64_t>(time_s * 1e6); }
+
+}  // namespace canalid::daemon
