@@ -83,11 +83,13 @@ ReachActions ReachPipeline::OnWriteFailed() {
   return Apply(event);
 }
 
-void ReachPipeline::SetNominalSetpoint(double value) {
+void ReachPipeline::SetNominalSetpoint(double value, std::optional<double> amplitude) {
   const ExperimentPhase phase = experiment_state_.phase;
   const bool running = phase == ExperimentPhase::kSettling || phase == ExperimentPhase::kExciting ||
                        phase == ExperimentPhase::kIdentifying;
-  if (options_.experiment && !running) options_.experiment->prbs.nominal = value;
+  if (!options_.experiment || running) return;
+  options_.experiment->prbs.nominal = value;
+  if (amplitude && *amplitude > 0.0) options_.experiment->prbs.amplitude = *amplitude;
 }
 
 std::optional<IdPipelineResult> ReachPipeline::IdentifyRecord(ReachActions* actions) {

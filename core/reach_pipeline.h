@@ -54,7 +54,8 @@ class ReachPipeline final {
   /// Sets the actuator's nominal setpoint (the PRBS centre and the value every abort restores),
   /// e.g. from the actuator's reading when the configuration leaves it open.  Ignored unless
   /// idle, done or aborted, so a running experiment keeps its nominal.
-  void SetNominalSetpoint(double value);
+  /// `amplitude` (> 0) replaces the PRBS amplitude too when given.
+  void SetNominalSetpoint(double value, std::optional<double> amplitude = std::nullopt);
 
   /// Batch identification of the completed record (ID model pipeline); then the experiment
   /// ends done (a model) or aborted (kIdentificationFailed).  @pre a record is complete.

@@ -219,7 +219,9 @@ void Daemon::OnPoll(int index, const drivers::PollSample& s) {
     if (!reach.nominal_known && w.actuator >= 0 && valid(w.actuator)) {
       reach.nominal = value(w.actuator);
       reach.nominal_known = true;
-      reach.pipeline.SetNominalSetpoint(reach.nominal);
+      std::optional<double> amplitude;
+      if (w.amplitude_fraction > 0.0) amplitude = w.amplitude_fraction * std::abs(reach.nominal);
+      reach.pipeline.SetNominalSetpoint(reach.nominal, amplitude);
       LogInfo("reach " + w.name + ": nominal setpoint " + std::to_string(reach.nominal) +
               " (read from the PLC)");
     }

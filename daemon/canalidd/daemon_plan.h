@@ -25,6 +25,9 @@ struct ReachWiring {
   int q_in = -1, q_out = -1, level = -1, actuator = -1;  ///< channel indices in that PLC
   core::ReachPipelineOptions pipeline;  ///< sample_time_s = poll period x time scale
   bool nominal_from_reading = false;    ///< take the actuator's first reading as the nominal
+  /// > 0: the PRBS amplitude is this fraction of the nominal setpoint (flow proportional to the
+  /// setting), applied when the nominal is known; 0: the plan's amplitude stands.
+  double amplitude_fraction = 0.0;
   bool start_experiment_on_start = false;
 };
 
