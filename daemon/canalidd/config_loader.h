@@ -42,7 +42,9 @@ core::DaemonConfig LoadDaemonConfig(const std::string& path);
 
 /// The effective configuration as TOML, every key written with its value (defaults included),
 /// numbers in their shortest exact form, so that ParseDaemonConfig(RenderDaemonConfig(c)) == c for
-/// any valid c.  Published on LCM at start and parsed again by `canalid replay`.
+/// every c that ParseDaemonConfig returns (fields of the other transport or experiment mode are
+/// not written: they keep their defaults).  Published on LCM at start, parsed again by
+/// `canalid replay`.
 std::string RenderDaemonConfig(const core::DaemonConfig& config);
 
 }  // namespace canalid::daemon
