@@ -13,13 +13,7 @@ ReachPipeline::ReachPipeline(const ReachPipelineOptions& options) : options_(opt
     options_.online_id.sample_time_s = options_.sample_time_s;
     online_id_.emplace(options_.online_id);
   }
-  if (options_.experiment) {
-    options_.experiment->Validate();
-    const auto n = static_cast<Eigen::Index>(options_.experiment->excite_samples);
-    record_q_in_.resize(n);
-    record_q_out_.resize(n);
-    record_level_.resize(n);
-  }
+  if (options_.experiment) SetExperimentPlan(*options_.experiment);
 }
 
 ReachActions ReachPipeline::Apply(const ExperimentEvent& event) {
@@ -83,13 +77,20 @@ ReachActions ReachPipeline::OnWriteFailed() {
   return Apply(event);
 }
 
-void ReachPipeline::SetNominalSetpoint(double value, std::optional<double> amplitude) {
+bool ReachPipeline::SetExperimentPlan(const ExperimentPlan& plan) {
   const ExperimentPhase phase = experiment_state_.phase;
-  const bool running = phase == ExperimentPhase::kSettling || phase == ExperimentPhase::kExciting ||
-                       phase == ExperimentPhase::kIdentifying;
-  if (!options_.experiment || running) return;
-  options_.experiment->prbs.nominal = value;
-  if (amplitude && *amplitude > 0.0) options_.experiment->prbs.amplitude = *amplitude;
+  if (phase == ExperimentPhase::kSettling || phase == ExperimentPhase::kExciting ||
+      phase == ExperimentPhase::kIdentifying) {
+    return false;
+  }
+  plan.Validate();
+  options_.experiment = plan;
+  const auto n = static_cast<Eigen::Index>(plan.excite_samples);
+  record_q_in_.resize(n);
+  record_q_out_.resize(n);
+  record_level_.resize(n);
+  recorded_ = 0;
+  return true;
 }
 
 std::optional<IdPipelineResult> ReachPipeline::IdentifyRecord(ReachActions* actions) {

@@ -51,11 +51,11 @@ class ReachPipeline final {
   ReachActions StopExperiment();
   /// A setpoint write of this reach failed: abort if exciting.
   ReachActions OnWriteFailed();
-  /// Sets the actuator's nominal setpoint (the PRBS centre and the value every abort restores),
-  /// e.g. from the actuator's reading when the configuration leaves it open.  Ignored unless
-  /// idle, done or aborted, so a running experiment keeps its nominal.
-  /// `amplitude` (> 0) replaces the PRBS amplitude too when given.
-  void SetNominalSetpoint(double value, std::optional<double> amplitude = std::nullopt);
+  /// Installs (or replaces) the experiment plan, e.g. once the actuator's nominal setpoint has
+  /// been read from the PLC.  Allocates the record for the plan's length (not per sample).
+  /// Returns false, changing nothing, while an experiment runs.
+  /// @throws std::invalid_argument if the plan is invalid.
+  bool SetExperimentPlan(const ExperimentPlan& plan);
 
   /// Batch identification of the completed record (ID model pipeline); then the experiment
   /// ends done (a model) or aborted (kIdentificationFailed).  @pre a record is complete.

@@ -78,10 +78,7 @@ Daemon::Daemon(DaemonPlan plan, std::unique_ptr<drivers::Bus> bus, PortFactory m
   }
   for (std::size_t r = 0; r < plan_.reaches.size(); ++r) {
     auto reach = std::make_unique<Reach>(plan_.reaches[r]);
-    if (!reach->wiring.nominal_from_reading && reach->pipeline.experiment_plan()) {
-      reach->nominal_known = true;
-      reach->nominal = reach->pipeline.experiment_plan()->prbs.nominal;
-    }
+    if (reach->wiring.nominal_setpoint) SetNominal(*reach, *reach->wiring.nominal_setpoint);
     plcs_.at(static_cast<std::size_t>(reach->wiring.plc))->reaches.push_back(static_cast<int>(r));
     reaches_.push_back(std::move(reach));
   }
@@ -113,6 +110,18 @@ DaemonExit Daemon::Run() {
   for (auto& plc : plcs_) plc->poller->Stop();
   LogInfo(exit_ == DaemonExit::kReload ? "reloading the configuration" : "stopped");
   return exit_;
+}
+
+void Daemon::SetNominal(Reach& reach, double nominal) {
+  reach.nominal = nominal;
+  reach.nominal_known = true;
+  if (!reach.wiring.experiment_for_nominal) return;
+  try {
+    reach.pipeline.SetExperimentPlan(reach.wiring.experiment_for_nominal(nominal));
+  } catch (const std::invalid_argument& e) {
+    // No safe experiment around this nominal: the reach is watched and estimated, never excited.
+    LogError("reach " + reach.wiring.name + ": no experiment: " + e.what());
+  }
 }
 
 void Daemon::StartPollers() {
@@ -217,13 +226,8 @@ void Daemon::OnPoll(int index, const drivers::PollSample& s) {
       return channel >= 0 && s.valid(static_cast<std::size_t>(channel));
     };
     if (!reach.nominal_known && w.actuator >= 0 && valid(w.actuator)) {
-      reach.nominal = value(w.actuator);
-      reach.nominal_known = true;
-      std::optional<double> amplitude;
-      if (w.amplitude_fraction > 0.0) amplitude = w.amplitude_fraction * std::abs(reach.nominal);
-      reach.pipeline.SetNominalSetpoint(reach.nominal, amplitude);
-      LogInfo("reach " + w.name + ": nominal setpoint " + std::to_string(reach.nominal) +
-              " (read from the PLC)");
+      LogInfo("reach " + w.name + ": nominal setpoint " + std::to_string(value(w.actuator)) + " (read from the PLC)");
+      SetNominal(reach, value(w.actuator));
     }
     core::ReachSample sample;
     sample.q_in_valid = valid(w.q_in);

@@ -54,6 +54,7 @@ class Daemon final {
   struct Reach;
   struct Plc;
 
+  void SetNominal(Reach& reach, double nominal);
   void StartPollers();
   void Drain(int plc);
   void OnPoll(int plc, const drivers::PollSample& sample);

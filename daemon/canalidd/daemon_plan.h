@@ -1,4 +1,6 @@
 #pragma once
+#include <functional>
+#include <optional>
 #include <string>
 #include <variant>
 #include <vector>
@@ -23,11 +25,12 @@ struct ReachWiring {
   std::string name;
   int plc = 0;  ///< index into DaemonPlan::plcs; all of a reach's channels are on one PLC
   int q_in = -1, q_out = -1, level = -1, actuator = -1;  ///< channel indices in that PLC
-  core::ReachPipelineOptions pipeline;  ///< sample_time_s = poll period x time scale
-  bool nominal_from_reading = false;    ///< take the actuator's first reading as the nominal
-  /// > 0: the PRBS amplitude is this fraction of the nominal setpoint (flow proportional to the
-  /// setting), applied when the nominal is known; 0: the plan's amplitude stands.
-  double amplitude_fraction = 0.0;
+  core::ReachPipelineOptions pipeline;  ///< sample_time_s = poll period x time scale; no experiment
+  /// The actuator's nominal setpoint; none: its first valid reading.
+  std::optional<double> nominal_setpoint;
+  /// The reach's experiment for a nominal setpoint (empty: the reach is never excited).
+  /// @throws std::invalid_argument when the nominal leaves no room for the PRBS inside the limits.
+  std::function<core::ExperimentPlan(double nominal_setpoint)> experiment_for_nominal;
   bool start_experiment_on_start = false;
 };
 

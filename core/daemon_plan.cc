@@ -1,0 +1,82 @@
+#include "core/daemon_plan.h"
+
+#include <cmath>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+
+#include "core/experiment_design.h"
+
+namespace canalid::core {
+
+ExperimentPlan BuildExperimentPlan(const DaemonConfig& config, const ExperimentConfig& experiment,
+                                   double nominal_setpoint) {
+  const std::string where = "experiment \"" + experiment.name + "\": ";
+  const ReachConfig* reach = config.FindReach(experiment.reach);
+  if (reach == nullptr) throw std::invalid_argument(where + "unknown reach " + experiment.reach);
+  const ChannelConfig* actuator = config.FindChannel(reach->actuator);
+  if (actuator == nullptr)
+    throw std::invalid_argument(where + "unknown actuator " + reach->actuator);
+  const double ts = ReachSampleTimeS(config, *reach);
+
+  ExperimentPlan plan;
+  plan.prbs.nominal = nominal_setpoint;
+  plan.prbs.seed = static_cast<std::uint32_t>(experiment.seed);
+  if (experiment.mode == ExperimentMode::kDesign) {
+    ExperimentDesignRequest request;
+    request.nominal_flow_m3s = reach->nominal_inflow_m3s;
+    request.expected_delay_s = reach->expected_delay_s;
+    request.sample_time_s = ts;
+    request.amplitude_percent = experiment.amplitude_percent;
+    request.duration_factor = experiment.duration_factor;
+    const ExperimentDesign design = DesignPrbsExperiment(request);
+    plan.prbs.amplitude = reach->actuator_gain_m3s_per_unit
+                              ? design.amplitude_m3s / std::abs(*reach->actuator_gain_m3s_per_unit)
+                              : experiment.amplitude_percent / 100.0 * std::abs(nominal_setpoint);
+    plan.prbs.clock_period_samples = design.clock_period_samples;
+    plan.prbs.order = design.order;
+    plan.excite_samples = design.num_samples;
+  } else {
+    plan.prbs.amplitude = experiment.amplitude;
+    plan.prbs.clock_period_samples = static_cast<int>(std::lround(experiment.clock_period_s / ts));
+    plan.prbs.order = experiment.order;
+    plan.excite_samples = static_cast<std::int64_t>(experiment.periods) *
+                          ((std::int64_t{1} << experiment.order) - 1) *
+                          plan.prbs.clock_period_samples;
+  }
+  if (!(plan.prbs.amplitude > 0.0)) {
+    throw std::invalid_argument(where + "PRBS amplitude " + std::to_string(plan.prbs.amplitude) +
+                                " (actuator units) must be > 0 (nominal setpoint " +
+                                std::to_string(nominal_setpoint) + ")");
+  }
+  const double low = nominal_setpoint - plan.prbs.amplitude;
+  const double high = nominal_setpoint + plan.prbs.amplitude;
+  if (!(low >= actuator->setpoint_min && high <= actuator->setpoint_max)) {
+    throw std::invalid_argument(where + "nominal " + std::to_string(nominal_setpoint) + " +- " +
+                                std::to_string(plan.prbs.amplitude) + " leaves the actuator's [" +
+                                std::to_string(actuator->setpoint_min) + ", " +
+                                std::to_string(actuator->setpoint_max) + "]");
+  }
+  // The small tolerance keeps settle_s = n Ts at n samples despite rounding in the division.
+  plan.settle_samples = static_cast<std::int64_t>(std::ceil(experiment.settle_s / ts - 1e-9));
+  plan.level_min_m = reach->level_min_m;
+  plan.level_max_m = reach->level_max_m;
+  plan.max_invalid_samples = experiment.max_invalid_samples;
+  plan.Validate();
+  return plan;
+}
+
+OnlineIdOptions BuildOnlineIdOptions(const DaemonConfig& config, const ReachConfig& reach) {
+  OnlineIdOptions options;
+  options.sample_time_s = ReachSampleTimeS(config, reach);
+  options.min_delay_samples =
+      static_cast<int>(std::lround(reach.min_delay_s / options.sample_time_s));
+  options.max_delay_samples =
+      static_cast<int>(std::lround(reach.max_delay_s / options.sample_time_s));
+  options.rls.method = reach.rls_method;
+  options.rls.forgetting = reach.forgetting;
+  options.Validate();
+  return options;
+}
+
+}  // namespace canalid::core

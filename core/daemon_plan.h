@@ -1,0 +1,30 @@
+#pragma once
+#include "core/daemon_config.h"
+#include "core/experiment.h"
+#include "core/online_id.h"
+
+namespace canalid::core {
+
+/// The ExperimentPlan of `experiment` (of a valid `config`), in samples of its reach's PLC,
+/// Ts = poll_period_s * time_scale plant seconds:
+///   design:   core::DesignPrbsExperiment(nominal_inflow_m3s, expected_delay_s, Ts,
+///             amplitude_percent, duration_factor); the flow amplitude A_q becomes actuator units
+///             as A_q / |actuator_gain_m3s_per_unit|, or, without a gain, as
+///             amplitude_percent / 100 * |nominal_setpoint| (flow proportional to the setting);
+///             clock, order and excitation length (periods * (2^order - 1) * clock) from the
+///             design;
+///   explicit: amplitude, clock = clock_period_s / Ts samples, order, periods as given;
+///   settle_samples = ceil(settle_s / Ts), the level band of the reach, max_invalid_samples.
+/// @param nominal_setpoint the actuator's nominal (reach.nominal_setpoint, or its reading at
+/// start).
+/// @throws std::invalid_argument naming the experiment when the reach does not resolve, the
+///   amplitude is not positive, or nominal +- amplitude leaves [setpoint_min, setpoint_max].
+ExperimentPlan BuildExperimentPlan(const DaemonConfig& config, const ExperimentConfig& experiment,
+                                   double nominal_setpoint);
+
+/// Options of the reach's OnlineIdBank: Ts as above, delays min_delay_s / Ts .. max_delay_s / Ts
+/// (rounded to the nearest sample), the reach's RLS method and forgetting, other options default.
+/// @throws std::invalid_argument when the reach does not resolve or an option is out of range.
+OnlineIdOptions BuildOnlineIdOptions(const DaemonConfig& config, const ReachConfig& reach);
+
+}  // namespace canalid::core

@@ -1,0 +1,536 @@
+#include "daemon/canalidd/config_loader.h"
+
+#include <toml++/toml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <set>
+#include <sstream>
+#include <utility>
+
+namespace canalid::daemon {
+namespace {
+
+using core::ChannelConfig;
+using core::DaemonConfig;
+using core::ExperimentConfig;
+using core::PlcConfig;
+using core::ReachConfig;
+
+std::string Quoted(std::string_view s) { return "\"" + std::string(s) + "\""; }
+
+const char* TypeName(const toml::node& node) {
+  switch (node.type()) {
+    case toml::node_type::string:
+      return "a string";
+    case toml::node_type::integer:
+      return "an integer";
+    case toml::node_type::floating_point:
+      return "a float";
+    case toml::node_type::boolean:
+      return "a boolean";
+    case toml::node_type::table:
+      return "a table";
+    case toml::node_type::array:
+      return "an array";
+    default:
+      return "a date or time";
+  }
+}
+
+std::string JoinKeys(std::initializer_list<std::string_view> keys) {
+  std::string out;
+  for (std::string_view k : keys) out += (out.empty() ? "" : ", ") + std::string(k);
+  return out;
+}
+
+// Walks the document, filling the config and collecting problems with their positions. Every key
+// read (and every table) records its position under its path, so that problems found later by
+// core::Validate can be placed too.
+class Reader {
+ public:
+  explicit Reader(std::string file) : file_(std::move(file)) {}
+
+  void Problem(const toml::source_region& where, std::string path, std::string message) {
+    ConfigIssue issue;
+    issue.file = file_;
+    issue.line = where.begin.line == 0 ? 1 : static_cast<int>(where.begin.line);
+    issue.column = where.begin.column == 0 ? 1 : static_cast<int>(where.begin.column);
+    issue.path = std::move(path);
+    issue.message = std::move(message);
+    if (!placing_) reported_.insert(issue.path);
+    issues_.push_back(std::move(issue));
+  }
+
+  void Mark(const std::string& path, const toml::source_region& where) {
+    positions_.emplace(path, where);
+  }
+
+  // Unknown keys are errors; `conditional` maps keys allowed only elsewhere to the reason.
+  void Keys(const toml::table& table, const std::string& path,
+            std::initializer_list<std::string_view> allowed,
+            const std::map<std::string, std::string>& conditional = {}) {
+    for (const auto& [key, node] : table) {
+      const std::string k(key.str());
+      if (std::find(allowed.begin(), allowed.end(), k) != allowed.end()) continue;
+      const auto it = conditional.find(k);
+      if (it != conditional.end()) {
+        Problem(key.source(), Join(path, k), "only allowed when " + it->second);
+      } else {
+        Problem(key.source(), Join(path, k), "unknown key (allowed: " + JoinKeys(allowed) + ")");
+      }
+    }
+  }
+
+  static std::string Join(const std::string& path, std::string_view key) {
+    return path.empty() ? std::string(key) : path + "." + std::string(key);
+  }
+
+  const toml::node* Get(const toml::table& table, const std::string& path, std::string_view key,
+                        bool required) {
+    const toml::node* node = table.get(key);
+    if (node != nullptr) {
+      Mark(Join(path, key), node->source());
+    } else if (required) {
+      Problem(table.source(), Join(path, key), "missing (required)");
+    }
+    return node;
+  }
+
+  void Double(const toml::table& t, const std::string& path, std::string_view key, double& out,
+              bool required = false) {
+    const toml::node* node = Get(t, path, key, required);
+    if (node == nullptr) return;
+    if (const auto* f = node->as_floating_point()) {
+      out = f->get();
+    } else if (const auto* i = node->as_integer()) {
+      out = static_cast<double>(i->get());
+    } else {
+      Problem(node->source(), Join(path, key),
+              std::string("expected a number, got ") + TypeName(*node));
+    }
+  }
+
+  void OptionalDouble(const toml::table& t, const std::string& path, std::string_view key,
+                      std::optional<double>& out) {
+    if (t.get(key) == nullptr) return;
+    double value = 0.0;
+    Double(t, path, key, value);
+    out = value;
+  }
+
+  template <class Int>
+  void Integer(const toml::table& t, const std::string& path, std::string_view key, Int& out,
+               bool required = false) {
+    const toml::node* node = Get(t, path, key, required);
+    if (node == nullptr) return;
+    const auto* i = node->as_integer();
+    if (i == nullptr) {
+      Problem(node->source(), Join(path, key),
+              std::string("expected an integer, got ") + TypeName(*node));
+      return;
+    }
+    const std::int64_t v = i->get();
+    if (v < std::numeric_limits<Int>::min() || v > std::numeric_limits<Int>::max()) {
+      Problem(node->source(), Join(path, key),
+              std::to_string(v) + " is out of range (allowed: a " +
+                  std::to_string(8 * sizeof(Int)) + "-bit integer)");
+      return;
+    }
+    out = static_cast<Int>(v);
+  }
+
+  void Bool(const toml::table& t, const std::string& path, std::string_view key, bool& out) {
+    const toml::node* node = Get(t, path, key, false);
+    if (node == nullptr) return;
+    if (const auto* b = node->as_boolean()) {
+      out = b->get();
+    } else {
+      Problem(node->source(), Join(path, key),
+              std::string("expected a boolean, got ") + TypeName(*node));
+    }
+  }
+
+  bool String(const toml::table& t, const std::string& path, std::string_view key, std::string& out,
+              bool required = false) {
+    const toml::node* node = Get(t, path, key, required);
+    if (node == nullptr) return false;
+    if (const auto* s = node->as_string()) {
+      out = s->get();
+      return true;
+    }
+    Problem(node->source(), Join(path, key),
+            std::string("expected a string, got ") + TypeName(*node));
+    return false;
+  }
+
+  template <class E>
+  bool EnumOf(const toml::node& node, const std::string& path, E& out) {
+    const auto* s = node.as_string();
+    if (s == nullptr) {
+      Problem(node.source(), path,
+              std::string("expected a string, got ") + TypeName(node) +
+                  " (allowed: " + core::AllowedNames<E>() + ")");
+      return false;
+    }
+    const std::optional<E> value = core::EnumFromName<E>(s->get());
+    if (!value) {
+      Problem(node.source(), path,
+              Quoted(s->get()) + " is not allowed (allowed: " + core::AllowedNames<E>() + ")");
+      return false;
+    }
+    out = *value;
+    return true;
+  }
+
+  template <class E>
+  void Enum(const toml::table& t, const std::string& path, std::string_view key, E& out,
+            bool required = false) {
+    const toml::node* node = Get(t, path, key, required);
+    if (node != nullptr) EnumOf(*node, Join(path, key), out);
+  }
+
+  template <class E>
+  void EnumList(const toml::table& t, const std::string& path, std::string_view key,
+                std::vector<E>& out) {
+    const toml::node* node = Get(t, path, key, false);
+    if (node == nullptr) return;
+    const auto* array = node->as_array();
+    if (array == nullptr) {
+      Problem(node->source(), Join(path, key),
+              std::string("expected an array, got ") + TypeName(*node) + " (allowed: of " +
+                  core::AllowedNames<E>() + ")");
+      return;
+    }
+    out.clear();
+    for (std::size_t i = 0; i < array->size(); ++i) {
+      const std::string at = Join(path, key) + "[" + std::to_string(i) + "]";
+      const toml::node& element = *array->get(i);
+      Mark(at, element.source());
+      E value{};
+      if (EnumOf(element, at, value)) out.push_back(value);
+    }
+  }
+
+  const toml::table* Table(const toml::table& parent, const std::string& path,
+                           std::string_view key) {
+    const toml::node* node = Get(parent, path, key, false);
+    if (node == nullptr) return nullptr;
+    if (const auto* table = node->as_table()) return table;
+    Problem(node->source(), Join(path, key),
+            std::string("expected a table, got ") + TypeName(*node));
+    return nullptr;
+  }
+
+  // [[key]]: an array of tables. Calls f(table, "key[i]") for each.
+  template <class F>
+  void Tables(const toml::table& root, std::string_view key, F&& f) {
+    const toml::node* node = Get(root, "", key, false);
+    if (node == nullptr) return;
+    const auto* array = node->as_array();
+    if (array == nullptr || !array->is_array_of_tables()) {
+      Problem(node->source(), std::string(key),
+              std::string("expected an array of tables [[") + std::string(key) + "]], got " +
+                  TypeName(*node));
+      return;
+    }
+    for (std::size_t i = 0; i < array->size(); ++i) {
+      const auto& table = *array->get(i)->as_table();
+      const std::string at = std::string(key) + "[" + std::to_string(i) + "]";
+      Mark(at, table.source());
+      f(table, at);
+    }
+  }
+
+  // Places a problem found by core::Validate at its key, or the nearest enclosing table.
+  void Place(const core::ConfigProblem& problem) {
+    // A key that could not be read keeps its default, which Validate may then flag again.
+    if (reported_.count(problem.path) != 0) return;
+    placing_ = true;
+    std::string path = problem.path;
+    while (!path.empty()) {
+      const auto it = positions_.find(path);
+      if (it != positions_.end()) {
+        Problem(it->second, problem.path, problem.message);
+        placing_ = false;
+        return;
+      }
+      // "reach[0].level" -> "reach[0]" -> "reach" -> "" (the file's start).
+      const std::size_t dot = path.rfind('.');
+      const std::size_t bracket = path.rfind('[');
+      std::size_t cut = 0;
+      if (dot != std::string::npos) cut = dot;
+      if (bracket != std::string::npos && (dot == std::string::npos || bracket > dot)) {
+        cut = bracket;
+      }
+      path = path.substr(0, cut);
+    }
+    Problem(toml::source_region{}, problem.path, problem.message);
+    placing_ = false;
+  }
+
+  std::vector<ConfigIssue> Take() {
+    std::stable_sort(issues_.begin(), issues_.end(), [](const auto& a, const auto& b) {
+      return std::pair(a.line, a.column) < std::pair(b.line, b.column);
+    });
+    return std::move(issues_);
+  }
+
+ private:
+  std::string file_;
+  std::map<std::string, toml::source_region> positions_;
+  std::set<std::string> reported_;  // paths with a problem found while reading
+  bool placing_ = false;
+  std::vector<ConfigIssue> issues_;
+};
+
+void ReadDaemon(Reader& r, const toml::table& root, DaemonConfig& c) {
+  const toml::table* t = r.Table(root, "", "daemon");
+  if (t == nullptr) return;
+  r.Keys(*t, "daemon", {"state_directory", "log_level", "time_scale", "heartbeat"});
+  r.String(*t, "daemon", "state_directory", c.daemon.state_directory);
+  r.Enum(*t, "daemon", "log_level", c.daemon.log_level);
+  r.Double(*t, "daemon", "time_scale", c.daemon.time_scale);
+  if (const toml::table* h = r.Table(*t, "daemon", "heartbeat")) {
+    c.daemon.heartbeat.emplace();
+    r.Keys(*h, "daemon.heartbeat", {"channel", "period_s"});
+    r.String(*h, "daemon.heartbeat", "channel", c.daemon.heartbeat->channel, true);
+    r.Double(*h, "daemon.heartbeat", "period_s", c.daemon.heartbeat->period_s);
+  }
+}
+
+void ReadLcm(Reader& r, const toml::table& root, DaemonConfig& c) {
+  const toml::table* t = r.Table(root, "", "lcm");
+  if (t == nullptr) return;
+  r.Keys(*t, "lcm", {"url", "channel_prefix"});
+  r.String(*t, "lcm", "url", c.lcm.url);
+  r.String(*t, "lcm", "channel_prefix", c.lcm.channel_prefix);
+}
+
+void ReadPlc(Reader& r, const toml::table& t, const std::string& at, PlcConfig& p) {
+  r.String(t, at, "name", p.name, true);
+  r.Enum(t, at, "transport", p.transport);
+  const bool tcp = p.transport == core::PlcTransport::kTcp;
+  const std::string tcp_only = "transport = \"tcp\"";
+  const std::string rtu_only = "transport = \"rtu\"";
+  const std::map<std::string, std::string> other =
+      tcp ? std::map<std::string, std::string>{{"device", rtu_only},
+                                               {"baud", rtu_only},
+                                               {"parity", rtu_only},
+                                               {"data_bits", rtu_only},
+                                               {"stop_bits", rtu_only}}
+          : std::map<std::string, std::string>{
+                {"host", tcp_only}, {"port", tcp_only}, {"connect_timeout_s", tcp_only}};
+  if (tcp) {
+    r.Keys(t, at,
+           {"name", "transport", "host", "port", "connect_timeout_s", "unit_id",
+            "response_timeout_s", "poll_period_s", "backoff_initial_s", "backoff_max_s",
+            "max_gap_registers", "timeouts_before_reconnect"},
+           other);
+    r.String(t, at, "host", p.host, true);
+    r.Integer(t, at, "port", p.port);
+    r.Double(t, at, "connect_timeout_s", p.connect_timeout_s);
+  } else {
+    r.Keys(t, at,
+           {"name", "transport", "device", "baud", "parity", "data_bits", "stop_bits", "unit_id",
+            "response_timeout_s", "poll_period_s", "backoff_initial_s", "backoff_max_s",
+            "max_gap_registers", "timeouts_before_reconnect"},
+           other);
+    r.String(t, at, "device", p.device, true);
+    r.Integer(t, at, "baud", p.baud);
+    std::string parity(1, p.parity);
+    if (r.String(t, at, "parity", parity)) {
+      // A longer string is stored as '?' so that Validate reports it with the allowed values.
+      p.parity = parity.size() == 1 ? parity[0] : '?';
+    }
+    r.Integer(t, at, "data_bits", p.data_bits);
+    r.Integer(t, at, "stop_bits", p.stop_bits);
+  }
+  r.Integer(t, at, "unit_id", p.unit_id);
+  r.Double(t, at, "response_timeout_s", p.response_timeout_s);
+  r.Double(t, at, "poll_period_s", p.poll_period_s);
+  r.Double(t, at, "backoff_initial_s", p.backoff_initial_s);
+  r.Double(t, at, "backoff_max_s", p.backoff_max_s);
+  r.Integer(t, at, "max_gap_registers", p.max_gap_registers);
+  r.Integer(t, at, "timeouts_before_reconnect", p.timeouts_before_reconnect);
+}
+
+void ReadChannel(Reader& r, const toml::table& t, const std::string& at, ChannelConfig& ch) {
+  r.Bool(t, at, "writable", ch.writable);
+  const std::string needs_writable = "writable = true";
+  r.Keys(
+      t, at,
+      ch.writable
+          ? std::initializer_list<std::string_view>{"name", "plc", "role", "register", "address",
+                                                    "type", "word_order", "scale", "offset", "unit",
+                                                    "valid_min", "valid_max", "writable",
+                                                    "setpoint_min", "setpoint_max",
+                                                    "max_rate_per_s"}
+          : std::initializer_list<std::string_view>{"name", "plc", "role", "register", "address",
+                                                    "type", "word_order", "scale", "offset", "unit",
+                                                    "valid_min", "valid_max", "writable"},
+      ch.writable ? std::map<std::string, std::string>{}
+                  : std::map<std::string, std::string>{{"setpoint_min", needs_writable},
+                                                       {"setpoint_max", needs_writable},
+                                                       {"max_rate_per_s", needs_writable}});
+  r.String(t, at, "name", ch.name, true);
+  r.String(t, at, "plc", ch.plc, true);
+  r.Enum(t, at, "role", ch.role, true);
+  r.Enum(t, at, "register", ch.table, true);
+  r.Integer(t, at, "address", ch.address, true);
+  r.Enum(t, at, "type", ch.type, true);
+  r.Enum(t, at, "word_order", ch.word_order);
+  r.Double(t, at, "scale", ch.scale);
+  r.Double(t, at, "offset", ch.offset);
+  r.String(t, at, "unit", ch.unit);
+  r.Double(t, at, "valid_min", ch.valid_min);
+  r.Double(t, at, "valid_max", ch.valid_max);
+  if (ch.writable) {
+    r.Double(t, at, "setpoint_min", ch.setpoint_min, true);
+    r.Double(t, at, "setpoint_max", ch.setpoint_max, true);
+    r.Double(t, at, "max_rate_per_s", ch.max_rate_per_s, true);
+  }
+}
+
+void ReadReach(Reader& r, const toml::table& t, const std::string& at, ReachConfig& reach) {
+  r.Keys(
+      t, at,
+      {"name", "inflow", "outflow", "level", "actuator", "nominal_setpoint",
+       "actuator_gain_m3s_per_unit", "nominal_inflow_m3s", "expected_delay_s", "level_min_m",
+       "level_max_m", "online_models", "min_delay_s", "max_delay_s", "forgetting", "rls_method"});
+  r.String(t, at, "name", reach.name, true);
+  r.String(t, at, "inflow", reach.inflow, true);
+  r.String(t, at, "outflow", reach.outflow, true);
+  r.String(t, at, "level", reach.level, true);
+  r.String(t, at, "actuator", reach.actuator, true);
+  r.OptionalDouble(t, at, "nominal_setpoint", reach.nominal_setpoint);
+  r.OptionalDouble(t, at, "actuator_gain_m3s_per_unit", reach.actuator_gain_m3s_per_unit);
+  r.Double(t, at, "nominal_inflow_m3s", reach.nominal_inflow_m3s, true);
+  r.Double(t, at, "expected_delay_s", reach.expected_delay_s, true);
+  r.Double(t, at, "level_min_m", reach.level_min_m, true);
+  r.Double(t, at, "level_max_m", reach.level_max_m, true);
+  r.EnumList(t, at, "online_models", reach.online_models);
+  r.Double(t, at, "min_delay_s", reach.min_delay_s);
+  // Default: twice the operators' guess, so the bank brackets it.
+  reach.max_delay_s = 2.0 * reach.expected_delay_s;
+  r.Double(t, at, "max_delay_s", reach.max_delay_s);
+  r.Double(t, at, "forgetting", reach.forgetting);
+  r.Enum(t, at, "rls_method", reach.rls_method);
+}
+
+void ReadExperiment(Reader& r, const toml::table& t, const std::string& at, ExperimentConfig& e) {
+  r.Enum(t, at, "mode", e.mode);
+  const bool design = e.mode == core::ExperimentMode::kDesign;
+  const std::string design_only = "mode = \"design\"";
+  const std::string explicit_only = "mode = \"explicit\"";
+  if (design) {
+    r.Keys(t, at,
+           {"name", "reach", "mode", "amplitude_percent", "duration_factor", "seed", "settle_s",
+            "start", "max_invalid_samples"},
+           {{"amplitude", explicit_only},
+            {"clock_period_s", explicit_only},
+            {"order", explicit_only},
+            {"periods", explicit_only}});
+    r.Double(t, at, "amplitude_percent", e.amplitude_percent);
+    r.Double(t, at, "duration_factor", e.duration_factor);
+  } else {
+    r.Keys(t, at,
+           {"name", "reach", "mode", "amplitude", "clock_period_s", "order", "periods", "seed",
+            "settle_s", "start", "max_invalid_samples"},
+           {{"amplitude_percent", design_only}, {"duration_factor", design_only}});
+    r.Double(t, at, "amplitude", e.amplitude, true);
+    r.Double(t, at, "clock_period_s", e.clock_period_s, true);
+    r.Integer(t, at, "order", e.order);
+    r.Integer(t, at, "periods", e.periods);
+  }
+  r.String(t, at, "name", e.name, true);
+  r.String(t, at, "reach", e.reach, true);
+  r.Integer(t, at, "seed", e.seed);
+  r.Double(t, at, "settle_s", e.settle_s);
+  r.Enum(t, at, "start", e.start);
+  r.Integer(t, at, "max_invalid_samples", e.max_invalid_samples);
+}
+
+void ReadCommands(Reader& r, const toml::table& root, DaemonConfig& c) {
+  const toml::table* t = r.Table(root, "", "commands");
+  if (t == nullptr) return;
+  r.Keys(*t, "commands", {"enabled", "key_file", "max_clock_skew_s", "accepted"});
+  r.Bool(*t, "commands", "enabled", c.commands.enabled);
+  r.String(*t, "commands", "key_file", c.commands.key_file);
+  r.Double(*t, "commands", "max_clock_skew_s", c.commands.max_clock_skew_s);
+  r.EnumList(*t, "commands", "accepted", c.commands.accepted);
+}
+
+}  // namespace
+
+std::string ConfigIssue::ToString() const {
+  std::string out = file + ":" + std::to_string(line) + ":" + std::to_string(column) + ": ";
+  if (!path.empty()) out += path + ": ";
+  return out + message;
+}
+
+namespace {
+std::string JoinIssues(const std::vector<ConfigIssue>& issues) {
+  std::string out;
+  for (const ConfigIssue& issue : issues) out += (out.empty() ? "" : "\n") + issue.ToString();
+  return out;
+}
+}  // namespace
+
+ConfigError::ConfigError(std::vector<ConfigIssue> issues)
+    : std::runtime_error(JoinIssues(issues)), issues_(std::move(issues)) {}
+
+DaemonConfig ParseDaemonConfig(std::string_view text, const std::string& name) {
+  toml::table root;
+  try {
+    root = toml::parse(text, name);
+  } catch (const toml::parse_error& e) {
+    ConfigIssue issue;
+    issue.file = name;
+    issue.line = static_cast<int>(e.source().begin.line);
+    issue.column = static_cast<int>(e.source().begin.column);
+    issue.message = std::string(e.description());
+    throw ConfigError({issue});
+  }
+  Reader r(name);
+  DaemonConfig c;
+  r.Keys(root, "", {"daemon", "lcm", "plc", "channel", "reach", "experiment", "commands"});
+  ReadDaemon(r, root, c);
+  ReadLcm(r, root, c);
+  r.Tables(root, "plc", [&](const toml::table& t, const std::string& at) {
+    ReadPlc(r, t, at, c.plcs.emplace_back());
+  });
+  r.Tables(root, "channel", [&](const toml::table& t, const std::string& at) {
+    ReadChannel(r, t, at, c.channels.emplace_back());
+  });
+  r.Tables(root, "reach", [&](const toml::table& t, const std::string& at) {
+    ReadReach(r, t, at, c.reaches.emplace_back());
+  });
+  r.Tables(root, "experiment", [&](const toml::table& t, const std::string& at) {
+    ReadExperiment(r, t, at, c.experiments.emplace_back());
+  });
+  ReadCommands(r, root, c);
+  for (const core::ConfigProblem& problem : core::Validate(c)) r.Place(problem);
+  std::vector<ConfigIssue> issues = r.Take();
+  if (!issues.empty()) throw ConfigError(std::move(issues));
+  return c;
+}
+
+DaemonConfig LoadDaemonConfig(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  if (in) text << in.rdbuf();
+  if (!in) {
+    ConfigIssue issue;
+    issue.file = path;
+    issue.message = "cannot read the file";
+    throw ConfigError({issue});
+  }
+  return ParseDaemonConfig(text.str(), path);
+}
+
+}  // namespace canalid::daemon

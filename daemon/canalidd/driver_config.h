@@ -1,0 +1,21 @@
+#pragma once
+#include <variant>
+
+#include "core/daemon_config.h"
+#include "drivers/modbus/modbus_port.h"
+#include "drivers/modbus/plc_poller.h"
+
+namespace canalid::daemon {
+
+/// The link settings of `plc` for drivers::ModbusPort (TCP or RTU, by its transport).
+std::variant<drivers::ModbusTcpConfig, drivers::ModbusRtuConfig> BuildModbusConfig(
+    const core::PlcConfig& plc);
+
+/// The poller of `plc`: its period and backoff, and every channel of `config` on this PLC in file
+/// order, with scaling (type, word order, scale, offset, valid range) and, for writable channels,
+/// the setpoint limits (max_rate_per_s is per plant second in the file and per wall second in the
+/// poller: multiplied by time_scale).  PollSample::values[i] is then the i-th such channel.
+drivers::PollerConfig BuildPollerConfig(const core::DaemonConfig& config,
+                                        const core::PlcConfig& plc);
+
+}  // namespace canalid::daemon

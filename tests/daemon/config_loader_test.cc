@@ -1,0 +1,336 @@
+#include "daemon/canalidd/config_loader.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "core/daemon_plan.h"
+#include "daemon/canalidd/driver_config.h"
+
+namespace canalid::daemon {
+namespace {
+
+using ::testing::ElementsAre;
+using ::testing::HasSubstr;
+
+// The smallest valid file: lines are numbered in the comments so positions can be checked.
+const std::string kMinimal = R"([[plc]]
+name = "p"
+host = "127.0.0.1"
+
+[[channel]]
+name = "level"
+plc = "p"
+role = "level"
+register = "input"
+address = 10
+type = "i16"
+scale = 0.001
+)";
+// line 1 [[plc]], 5 [[channel]], 13 is the first line after it.
+
+std::vector<std::string> Issues(const std::string& text) {
+  try {
+    ParseDaemonConfig(text, "t.toml");
+  } catch (const ConfigError& e) {
+    std::vector<std::string> out;
+    for (const ConfigIssue& issue : e.issues()) out.push_back(issue.ToString());
+    return out;
+  }
+  return {};
+}
+
+TEST(ConfigLoaderTest, MinimalFileTakesTheDefaults) {
+  const core::DaemonConfig c = ParseDaemonConfig(kMinimal, "t.toml");
+  EXPECT_EQ(c.daemon.state_directory, "/var/lib/canalidd");
+  EXPECT_EQ(c.daemon.log_level, core::LogLevel::kInfo);
+  EXPECT_EQ(c.daemon.time_scale, 1.0);
+  EXPECT_FALSE(c.daemon.heartbeat.has_value());
+  EXPECT_EQ(c.lcm.url, "");
+  EXPECT_EQ(c.lcm.channel_prefix, "CANALID_");
+  ASSERT_EQ(c.plcs.size(), 1u);
+  EXPECT_EQ(c.plcs[0].transport, core::PlcTransport::kTcp);
+  EXPECT_EQ(c.plcs[0].port, 502);
+  EXPECT_EQ(c.plcs[0].poll_period_s, 1.0);
+  ASSERT_EQ(c.channels.size(), 1u);
+  EXPECT_EQ(c.channels[0].type, core::RegisterType::kI16);
+  EXPECT_EQ(c.channels[0].scale, 0.001);
+  EXPECT_EQ(c.channels[0].valid_min, -INFINITY);
+  EXPECT_FALSE(c.commands.enabled);
+  EXPECT_EQ(c.commands.accepted.size(), 4u);
+}
+
+TEST(ConfigLoaderTest, SyntaxErrorIsReportedWithItsPosition) {
+  const auto issues = Issues("[daemon]\nlog_level = \"info\nx = 1\n");
+  ASSERT_EQ(issues.size(), 1u);
+  EXPECT_THAT(issues[0], HasSubstr("t.toml:2:"));
+}
+
+TEST(ConfigLoaderTest, UnknownKeysAndTablesAreErrors) {
+  EXPECT_THAT(Issues("[deamon]\n" + kMinimal + "bogus = 1\n"),
+              ElementsAre("t.toml:1:2: deamon: unknown key (allowed: daemon, lcm, plc, channel, "
+                          "reach, experiment, commands)",
+                          "t.toml:14:1: channel[0].bogus: unknown key (allowed: name, plc, role, "
+                          "register, address, type, word_order, scale, offset, unit, valid_min, "
+                          "valid_max, writable)"));
+}
+
+TEST(ConfigLoaderTest, WrongTypesAndUnknownNames) {
+  std::string text = "[daemon]\ntime_scale = \"fast\"\nlog_level = \"verbose\"\n" + kMinimal;
+  text.replace(text.find("address = 10"), 12, "address = 1.5");
+  EXPECT_THAT(Issues(text),
+              ElementsAre("t.toml:2:14: daemon.time_scale: expected a number, got a string",
+                          "t.toml:3:13: daemon.log_level: \"verbose\" is not allowed (allowed: "
+                          "error, warn, info, debug)",
+                          "t.toml:13:11: channel[0].address: expected an integer, got a float"));
+}
+
+TEST(ConfigLoaderTest, MissingRequiredKeysPointAtTheirTable) {
+  EXPECT_THAT(Issues("[[plc]]\nname = \"p\"\n\n[[channel]]\nname = \"c\"\nplc = \"p\"\n"),
+              ElementsAre("t.toml:1:1: plc[0].host: missing (required)",
+                          "t.toml:4:1: channel[0].role: missing (required)",
+                          "t.toml:4:1: channel[0].register: missing (required)",
+                          "t.toml:4:1: channel[0].address: missing (required)",
+                          "t.toml:4:1: channel[0].type: missing (required)"));
+}
+
+TEST(ConfigLoaderTest, KeysOfTheOtherTransportOrModeAreErrors) {
+  std::string text = kMinimal;
+  text.replace(text.find("host"), 4, "baud = 9600\nhost");
+  EXPECT_THAT(Issues(text),
+              ElementsAre("t.toml:3:1: plc[0].baud: only allowed when transport = \"rtu\""));
+  EXPECT_THAT(Issues("[[plc]]\nname = \"p\"\ntransport = \"rtu\"\nhost = \"h\"\n"
+                     "device = \"/dev/ttyS0\"\nparity = \"X\"\n" +
+                     kMinimal.substr(kMinimal.find("[[channel]]"))),
+              ElementsAre("t.toml:4:1: plc[0].host: only allowed when transport = \"tcp\"",
+                          "t.toml:6:10: plc[0].parity: \"X\" is not a parity (allowed: \"N\", "
+                          "\"E\", \"O\")"));
+  EXPECT_THAT(Issues(kMinimal + "setpoint_max = 2.0\n"),
+              ElementsAre("t.toml:13:1: channel[0].setpoint_max: only allowed when writable = "
+                          "true"));
+}
+
+TEST(ConfigLoaderTest, WritableChannelNeedsItsLimits) {
+  EXPECT_THAT(Issues(kMinimal + "writable = true\nsetpoint_max = 2.0\n"),
+              ElementsAre("t.toml:5:1: channel[0].setpoint_min: missing (required)",
+                          "t.toml:5:1: channel[0].max_rate_per_s: missing (required)",
+                          "t.toml:13:12: channel[0].writable: an input register cannot be "
+                          "written (allowed: register = \"holding\")"));
+}
+
+TEST(ConfigLoaderTest, RangesAndDanglingReferencesAreReportedAtTheirValues) {
+  EXPECT_THAT(
+      Issues(kMinimal + R"(
+[[channel]]
+name = "level"
+plc = "q"
+role = "flow"
+register = "holding"
+address = 70000
+type = "u16"
+)"),
+      ElementsAre("t.toml:15:8: channel[1].name: duplicate channel name \"level\"",
+                  "t.toml:16:7: channel[1].plc: unknown plc \"q\" (allowed: a [[plc]] name)",
+                  "t.toml:19:11: channel[1].address: 70000 is out of range (allowed: 0..65535)"));
+}
+
+TEST(ConfigLoaderTest, ReachAndExperimentReferences) {
+  EXPECT_THAT(Issues(kMinimal + R"(
+[[reach]]
+name = "r"
+inflow = "level"
+outflow = "nope"
+level = "level"
+actuator = "level"
+nominal_inflow_m3s = 10
+expected_delay_s = 600
+level_min_m = 1.9
+level_max_m = 2.3
+online_models = ["id", "ar"]
+
+[[experiment]]
+name = "e"
+reach = "r2"
+amplitude = 0.1
+)"),
+              ElementsAre("t.toml:16:10: reach[0].inflow: channel \"level\" has role \"level\" "
+                          "(allowed: \"flow\")",
+                          "t.toml:17:11: reach[0].outflow: unknown channel \"nope\" (allowed: a "
+                          "[[channel]] name)",
+                          "t.toml:19:12: reach[0].actuator: channel \"level\" has role \"level\" "
+                          "(allowed: \"gate\" or \"pump\")",
+                          "t.toml:19:12: reach[0].actuator: channel \"level\" is not writable "
+                          "(allowed: writable = true)",
+                          "t.toml:24:24: reach[0].online_models[1]: \"ar\" is not allowed "
+                          "(allowed: id, arx)",
+                          "t.toml:28:9: experiment[0].reach: unknown reach \"r2\" (allowed: a "
+                          "[[reach]] name)",
+                          "t.toml:29:1: experiment[0].amplitude: only allowed when mode = "
+                          "\"explicit\""));
+}
+
+TEST(ConfigLoaderTest, CommandsKeyFileRequiredWhenEnabled) {
+  EXPECT_THAT(Issues("[commands]\nenabled = true\n" + kMinimal),
+              ElementsAre("t.toml:1:1: commands.key_file: \"\" is not an absolute path (allowed: "
+                          "/..., required when enabled)"));
+}
+
+TEST(ConfigLoaderTest, PlcArrayMustBeAnArrayOfTables) {
+  EXPECT_THAT(Issues("plc = 3\n"),
+              // Validate's "no [[plc]] table" on the same key is not repeated.
+              ElementsAre("t.toml:1:7: plc: expected an array of tables [[plc]], got an integer"));
+}
+
+TEST(ConfigLoaderTest, UnreadableFile) {
+  try {
+    LoadDaemonConfig("/nonexistent/canalidd.toml");
+    FAIL() << "no exception";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()), "/nonexistent/canalidd.toml:1:1: cannot read the file");
+  }
+}
+
+core::DaemonConfig LoadShipped(const char* name) {
+  return LoadDaemonConfig(std::string(CANALID_SOURCE_DIR) + "/config/" + name);
+}
+
+TEST(ConfigLoaderTest, ShippedConfigsLoadAndRoundTrip) {
+  for (const char* name : {"canalidd.example.toml", "canalidd-asce2.toml"}) {
+    SCOPED_TRACE(name);
+    core::DaemonConfig c;
+    try {
+      c = LoadShipped(name);
+    } catch (const ConfigError& e) {
+      FAIL() << e.what();
+    }
+    const std::string text = RenderDaemonConfig(c);
+    const core::DaemonConfig again = ParseDaemonConfig(text, "rendered");
+    EXPECT_TRUE(again == c) << text;
+    EXPECT_EQ(RenderDaemonConfig(again), text);
+  }
+}
+
+// Numbers whose shortest decimal form needs 17 digits, infinities, strings with escapes, RTU and
+// explicit experiments: what the shipped files do not exercise.
+TEST(ConfigLoaderTest, RoundTripIsExact) {
+  core::DaemonConfig c = LoadShipped("canalidd-asce2.toml");
+  c.daemon.heartbeat->period_s = 0.1 + 0.2;  // 0.30000000000000004
+  c.daemon.state_directory = "/var/lib/can\"al\\idd\t";
+  c.lcm.url = "udpm://239.255.76.67:7667?ttl=1";
+  core::PlcConfig& plc = c.plcs[0];
+  plc.transport = core::PlcTransport::kRtu;
+  plc.host = "127.0.0.1";  // the defaults of the keys an RTU file cannot have
+  plc.port = 502;
+  plc.connect_timeout_s = 1.0;
+  plc.device = "/dev/ttyUSB0";
+  plc.parity = 'N';
+  plc.stop_bits = 2;
+  c.channels[1].scale = 1.0 / 3.0;
+  c.channels[1].offset = -1e-300;
+  c.reaches[0].nominal_setpoint = 0.7;
+  c.reaches[0].actuator_gain_m3s_per_unit = 14.5;
+  c.reaches[0].online_models = {};
+  c.reaches[0].rls_method = core::RlsMethod::kNlms;
+  core::ExperimentConfig& e = c.experiments.emplace_back();
+  e.name = "x";
+  e.reach = "pool2";
+  e.mode = core::ExperimentMode::kExplicit;
+  e.amplitude = 0.05;
+  e.clock_period_s = 340.0;
+  e.order = 5;
+  e.periods = 3;
+  e.seed = 2147483647;
+  c.commands.enabled = true;
+  c.commands.key_file = "/etc/canalidd/key";
+  c.commands.accepted = {core::CommandKind::kAbortExperiment};
+  for (const core::ConfigProblem& p : core::Validate(c))
+    ADD_FAILURE() << p.path << ": " << p.message;
+  const std::string text = RenderDaemonConfig(c);
+  EXPECT_TRUE(ParseDaemonConfig(text, "rendered") == c) << text;
+  EXPECT_THAT(text, HasSubstr("period_s = 0.30000000000000004\n"));
+  EXPECT_THAT(text, HasSubstr("max_rate_per_s = inf\n"));
+}
+
+// The asce2 demo file against docs/register-map.md: pool record r of the float input block at
+// 300 + 16 r + 2 field (fields 0 inflow, 1 outflow, 2 downstream level, 3 gate position), the
+// gate setpoint of record r at holding 300 + 4 r; pool 2 is record 1, its inflow gate record 0.
+TEST(ConfigLoaderTest, Asce2MapsOntoThePoller) {
+  const core::DaemonConfig c = LoadShipped("canalidd-asce2.toml");
+  ASSERT_EQ(c.plcs.size(), 1u);
+  const drivers::PollerConfig poller = BuildPollerConfig(c, c.plcs[0]);
+  EXPECT_EQ(poller.plc_name, "asce2");
+  EXPECT_DOUBLE_EQ(poller.period_s, 0.2);
+  ASSERT_EQ(poller.channels.size(), 6u);
+  struct Expected {
+    const char* name;
+    drivers::RegisterKind kind;
+    int address;
+  };
+  const Expected expected[] = {{"heartbeat", drivers::RegisterKind::kHolding, 0},
+                               {"pool2_inflow", drivers::RegisterKind::kInput, 316},
+                               {"pool2_outflow", drivers::RegisterKind::kInput, 318},
+                               {"pool2_level", drivers::RegisterKind::kInput, 320},
+                               {"gate1_position", drivers::RegisterKind::kInput, 306},
+                               {"gate1_setpoint", drivers::RegisterKind::kHolding, 300}};
+  for (std::size_t i = 0; i < poller.channels.size(); ++i) {
+    EXPECT_EQ(poller.channels[i].name, expected[i].name);
+    EXPECT_EQ(poller.channels[i].kind, expected[i].kind) << expected[i].name;
+    EXPECT_EQ(poller.channels[i].address, expected[i].address) << expected[i].name;
+  }
+  // 2.1 m as canalsim serves it (docs/register-map.md: 0x4006 0x6666, abcd) decodes to 2.1 m.
+  const uint16_t level_registers[] = {0x4006, 0x6666};
+  const core::DecodedValue level = core::DecodeChannel(poller.channels[3].scaling, level_registers);
+  ASSERT_TRUE(level.ok());
+  EXPECT_NEAR(level.value, 2.1, 1e-6);  // float32 resolution near 2 m is 2.4e-7 m
+  const drivers::PollChannel& gate = poller.channels[5];
+  EXPECT_TRUE(gate.writable);
+  EXPECT_DOUBLE_EQ(gate.limits.min_value, 0.05);
+  EXPECT_DOUBLE_EQ(gate.limits.max_value, 2.0);
+  // 0.005 m per plant second at 50 plant seconds per wall second.
+  EXPECT_DOUBLE_EQ(gate.limits.max_rate_per_s, 0.25);
+  EXPECT_TRUE(poller.channels[0].writable);
+  EXPECT_TRUE(std::isinf(poller.channels[0].limits.max_rate_per_s));
+  drivers::ValidatePollerConfig(poller, c.plcs[0].response_timeout_s);
+
+  const auto link = BuildModbusConfig(c.plcs[0]);
+  ASSERT_TRUE(std::holds_alternative<drivers::ModbusTcpConfig>(link));
+  const auto& tcp = std::get<drivers::ModbusTcpConfig>(link);
+  EXPECT_EQ(tcp.host, "127.0.0.1");
+  EXPECT_EQ(tcp.port, 1502);
+  EXPECT_DOUBLE_EQ(tcp.response_timeout_s, 0.1);
+  drivers::ValidateModbusConfig(tcp);
+
+  // The demo's experiment: Ts = 0.2 s x 50 = 10 s; clock round(682 / 20) = 34 samples; order 4
+  // (15 x 340 s = 5100 s >= 5 x 682 s); 60 samples of settling.
+  const core::ExperimentPlan plan = core::BuildExperimentPlan(c, c.experiments[0], 0.9);
+  EXPECT_EQ(plan.prbs.clock_period_samples, 34);
+  EXPECT_EQ(plan.prbs.order, 4);
+  EXPECT_EQ(plan.excite_samples, 510);
+  EXPECT_EQ(plan.settle_samples, 60);
+  EXPECT_DOUBLE_EQ(plan.level_min_m, 1.9);
+  EXPECT_DOUBLE_EQ(plan.level_max_m, 2.3);
+}
+
+TEST(ConfigLoaderTest, RtuLinkSettings) {
+  core::PlcConfig plc;
+  plc.transport = core::PlcTransport::kRtu;
+  plc.device = "/dev/ttyUSB1";
+  plc.baud = 9600;
+  plc.parity = 'O';
+  plc.stop_bits = 2;
+  plc.unit_id = 7;
+  const auto link = BuildModbusConfig(plc);
+  ASSERT_TRUE(std::holds_alternative<drivers::ModbusRtuConfig>(link));
+  const auto& rtu = std::get<drivers::ModbusRtuConfig>(link);
+  EXPECT_EQ(rtu.device, "/dev/ttyUSB1");
+  EXPECT_EQ(rtu.baud, 9600);
+  EXPECT_EQ(rtu.parity, 'O');
+  EXPECT_EQ(rtu.stop_bits, 2);
+  EXPECT_EQ(rtu.unit_id, 7);
+}
+
+}  // namespace
+}  // namespace canalid::daemon
