@@ -23,6 +23,8 @@ constexpr std::array kTypes{RegisterType::kU16, RegisterType::kI16, RegisterType
                             RegisterType::kI32, RegisterType::kF32};
 constexpr std::array kWordOrders{WordOrder::kHighWordFirst, WordOrder::kLowWordFirst};
 constexpr std::array kModels{OnlineModel::kId, OnlineModel::kArx};
+constexpr std::array kClosedLoopModes{ClosedLoopMode::kAuto, ClosedLoopMode::kOn,
+                                      ClosedLoopMode::kOff};
 constexpr std::array kRlsMethods{RlsMethod::kUdDirectional, RlsMethod::kUdExponential,
                                  RlsMethod::kExponential,   RlsMethod::kDirectional,
                                  RlsMethod::kConstantTrace, RlsMethod::kStabilised,
@@ -500,6 +502,9 @@ const char* EnumName(RlsMethod v) {
                 {"ud_directional", "ud_exponential", "exponential", "directional", "constant_trace",
                  "stabilised", "kalman", "nlms"});
 }
+const char* EnumName(ClosedLoopMode v) {
+  return NameIn(v, kClosedLoopModes, {"auto", "on", "off"});
+}
 const char* EnumName(ExperimentMode v) { return NameIn(v, kModes, {"design", "explicit"}); }
 const char* EnumName(ExperimentStart v) { return NameIn(v, kStarts, {"manual", "on_start"}); }
 const char* EnumName(CommandKind v) {
@@ -538,6 +543,10 @@ std::span<const OnlineModel> AllValues<OnlineModel>() {
 template <>
 std::span<const RlsMethod> AllValues<RlsMethod>() {
   return kRlsMethods;
+}
+template <>
+std::span<const ClosedLoopMode> AllValues<ClosedLoopMode>() {
+  return kClosedLoopModes;
 }
 template <>
 std::span<const ExperimentMode> AllValues<ExperimentMode>() {

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/channel_scaling.h"
+#include "core/id_model.h"
 #include "core/rls_options.h"
 
 namespace canalid::core {
@@ -119,6 +120,9 @@ struct ReachConfig {
   double max_delay_s = 0.0;  ///< largest, >= min_delay_s, at most 2000 samples
   double forgetting = 1.0;   ///< (0, 1]
   RlsMethod rls_method = RlsMethod::kUdDirectional;
+  /// Batch identification at the end of an experiment: "auto" decides from the data whether the
+  /// outflow follows the level (three-step closed-loop method), "on"/"off" force it.
+  ClosedLoopMode closed_loop = ClosedLoopMode::kAuto;
   bool operator==(const ReachConfig&) const = default;
 };
 
@@ -197,6 +201,7 @@ const char* EnumName(RegisterType value);
 const char* EnumName(WordOrder value);
 const char* EnumName(OnlineModel value);
 const char* EnumName(RlsMethod value);
+const char* EnumName(ClosedLoopMode value);
 const char* EnumName(ExperimentMode value);
 const char* EnumName(ExperimentStart value);
 const char* EnumName(CommandKind value);
@@ -220,6 +225,8 @@ template <>
 std::span<const OnlineModel> AllValues<OnlineModel>();
 template <>
 std::span<const RlsMethod> AllValues<RlsMethod>();
+template <>
+std::span<const ClosedLoopMode> AllValues<ClosedLoopMode>();
 template <>
 std::span<const ExperimentMode> AllValues<ExperimentMode>();
 template <>

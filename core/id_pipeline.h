@@ -10,9 +10,10 @@ namespace canalid::core {
 struct IdPipelineOptions {
   IdFitOptions fit;
   bool remove_level_outliers = true;
-  /// Hampel settings for the level: 31-sample window, 5 sigma, sigma never below 1 mm (a level
-  /// sensor's resolution), so flat stretches of a quantised sensor are not flagged.
-  HampelOptions level_outliers{15, 5.0, 0.001};
+  /// Hampel settings for the level: 31-sample window, 5 sigma, sigma never below 5 mm, so only
+  /// jumps above 2.5 cm are taken for spikes: with a floor of 1 mm the wave fronts of a
+  /// gate-driven pool (a few mm per sample) were flagged, 16 samples on a clean 6.7 h record.
+  HampelOptions level_outliers{15, 5.0, 0.005};
 };
 
 /// Batch identification of a pool's ID model as `canalid identify --model id` and the daemon's

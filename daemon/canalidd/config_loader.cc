@@ -397,11 +397,11 @@ void ReadChannel(Reader& r, const toml::table& t, const std::string& at, Channel
 }
 
 void ReadReach(Reader& r, const toml::table& t, const std::string& at, ReachConfig& reach) {
-  r.Keys(
-      t, at,
-      {"name", "inflow", "outflow", "level", "actuator", "nominal_setpoint",
-       "actuator_gain_m3s_per_unit", "nominal_inflow_m3s", "expected_delay_s", "level_min_m",
-       "level_max_m", "online_models", "min_delay_s", "max_delay_s", "forgetting", "rls_method"});
+  r.Keys(t, at,
+         {"name", "inflow", "outflow", "level", "actuator", "nominal_setpoint",
+          "actuator_gain_m3s_per_unit", "nominal_inflow_m3s", "expected_delay_s", "level_min_m",
+          "level_max_m", "online_models", "min_delay_s", "max_delay_s", "forgetting", "rls_method",
+          "closed_loop"});
   r.String(t, at, "name", reach.name, true);
   r.String(t, at, "inflow", reach.inflow, true);
   r.String(t, at, "outflow", reach.outflow, true);
@@ -420,6 +420,7 @@ void ReadReach(Reader& r, const toml::table& t, const std::string& at, ReachConf
   r.Double(t, at, "max_delay_s", reach.max_delay_s);
   r.Double(t, at, "forgetting", reach.forgetting);
   r.Enum(t, at, "rls_method", reach.rls_method);
+  r.Enum(t, at, "closed_loop", reach.closed_loop);
 }
 
 void ReadExperiment(Reader& r, const toml::table& t, const std::string& at, ExperimentConfig& e) {

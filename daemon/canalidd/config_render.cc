@@ -146,6 +146,7 @@ std::string RenderDaemonConfig(const core::DaemonConfig& c) {
     w.Key("max_delay_s", r.max_delay_s);
     w.Key("forgetting", r.forgetting);
     w.Key("rls_method", core::EnumName(r.rls_method));
+    w.Key("closed_loop", core::EnumName(r.closed_loop));
   }
   for (const core::ExperimentConfig& e : c.experiments) {
     w.Line("");

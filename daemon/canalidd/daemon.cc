@@ -226,7 +226,8 @@ void Daemon::OnPoll(int index, const drivers::PollSample& s) {
       return channel >= 0 && s.valid(static_cast<std::size_t>(channel));
     };
     if (!reach.nominal_known && w.actuator >= 0 && valid(w.actuator)) {
-      LogInfo("reach " + w.name + ": nominal setpoint " + std::to_string(value(w.actuator)) + " (read from the PLC)");
+      LogInfo("reach " + w.name + ": nominal setpoint " + std::to_string(value(w.actuator)) +
+              " (read from the PLC)");
       SetNominal(reach, value(w.actuator));
     }
     core::ReachSample sample;

@@ -17,20 +17,26 @@ constexpr int kExitSoftware = 70;
 
 canalid::daemon::LogLevel ToLogLevel(canalid::core::LogLevel level) {
   switch (level) {
-    case canalid::core::LogLevel::kError: return canalid::daemon::LogLevel::kError;
-    case canalid::core::LogLevel::kWarn: return canalid::daemon::LogLevel::kWarning;
-    case canalid::core::LogLevel::kInfo: return canalid::daemon::LogLevel::kInfo;
-    case canalid::core::LogLevel::kDebug: return canalid::daemon::LogLevel::kDebug;
+    case canalid::core::LogLevel::kError:
+      return canalid::daemon::LogLevel::kError;
+    case canalid::core::LogLevel::kWarn:
+      return canalid::daemon::LogLevel::kWarning;
+    case canalid::core::LogLevel::kInfo:
+      return canalid::daemon::LogLevel::kInfo;
+    case canalid::core::LogLevel::kDebug:
+      return canalid::daemon::LogLevel::kDebug;
   }
   return canalid::daemon::LogLevel::kInfo;
 }
 
 // Loads, validates and plans; prints every problem and returns nothing when the file is bad.
-std::optional<canalid::daemon::DaemonPlan> LoadPlan(const std::string& path, canalid::core::LogLevel* level) {
+std::optional<canalid::daemon::DaemonPlan> LoadPlan(const std::string& path,
+                                                    canalid::core::LogLevel* level) {
   try {
     const canalid::core::DaemonConfig config = canalid::daemon::LoadDaemonConfig(path);
     if (level != nullptr) *level = config.daemon.log_level;
-    return canalid::daemon::BuildDaemonPlan(config, path, canalid::daemon::RenderDaemonConfig(config));
+    return canalid::daemon::BuildDaemonPlan(config, path,
+                                            canalid::daemon::RenderDaemonConfig(config));
   } catch (const canalid::daemon::ConfigError& e) {
     std::cerr << e.what() << (std::string(e.what()).ends_with('\n') ? "" : "\n");
   } catch (const std::exception& e) {
@@ -42,16 +48,21 @@ std::optional<canalid::daemon::DaemonPlan> LoadPlan(const std::string& path, can
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"canalidd: identification daemon for canal pools, beside a PLC (Modbus) on an LCM bus"};
+  CLI::App app{
+      "canalidd: identification daemon for canal pools, beside a PLC (Modbus) on an LCM bus"};
   std::string config_path;
   bool check_only = false;
-  app.add_option("-c,--config", config_path, "Configuration file (TOML, see config/canalidd.example.toml)")
+  app.add_option("-c,--config", config_path,
+                 "Configuration file (TOML, see config/canalidd.example.toml)")
       ->required();
-  app.add_flag("--check-config", check_only, "Validate the configuration, print every problem, and exit (0 or 78)");
+  app.add_flag("--check-config", check_only,
+               "Validate the configuration, print every problem, and exit (0 or 78)");
   app.set_version_flag("--version", "canalidd 0.1.0");
   app.footer(
-      "Signals: SIGTERM/SIGINT stop experiments, restore nominal setpoints and exit 0; SIGHUP reloads\n"
-      "the configuration when it is valid. Exit 78: configuration error. Docs: docs/configuration.md.");
+      "Signals: SIGTERM/SIGINT stop experiments, restore nominal setpoints and exit 0; SIGHUP "
+      "reloads\n"
+      "the configuration when it is valid. Exit 78: configuration error. Docs: "
+      "docs/configuration.md.");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -69,7 +80,8 @@ int main(int argc, char** argv) {
   try {
     while (true) {
       auto bus = std::make_unique<canalid::drivers::LcmBus>(plan->lcm_url);
-      canalid::daemon::Daemon daemon(std::move(*plan), std::move(bus), canalid::daemon::Daemon::MakeModbusPort,
+      canalid::daemon::Daemon daemon(std::move(*plan), std::move(bus),
+                                     canalid::daemon::Daemon::MakeModbusPort,
                                      [&config_path] { return LoadPlan(config_path, nullptr); });
       if (daemon.Run() != canalid::daemon::DaemonExit::kReload) return 0;
       plan = daemon.TakeReloadedPlan();

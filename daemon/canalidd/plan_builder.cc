@@ -14,7 +14,8 @@ int ChannelIndex(const drivers::PollerConfig& poller, const std::string& name) {
   for (std::size_t i = 0; i < poller.channels.size(); ++i) {
     if (poller.channels[i].name == name) return static_cast<int>(i);
   }
-  throw std::invalid_argument("channel '" + name + "' is not polled on PLC '" + poller.plc_name + "'");
+  throw std::invalid_argument("channel '" + name + "' is not polled on PLC '" + poller.plc_name +
+                              "'");
 }
 
 }  // namespace
@@ -36,11 +37,6 @@ DaemonPlan BuildDaemonPlan(const core::DaemonConfig& config, const std::string& 
     PlcWiring wiring;
     wiring.link = BuildModbusConfig(plc);
     wiring.poller = BuildPollerConfig(config, plc);
-    // Rates are plant rates: against a simulator running time_scale times faster than the wall
-    // clock, the limiter (which counts wall seconds) must allow time_scale times more per second.
-    for (drivers::PollChannel& channel : wiring.poller.channels) {
-      channel.limits.max_rate_per_s *= config.daemon.time_scale;
-    }
     if (config.daemon.heartbeat) {
       const core::ChannelConfig* channel = config.FindChannel(config.daemon.heartbeat->channel);
       if (channel != nullptr && channel->plc == plc.name) {
@@ -52,7 +48,8 @@ DaemonPlan BuildDaemonPlan(const core::DaemonConfig& config, const std::string& 
   }
   for (const core::ReachConfig& reach : config.reaches) {
     const core::ChannelConfig* level = config.FindChannel(reach.level);
-    if (level == nullptr) throw std::invalid_argument("reach '" + reach.name + "': no level channel");
+    if (level == nullptr)
+      throw std::invalid_argument("reach '" + reach.name + "': no level channel");
     const auto plc = std::find_if(config.plcs.begin(), config.plcs.end(),
                                   [&](const core::PlcConfig& p) { return p.name == level->plc; });
     if (plc == config.plcs.end()) throw std::invalid_argument("reach '" + reach.name + "': no PLC");
@@ -71,6 +68,7 @@ DaemonPlan BuildDaemonPlan(const core::DaemonConfig& config, const std::string& 
     wiring.pipeline.online_id = core::BuildOnlineIdOptions(config, reach);
     wiring.pipeline.batch.fit.min_nk = wiring.pipeline.online_id.min_delay_samples;
     wiring.pipeline.batch.fit.max_nk = wiring.pipeline.online_id.max_delay_samples;
+    wiring.pipeline.batch.fit.closed_loop = reach.closed_loop;
     wiring.nominal_setpoint = reach.nominal_setpoint;
     for (const core::ExperimentConfig& experiment : config.experiments) {
       if (experiment.reach != reach.name) continue;

@@ -239,7 +239,7 @@ TEST(ConfigLoaderTest, RoundTripIsExact) {
   e.reach = "pool2";
   e.mode = core::ExperimentMode::kExplicit;
   e.amplitude = 0.05;
-  e.clock_period_s = 340.0;
+  e.clock_period_s = 360.0;  // a whole number of the demo's 60 s samples
   e.order = 5;
   e.periods = 3;
   e.seed = 2147483647;
@@ -262,7 +262,7 @@ TEST(ConfigLoaderTest, Asce2MapsOntoThePoller) {
   ASSERT_EQ(c.plcs.size(), 1u);
   const drivers::PollerConfig poller = BuildPollerConfig(c, c.plcs[0]);
   EXPECT_EQ(poller.plc_name, "asce2");
-  EXPECT_DOUBLE_EQ(poller.period_s, 0.2);
+  EXPECT_DOUBLE_EQ(poller.period_s, 0.1);
   ASSERT_EQ(poller.channels.size(), 6u);
   struct Expected {
     const char* name;
@@ -289,8 +289,8 @@ TEST(ConfigLoaderTest, Asce2MapsOntoThePoller) {
   EXPECT_TRUE(gate.writable);
   EXPECT_DOUBLE_EQ(gate.limits.min_value, 0.05);
   EXPECT_DOUBLE_EQ(gate.limits.max_value, 2.0);
-  // 0.005 m per plant second at 50 plant seconds per wall second.
-  EXPECT_DOUBLE_EQ(gate.limits.max_rate_per_s, 0.25);
+  // 0.005 m per plant second at 600 plant seconds per wall second.
+  EXPECT_DOUBLE_EQ(gate.limits.max_rate_per_s, 3.0);
   EXPECT_TRUE(poller.channels[0].writable);
   EXPECT_TRUE(std::isinf(poller.channels[0].limits.max_rate_per_s));
   drivers::ValidatePollerConfig(poller, c.plcs[0].response_timeout_s);
@@ -300,16 +300,16 @@ TEST(ConfigLoaderTest, Asce2MapsOntoThePoller) {
   const auto& tcp = std::get<drivers::ModbusTcpConfig>(link);
   EXPECT_EQ(tcp.host, "127.0.0.1");
   EXPECT_EQ(tcp.port, 1502);
-  EXPECT_DOUBLE_EQ(tcp.response_timeout_s, 0.1);
+  EXPECT_DOUBLE_EQ(tcp.response_timeout_s, 0.05);
   drivers::ValidateModbusConfig(tcp);
 
-  // The demo's experiment: Ts = 0.2 s x 50 = 10 s; clock round(682 / 20) = 34 samples; order 4
-  // (15 x 340 s = 5100 s >= 5 x 682 s); 60 samples of settling.
+  // The demo's experiment: Ts = 0.1 s x 600 = 60 s; clock round(682 / 120) = 6 samples; order 6
+  // (63 x 360 s = 22680 s >= 20 x 682 s, order 5's 11160 s is not); 10 samples of settling.
   const core::ExperimentPlan plan = core::BuildExperimentPlan(c, c.experiments[0], 0.9);
-  EXPECT_EQ(plan.prbs.clock_period_samples, 34);
-  EXPECT_EQ(plan.prbs.order, 4);
-  EXPECT_EQ(plan.excite_samples, 510);
-  EXPECT_EQ(plan.settle_samples, 60);
+  EXPECT_EQ(plan.prbs.clock_period_samples, 6);
+  EXPECT_EQ(plan.prbs.order, 6);
+  EXPECT_EQ(plan.excite_samples, 378);
+  EXPECT_EQ(plan.settle_samples, 10);
   EXPECT_DOUBLE_EQ(plan.level_min_m, 1.9);
   EXPECT_DOUBLE_EQ(plan.level_max_m, 2.3);
 }
