@@ -16,6 +16,8 @@ namespace {
 
 constexpr const char* kFormat = "canalid-state-v1";
 constexpr const char* kTempSuffix = ".tmp";
+constexpr const char* kCountersFormat = "canalid-command-counters-v1";
+constexpr const char* kCountersFile = "command-counters.json";
 
 bool ValidName(const std::string& name) {
   if (name.empty() || name.size() > 64) return false;
@@ -78,17 +80,8 @@ std::filesystem::path StateStore::PathFor(const std::string& reach,
   return directory_ / (reach + "." + model_kind + ".json");
 }
 
-void StateStore::Save(const PersistedModel& model) {
-  const std::filesystem::path target = PathFor(model.reach, model.model_kind);
+void StateStore::AtomicWrite(const std::filesystem::path& target, const std::string& text) {
   const std::filesystem::path temp = directory_ / ("." + target.filename().string() + kTempSuffix);
-  nlohmann::json document = {{"format", kFormat},
-                             {"reach", model.reach},
-                             {"model_kind", model.model_kind},
-                             {"saved_utime_us", model.saved_utime_us},
-                             {"model", model.model},
-                             {"online", model.online}};
-  const std::string text = document.dump(2) + "\n";
-
   // 0600: the state is the service's own (UMask=0077 in the unit does the same).
   Fd fd(::open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600));
   if (fd.get() < 0) SystemFail("cannot create", temp);
@@ -103,6 +96,46 @@ void StateStore::Save(const PersistedModel& model) {
   if (::fsync(dir.get()) != 0) SystemFail("cannot fsync directory", directory_);
 }
 
+void StateStore::Save(const PersistedModel& model) {
+  const std::filesystem::path target = PathFor(model.reach, model.model_kind);
+  nlohmann::json document = {{"format", kFormat},
+                             {"reach", model.reach},
+                             {"model_kind", model.model_kind},
+                             {"saved_utime_us", model.saved_utime_us},
+                             {"model", model.model},
+                             {"online", model.online}};
+  AtomicWrite(target, document.dump(2) + "\n");
+}
+
+void StateStore::SaveCommandCounters(const std::map<std::string, int64_t, std::less<>>& counters) {
+  nlohmann::json document = {{"format", kCountersFormat}, {"counters", nlohmann::json::object()}};
+  for (const auto& [sender, counter] : counters) document["counters"][sender] = counter;
+  AtomicWrite(directory_ / kCountersFile, document.dump(2) + "\n");
+}
+
+std::map<std::string, int64_t, std::less<>> StateStore::LoadCommandCounters(
+    std::string* problem) const {
+  std::map<std::string, int64_t, std::less<>> counters;
+  const auto path = directory_ / kCountersFile;
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return counters;
+  std::stringstream text;
+  text << in.rdbuf();
+  try {
+    const auto document = nlohmann::json::parse(text.str());
+    if (!document.is_object() || document.value("format", "") != kCountersFormat) {
+      throw std::runtime_error(std::string("\"format\" is not \"") + kCountersFormat + "\"");
+    }
+    for (const auto& [sender, counter] : document.at("counters").items()) {
+      counters[sender] = counter.get<int64_t>();
+    }
+  } catch (const std::exception& e) {
+    if (problem != nullptr) *problem = path.string() + ": " + e.what() + "; ignored";
+    counters.clear();
+  }
+  return counters;
+}
+
 StateLoadReport StateStore::LoadAll() const {
   StateLoadReport report;
   std::error_code ec;
@@ -112,7 +145,7 @@ StateLoadReport StateStore::LoadAll() const {
     const auto name = entry.path().filename().string();
     if (name.ends_with(kTempSuffix)) {
       report.leftover_temp_files.push_back(entry.path());
-    } else if (name.ends_with(".json") && !name.starts_with(".")) {
+    } else if (name.ends_with(".json") && !name.starts_with(".") && name != kCountersFile) {
       files.push_back(entry.path());
     }
   }

@@ -1,6 +1,8 @@
 #pragma once
 #include <cstdint>
 #include <filesystem>
+#include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -44,9 +46,17 @@ class StateStore final {
   ///   system error when a write, fsync or rename fails (the previous file is then unchanged).
   void Save(const PersistedModel& model);
 
-  /// Reads every `*.json` state file of the directory (a missing directory is an empty state).
-  /// Never throws for a bad file: it is reported in problems and skipped.
+  /// Reads every `<reach>.<model_kind>.json` state file of the directory (a missing directory is an
+  /// empty state). Never throws for a bad file: it is reported in problems and skipped.
   StateLoadReport LoadAll() const;
+
+  /// Last accepted command counter per sender (core::CommandAuthenticator::last_counters), saved
+  /// atomically to `command-counters.json` so a restart does not reopen a replay window.
+  /// @throws std::runtime_error as Save.
+  void SaveCommandCounters(const std::map<std::string, int64_t, std::less<>>& counters);
+  /// The saved counters; empty when there is no file. A corrupt file is reported in `problem`
+  /// ("PATH: reason") and gives no counters (the timestamp window still bounds replays).
+  std::map<std::string, int64_t, std::less<>> LoadCommandCounters(std::string* problem) const;
 
   std::filesystem::path PathFor(const std::string& reach, const std::string& model_kind) const;
   const std::filesystem::path& directory() const { return directory_; }
@@ -56,6 +66,8 @@ class StateStore final {
   void set_crash_before_rename_for_test(bool crash) { crash_before_rename_ = crash; }
 
  private:
+  void AtomicWrite(const std::filesystem::path& target, const std::string& text);
+
   std::filesystem::path directory_;
   bool crash_before_rename_ = false;
 };

@@ -135,3 +135,32 @@ TEST_F(StateStoreTest, BadNamesAndUnwritableDirectory) {
 
 }  // namespace
 }  // namespace canalid::daemon
+
+namespace canalid::daemon {
+namespace {
+
+TEST(StateStoreCounters, RoundTripAndCorruption) {
+  const auto dir = testing::TestDirectory("state_store_counters");
+  StateStore store(dir);
+  std::string problem;
+  EXPECT_TRUE(store.LoadCommandCounters(&problem).empty());
+  EXPECT_TRUE(problem.empty());
+  // Counters near 2^63 survive JSON (nlohmann keeps int64 exact).
+  store.SaveCommandCounters({{"ops1", 41}, {"operator@scada", 1763700000000000123}});
+  const auto loaded = store.LoadCommandCounters(&problem);
+  EXPECT_TRUE(problem.empty());
+  ASSERT_EQ(loaded.size(), 2u);
+  EXPECT_EQ(loaded.at("ops1"), 41);
+  EXPECT_EQ(loaded.at("operator@scada"), 1763700000000000123);
+  // Not mistaken for a model file.
+  EXPECT_TRUE(store.LoadAll().problems.empty());
+
+  const auto path = dir / "command-counters.json";
+  const std::string full = testing::ReadFile(path);
+  testing::WriteFile(path, full.substr(0, full.size() / 2));
+  EXPECT_TRUE(store.LoadCommandCounters(&problem).empty());
+  EXPECT_NE(problem.find(path.string()), std::string::npos) << problem;
+}
+
+}  // namespace
+}  // namespace canalid::daemon
