@@ -15,7 +15,8 @@ namespace {
 
 class KeyFileTest : public ::testing::Test {
  protected:
-  std::filesystem::path dir_ = testing::TestDirectory("key_file");
+  std::filesystem::path dir_ = testing::TestDirectory(
+      std::string("key_file.") + ::testing::UnitTest::GetInstance()->current_test_info()->name());
   std::filesystem::path Write(const std::string& text, mode_t mode = 0600) {
     const auto path = dir_ / ("key" + std::to_string(next_++));
     testing::WriteFile(path, text);

@@ -25,7 +25,9 @@ PersistedModel Model(const std::string& reach, double area_m2, int64_t utime_us)
 
 class StateStoreTest : public ::testing::Test {
  protected:
-  std::filesystem::path dir_ = testing::TestDirectory("state_store");
+  std::filesystem::path dir_ =
+      testing::TestDirectory(std::string("state_store.") +
+                             ::testing::UnitTest::GetInstance()->current_test_info()->name());
   StateStore store_{dir_};
 };
 
@@ -140,7 +142,9 @@ namespace canalid::daemon {
 namespace {
 
 TEST(StateStoreCounters, RoundTripAndCorruption) {
-  const auto dir = testing::TestDirectory("state_store_counters");
+  const auto dir =
+      testing::TestDirectory(std::string("state_store_counters.") +
+                             ::testing::UnitTest::GetInstance()->current_test_info()->name());
   StateStore store(dir);
   std::string problem;
   EXPECT_TRUE(store.LoadCommandCounters(&problem).empty());

@@ -168,7 +168,9 @@ TEST(CommandReceiver, OverMemqLcm) {
 // The canalid-command program writes a log (file://...?mode=w); LcmBus reads it back losslessly.
 class CommandProgram : public ::testing::Test {
  protected:
-  std::filesystem::path dir_ = testing::TestDirectory("canalid_command");
+  std::filesystem::path dir_ =
+      testing::TestDirectory(std::string("canalid_command.") +
+                             ::testing::UnitTest::GetInstance()->current_test_info()->name());
   std::string program_ = std::string(CANALID_BINARY_DIR) + "/daemon/command/canalid-command";
 
   std::filesystem::path KeyFile(const std::string& name, const std::string& text, mode_t mode) {
