@@ -1,0 +1,71 @@
+#include "drivers/lcm/command_receiver.h"
+
+#include <regex>
+
+#include "canalid/command_t.hpp"
+
+namespace canalid::drivers {
+
+CommandReceiver::CommandReceiver(Bus& bus, const std::string& channel,
+                                 core::CommandAuthenticator& authenticator, Clock now_us,
+                                 Callback on_accepted)
+    : bus_(bus),
+      authenticator_(authenticator),
+      now_us_(std::move(now_us)),
+      on_accepted_(std::move(on_accepted)) {
+  // The bus matches a regex; escape the channel so names with '.' match only themselves.
+  static const std::regex kSpecial(R"([.^$|()\[\]{}*+?\\])");
+  const std::string pattern = std::regex_replace(channel, kSpecial, R"(\$&)");
+  subscription_ = bus_.Subscribe(pattern, [this](const std::string&, std::span<const uint8_t> d) {
+    Receive(d);
+    return true;  // rejected commands are counted here, not as bus handler failures
+  });
+}
+
+CommandReceiver::~CommandReceiver() { bus_.Unsubscribe(subscription_); }
+
+int64_t CommandReceiver::rejected() const {
+  int64_t total = 0;
+  for (std::size_t i = 0; i < counts_.size(); ++i) {
+    if (i != static_cast<std::size_t>(core::CommandVerdict::kAccepted)) total += counts_[i];
+  }
+  return total;
+}
+
+void CommandReceiver::Receive(std::span<const uint8_t> data) noexcept {
+  auto verdict = core::CommandVerdict::kMalformed;
+  try {
+    canalid::command_t message;
+    const int size = static_cast<int>(data.size());
+    if (message.decode(data.data(), 0, size) == size && message.hmac_size >= 0 &&
+        static_cast<std::size_t>(message.hmac_size) == message.hmac.size()) {
+      core::CommandFields fields;
+      fields.utime_us = message.utime;
+      fields.counter = message.counter;
+      fields.sender = message.sender;
+      fields.kind = message.kind;
+      fields.reach = message.reach;
+      fields.argument = message.argument;
+      fields.mac = std::span<const uint8_t>(message.hmac.data(), message.hmac.size());
+      verdict = authenticator_.Verify(fields, now_us_());
+      if (verdict == core::CommandVerdict::kAccepted) {
+        ++counts_[static_cast<std::size_t>(verdict)];
+        AcceptedCommand command{static_cast<core::CommandKind>(message.kind),
+                                message.utime,
+                                message.counter,
+                                message.sender,
+                                message.reach,
+                                message.argument};
+        on_accepted_(command);
+        return;
+      }
+    }
+  } catch (...) {
+    // A throwing clock or callback (an accepted command is already counted as accepted).
+    ++callback_failures_;
+    return;
+  }
+  ++counts_[static_cast<std::size_t>(verdict)];
+}
+
+}  // namespace canalid::drivers

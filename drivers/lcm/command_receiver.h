@@ -1,0 +1,59 @@
+#pragma once
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <string>
+
+#include "core/command_auth.h"
+#include "drivers/lcm/bus.h"
+
+namespace canalid::drivers {
+
+/// A command that passed verification, handed to the daemon.
+struct AcceptedCommand {
+  core::CommandKind kind = core::CommandKind::kStartExperiment;
+  int64_t utime_us = 0;
+  int64_t counter = 0;
+  std::string sender;
+  std::string reach;
+  std::string argument;
+};
+
+/// Receives canalid.command_t on one channel of a Bus, verifies each message with a
+/// core::CommandAuthenticator against the daemon clock `now_us()`, counts every verdict (bytes
+/// that do not decode as command_t count as malformed) and calls `on_accepted` for accepted ones.
+/// Never throws from the bus handler: an exception from `on_accepted` or the clock is caught and
+/// counted in callback_failures(). Runs on the Bus's thread; not thread-safe.
+class CommandReceiver final {
+ public:
+  using Clock = std::function<int64_t()>;
+  using Callback = std::function<void(const AcceptedCommand&)>;
+
+  /// Subscribes to `channel` (an exact name, not a pattern). `authenticator` must outlive this.
+  /// @throws std::runtime_error when the subscription cannot be made.
+  CommandReceiver(Bus& bus, const std::string& channel, core::CommandAuthenticator& authenticator,
+                  Clock now_us, Callback on_accepted);
+  ~CommandReceiver();
+  CommandReceiver(const CommandReceiver&) = delete;
+  CommandReceiver& operator=(const CommandReceiver&) = delete;
+
+  int64_t count(core::CommandVerdict verdict) const {
+    return counts_[static_cast<std::size_t>(verdict)];
+  }
+  /// All messages that were not accepted.
+  int64_t rejected() const;
+  int64_t callback_failures() const { return callback_failures_; }
+
+ private:
+  void Receive(std::span<const uint8_t> data) noexcept;
+
+  Bus& bus_;
+  core::CommandAuthenticator& authenticator_;
+  Clock now_us_;
+  Callback on_accepted_;
+  int subscription_ = 0;
+  std::array<int64_t, core::kNumCommandVerdicts> counts_{};
+  int64_t callback_failures_ = 0;
+};
+
+}  // namespace canalid::drivers

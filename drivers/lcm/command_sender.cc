@@ -1,0 +1,22 @@
+#include "drivers/lcm/command_sender.h"
+
+#include <string>
+
+namespace canalid::drivers {
+
+canalid::command_t BuildSignedCommand(std::span<const uint8_t> key,
+                                      const core::CommandFields& fields) {
+  canalid::command_t message;
+  message.utime = fields.utime_us;
+  message.counter = fields.counter;
+  message.sender = std::string(fields.sender);
+  message.kind = fields.kind;
+  message.reach = std::string(fields.reach);
+  message.argument = std::string(fields.argument);
+  const core::Sha256Digest mac = core::SignCommand(key, fields);
+  message.hmac.assign(mac.begin(), mac.end());
+  message.hmac_size = static_cast<int32_t>(message.hmac.size());
+  return message;
+}
+
+}  // namespace canalid::drivers

@@ -1,0 +1,15 @@
+#pragma once
+#include <cstdint>
+#include <span>
+
+#include "canalid/command_t.hpp"
+#include "core/command_auth.h"
+
+namespace canalid::drivers {
+
+/// A canalid.command_t carrying `fields` (fields.mac is ignored) and their HMAC-SHA256 under
+/// `key` (core::SignCommand), ready to publish on the command channel.
+canalid::command_t BuildSignedCommand(std::span<const uint8_t> key,
+                                      const core::CommandFields& fields);
+
+}  // namespace canalid::drivers

@@ -1,0 +1,170 @@
+// StateStore: round trip, atomic replacement, a crash between write and rename, and corrupt,
+// truncated or inconsistent files, which are reported with their path and ignored.
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+
+#include "daemon/canalidd/state_store.h"
+#include "support/run_program.h"
+
+namespace canalid::daemon {
+namespace {
+
+PersistedModel Model(const std::string& reach, double area_m2, int64_t utime_us) {
+  PersistedModel m;
+  m.reach = reach;
+  m.model_kind = "id";
+  m.saved_utime_us = utime_us;
+  m.model = {{"model", "id"}, {"area_m2", area_m2}, {"delay_s", 240.0}};
+  m.online = {{"samples", 1200}, {"b", 0.05}, {"delay_samples", 4}};
+  return m;
+}
+
+class StateStoreTest : public ::testing::Test {
+ protected:
+  std::filesystem::path dir_ =
+      testing::TestDirectory(std::string("state_store.") +
+                             ::testing::UnitTest::GetInstance()->current_test_info()->name());
+  StateStore store_{dir_};
+};
+
+TEST_F(StateStoreTest, RoundTripOfSeveralReaches) {
+  store_.Save(Model("pool2", 34113.0, 100));
+  store_.Save(Model("pool1", 6000.0, 200));
+  const auto report = store_.LoadAll();
+  EXPECT_TRUE(report.problems.empty());
+  ASSERT_EQ(report.models.size(), 2u);
+  EXPECT_EQ(report.models[0].reach, "pool1");  // sorted by file name
+  EXPECT_EQ(report.models[1].reach, "pool2");
+  EXPECT_EQ(report.models[1].model.at("area_m2").get<double>(), 34113.0);
+  EXPECT_EQ(report.models[1].online.at("samples").get<int>(), 1200);
+  EXPECT_EQ(report.models[1].saved_utime_us, 100);
+  EXPECT_EQ(store_.PathFor("pool2", "id"), dir_ / "pool2.id.json");
+  // Private to the service user.
+  struct stat st {};
+  ASSERT_EQ(::stat((dir_ / "pool2.id.json").c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 077, 0u);
+}
+
+TEST_F(StateStoreTest, SaveReplacesAndLeavesNoTempFile) {
+  store_.Save(Model("pool2", 30000.0, 1));
+  store_.Save(Model("pool2", 34113.0, 2));
+  const auto report = store_.LoadAll();
+  ASSERT_EQ(report.models.size(), 1u);
+  EXPECT_EQ(report.models[0].model.at("area_m2").get<double>(), 34113.0);
+  EXPECT_TRUE(report.leftover_temp_files.empty());
+  int files = 0;
+  for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(dir_)) ++files;
+  EXPECT_EQ(files, 1);
+}
+
+TEST_F(StateStoreTest, CrashBetweenWriteAndRenameKeepsTheOldState) {
+  store_.Save(Model("pool2", 30000.0, 1));
+  store_.set_crash_before_rename_for_test(true);
+  store_.Save(Model("pool2", 99999.0, 2));
+  // A restarted daemon: a new store over the same directory.
+  const auto report = StateStore(dir_).LoadAll();
+  EXPECT_TRUE(report.problems.empty());
+  ASSERT_EQ(report.models.size(), 1u);
+  EXPECT_EQ(report.models[0].model.at("area_m2").get<double>(), 30000.0);
+  ASSERT_EQ(report.leftover_temp_files.size(), 1u);
+  EXPECT_EQ(report.leftover_temp_files[0], dir_ / ".pool2.id.json.tmp");
+  // The next good save replaces both.
+  store_.set_crash_before_rename_for_test(false);
+  store_.Save(Model("pool2", 34113.0, 3));
+  const auto after = store_.LoadAll();
+  ASSERT_EQ(after.models.size(), 1u);
+  EXPECT_EQ(after.models[0].model.at("area_m2").get<double>(), 34113.0);
+  EXPECT_TRUE(after.leftover_temp_files.empty());
+}
+
+TEST_F(StateStoreTest, TruncatedFileIsReportedWithItsPathAndIgnored) {
+  store_.Save(Model("pool1", 6000.0, 1));
+  store_.Save(Model("pool2", 34113.0, 1));
+  const auto path = dir_ / "pool2.id.json";
+  const std::string full = testing::ReadFile(path);
+  // Every cut short of the whole file (the trailing newline aside) must be refused.
+  for (std::size_t cut : {std::size_t{0}, std::size_t{1}, full.size() / 2, full.size() - 2}) {
+    testing::WriteFile(path, full.substr(0, cut));
+    const auto report = store_.LoadAll();
+    ASSERT_EQ(report.models.size(), 1u) << "cut at " << cut;
+    EXPECT_EQ(report.models[0].reach, "pool1");
+    ASSERT_EQ(report.problems.size(), 1u);
+    EXPECT_NE(report.problems[0].find(path.string()), std::string::npos) << report.problems[0];
+    EXPECT_NE(report.problems[0].find("ignored"), std::string::npos);
+  }
+}
+
+TEST_F(StateStoreTest, ForeignAndInconsistentFilesAreReported) {
+  testing::WriteFile(dir_ / "notes.json", R"({"hello": 1})");
+  testing::WriteFile(dir_ / "pool3.id.json",
+                     R"({"format": "canalid-state-v1", "reach": "pool9", "model_kind": "id",
+                         "saved_utime_us": 1, "model": {}, "online": null})");
+  testing::WriteFile(dir_ / "pool4.id.json",
+                     R"({"format": "canalid-state-v1", "reach": "pool4", "model_kind": "id",
+                         "saved_utime_us": "yesterday", "model": {}, "online": null})");
+  testing::WriteFile(dir_ / "README", "not json, not a state file");
+  const auto report = store_.LoadAll();
+  EXPECT_TRUE(report.models.empty());
+  ASSERT_EQ(report.problems.size(), 3u);
+  EXPECT_NE(report.problems[0].find("notes.json"), std::string::npos);
+  EXPECT_NE(report.problems[1].find("pool3.id.json"), std::string::npos);
+  EXPECT_NE(report.problems[1].find("do not match"), std::string::npos);
+  EXPECT_NE(report.problems[2].find("pool4.id.json"), std::string::npos);
+}
+
+TEST_F(StateStoreTest, MissingDirectoryIsAnEmptyState) {
+  const auto report = StateStore(dir_ / "absent").LoadAll();
+  EXPECT_TRUE(report.models.empty());
+  EXPECT_TRUE(report.problems.empty());
+}
+
+TEST_F(StateStoreTest, BadNamesAndUnwritableDirectory) {
+  EXPECT_THROW(store_.Save(Model("../etc", 1.0, 1)), std::invalid_argument);
+  EXPECT_THROW(store_.Save(Model("", 1.0, 1)), std::invalid_argument);
+  EXPECT_THROW(StateStore(""), std::invalid_argument);
+  StateStore missing(dir_ / "absent");
+  try {
+    missing.Save(Model("pool2", 1.0, 1));
+    ADD_FAILURE() << "saved into a missing directory";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("absent"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace canalid::daemon
+
+namespace canalid::daemon {
+namespace {
+
+TEST(StateStoreCounters, RoundTripAndCorruption) {
+  const auto dir =
+      testing::TestDirectory(std::string("state_store_counters.") +
+                             ::testing::UnitTest::GetInstance()->current_test_info()->name());
+  StateStore store(dir);
+  std::string problem;
+  EXPECT_TRUE(store.LoadCommandCounters(&problem).empty());
+  EXPECT_TRUE(problem.empty());
+  // Counters near 2^63 survive JSON (nlohmann keeps int64 exact).
+  store.SaveCommandCounters({{"ops1", 41}, {"operator@scada", 1763700000000000123}});
+  const auto loaded = store.LoadCommandCounters(&problem);
+  EXPECT_TRUE(problem.empty());
+  ASSERT_EQ(loaded.size(), 2u);
+  EXPECT_EQ(loaded.at("ops1"), 41);
+  EXPECT_EQ(loaded.at("operator@scada"), 1763700000000000123);
+  // Not mistaken for a model file.
+  EXPECT_TRUE(store.LoadAll().problems.empty());
+
+  const auto path = dir / "command-counters.json";
+  const std::string full = testing::ReadFile(path);
+  testing::WriteFile(path, full.substr(0, full.size() / 2));
+  EXPECT_TRUE(store.LoadCommandCounters(&problem).empty());
+  EXPECT_NE(problem.find(path.string()), std::string::npos) << problem;
+}
+
+}  // namespace
+}  // namespace canalid::daemon
