@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/channel_scaling.h"
+#include "core/command_auth.h"
 #include "core/id_model.h"
 #include "core/rls_options.h"
 
@@ -27,8 +28,6 @@ enum class RegisterTable { kInput, kHolding };
 enum class OnlineModel { kId, kArx };
 enum class ExperimentMode { kDesign, kExplicit };
 enum class ExperimentStart { kManual, kOnStart };
-/// Operator commands (drivers/lcm/types/command_t.lcm KIND_*).
-enum class CommandKind { kStartExperiment, kAbortExperiment, kResetEstimator, kPublishConfig };
 
 /// The PLC's watchdog register, written with a changing value every period_s (wall seconds).
 struct HeartbeatConfig {

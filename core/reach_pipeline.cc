@@ -77,6 +77,10 @@ ReachActions ReachPipeline::OnWriteFailed() {
   return Apply(event);
 }
 
+void ReachPipeline::ResetOnlineEstimator() {
+  if (online_id_) online_id_.emplace(options_.online_id);
+}
+
 bool ReachPipeline::SetExperimentPlan(const ExperimentPlan& plan) {
   const ExperimentPhase phase = experiment_state_.phase;
   if (phase == ExperimentPhase::kSettling || phase == ExperimentPhase::kExciting ||

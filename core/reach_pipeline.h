@@ -57,6 +57,9 @@ class ReachPipeline final {
   /// @throws std::invalid_argument if the plan is invalid.
   bool SetExperimentPlan(const ExperimentPlan& plan);
 
+  /// Restarts the online estimator from its initial state (operator command, detected change).
+  void ResetOnlineEstimator();
+
   /// Batch identification of the completed record (ID model pipeline); then the experiment
   /// ends done (a model) or aborted (kIdentificationFailed).  @pre a record is complete.
   std::optional<IdPipelineResult> IdentifyRecord(ReachActions* actions);

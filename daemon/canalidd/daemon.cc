@@ -1,11 +1,13 @@
 #include "daemon/canalidd/daemon.h"
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <csignal>
 #include <sstream>
 
+#include "daemon/canalidd/key_file.h"
 #include "daemon/canalidd/log.h"
 #include "daemon/canalidd/systemd_notify.h"
 #include "drivers/json/model_json.h"
@@ -99,6 +101,8 @@ std::unique_ptr<drivers::PlcPort> Daemon::MakeModbusPort(const PlcWiring& wiring
 DaemonExit Daemon::Run() {
   start_steady_s_ = SteadyNowS();
   publisher_.PublishConfig(plan_.config_path, plan_.config_text, WallNowS());
+  LoadState();
+  StartCommands();
   StartSignals();
   StartBusWatch();
   StartHealthTimer();
@@ -318,11 +322,115 @@ void Daemon::Handle(Reach& reach, const core::ReachActions& actions, double time
       nlohmann::json json = drivers::ToJson(*result);
       json["reach"] = w.name;
       LogInfo("reach " + w.name + ": identified " + json.dump());
+      SaveModel(reach, *result);
     } else {
       LogWarning("reach " + w.name + ": the experiment record could not be identified");
     }
     Handle(reach, after, time_s);
   }
+}
+
+void Daemon::LoadState() {
+  if (plan_.state_directory.empty()) return;
+  store_.emplace(plan_.state_directory);
+  const StateLoadReport report = store_->LoadAll();
+  for (const std::string& problem : report.problems) LogWarning("state: " + problem);
+  for (const auto& temp : report.leftover_temp_files) {
+    LogWarning("state: " + temp.string() + ": left by an interrupted write; ignored");
+  }
+  for (const PersistedModel& model : report.models) {
+    const bool known = std::any_of(reaches_.begin(), reaches_.end(),
+                                   [&](const auto& r) { return r->wiring.name == model.reach; });
+    if (!known) continue;
+    publisher_.PublishModelJson(model.reach, model.model, WallNowS());
+    LogInfo("reach " + model.reach + ": resumed the persisted " + model.model_kind + " model " +
+            model.model.dump());
+  }
+}
+
+void Daemon::SaveModel(const Reach& reach, const core::IdPipelineResult& result) {
+  if (!store_) return;
+  PersistedModel model;
+  model.reach = reach.wiring.name;
+  model.model_kind = "id";
+  model.saved_utime_us = ToUtime(WallNowS());
+  model.model = drivers::ToJson(result);
+  if (const core::OnlineIdBank* bank = reach.pipeline.online_id()) {
+    const core::IdSnapshot s = bank->Snapshot();
+    model.online = {{"delay_s", s.delay_s},
+                    {"area_m2", s.area_m2},
+                    {"b", s.b},
+                    {"area_std_m2", s.area_std_m2},
+                    {"samples", bank->health().samples}};
+  }
+  try {
+    store_->Save(model);
+  } catch (const std::exception& e) {
+    LogError(std::string("state: ") + e.what());
+  }
+}
+
+void Daemon::StartCommands() {
+  if (!plan_.commands_enabled) return;
+  core::CommandAuthOptions options;
+  options.enabled = true;
+  options.max_clock_skew_s = plan_.command_max_clock_skew_s;
+  authenticator_ =
+      std::make_unique<core::CommandAuthenticator>(options, ReadKeyFile(plan_.command_key_file));
+  if (store_) {
+    std::string problem;
+    for (const auto& [sender, counter] : store_->LoadCommandCounters(&problem)) {
+      authenticator_->RestoreCounter(sender, counter);
+    }
+    if (!problem.empty()) LogWarning("state: " + problem);
+  }
+  command_receiver_ = std::make_unique<drivers::CommandReceiver>(
+      *bus_, plan_.channel_prefix + "COMMAND", *authenticator_, [] { return ToUtime(WallNowS()); },
+      [this](const drivers::AcceptedCommand& command) { OnCommand(command); });
+  LogInfo("commands enabled on " + plan_.channel_prefix + "COMMAND");
+}
+
+void Daemon::OnCommand(const drivers::AcceptedCommand& command) {
+  if (std::find(plan_.command_kinds.begin(), plan_.command_kinds.end(), command.kind) ==
+      plan_.command_kinds.end()) {
+    LogWarning("command from " + command.sender +
+               " refused: this kind is not accepted by the configuration");
+    return;
+  }
+  if (store_) {
+    try {
+      store_->SaveCommandCounters(authenticator_->last_counters());
+    } catch (const std::exception& e) {
+      LogError(std::string("state: ") + e.what());
+    }
+  }
+  if (command.kind == core::CommandKind::kPublishConfig) {
+    publisher_.PublishConfig(plan_.config_path, plan_.config_text, WallNowS());
+    return;
+  }
+  for (auto& reach : reaches_) {
+    if (reach->wiring.name != command.reach) continue;
+    LogInfo("command from " + command.sender + " for reach " + command.reach);
+    switch (command.kind) {
+      case core::CommandKind::kStartExperiment:
+        if (!reach->pipeline.experiment_plan()) {
+          LogWarning("reach " + command.reach + ": no experiment to start");
+        } else if (!stopping_) {
+          Handle(*reach, reach->pipeline.StartExperiment(), reach->last_time_s);
+        }
+        break;
+      case core::CommandKind::kAbortExperiment:
+        Handle(*reach, reach->pipeline.StopExperiment(), reach->last_time_s);
+        break;
+      case core::CommandKind::kResetEstimator:
+        reach->pipeline.ResetOnlineEstimator();
+        break;
+      case core::CommandKind::kPublishConfig:
+        break;
+    }
+    return;
+  }
+  LogWarning("command from " + command.sender + " names an unknown reach '" + command.reach + "'");
 }
 
 void Daemon::PublishHealth() {

@@ -8,10 +8,13 @@
 #include <string>
 #include <vector>
 
+#include "core/command_auth.h"
 #include "core/reach_pipeline.h"
 #include "daemon/canalidd/daemon_plan.h"
 #include "daemon/canalidd/lcm_publisher.h"
+#include "daemon/canalidd/state_store.h"
 #include "drivers/lcm/bus.h"
+#include "drivers/lcm/command_receiver.h"
 #include "drivers/modbus/plc_poller.h"
 
 namespace canalid::daemon {
@@ -66,6 +69,10 @@ class Daemon final {
   void StartBusWatch();
   void StartSignals();
   void PublishHealth();
+  void LoadState();
+  void SaveModel(const Reach& reach, const core::IdPipelineResult& result);
+  void StartCommands();
+  void OnCommand(const drivers::AcceptedCommand& command);
   void BeginStop(DaemonExit exit);
   void FinishStopWhenSafe();
   std::string Status() const;
@@ -83,6 +90,9 @@ class Daemon final {
   std::vector<std::unique_ptr<Plc>> plcs_;
   std::vector<std::unique_ptr<Reach>> reaches_;
   std::optional<DaemonPlan> reloaded_plan_;
+  std::optional<StateStore> store_;
+  std::unique_ptr<core::CommandAuthenticator> authenticator_;
+  std::unique_ptr<drivers::CommandReceiver> command_receiver_;
   DaemonExit exit_ = DaemonExit::kStopped;
   bool stopping_ = false;
   bool ready_ = false;

@@ -5,6 +5,7 @@
 #include <variant>
 #include <vector>
 
+#include "core/command_auth.h"
 #include "core/reach_pipeline.h"
 #include "drivers/modbus/modbus_port.h"
 #include "drivers/modbus/plc_poller.h"
@@ -47,6 +48,7 @@ struct DaemonPlan {
   bool commands_enabled = false;
   std::string command_key_file;
   double command_max_clock_skew_s = 5.0;
+  std::vector<core::CommandKind> command_kinds;  ///< the kinds accepted (others are refused)
 };
 
 }  // namespace canalid::daemon

@@ -116,6 +116,33 @@ void LcmPublisher::PublishBatchId(const std::string& reach, const core::IdPipeli
   Send(prefix_ + "MODEL_" + reach, model_);
 }
 
+void LcmPublisher::PublishModelJson(const std::string& reach, const nlohmann::json& model,
+                                    double time_s) {
+  model_.utime = ToUtime(time_s);
+  model_.reach = reach;
+  model_.model_kind = model.value("model", std::string("unknown"));
+  model_.estimator = "persisted";
+  model_.samples_used = 0;
+  model_.param_names.clear();
+  model_.param_values.clear();
+  model_.param_std_devs.clear();
+  for (const char* key : {"delay_s", "area_m2", "b", "p21_s_per_m2", "offset_m", "gain",
+                          "time_constant_s", "alpha"}) {
+    if (model.contains(key) && model[key].is_number()) {
+      model_.param_names.emplace_back(key);
+      model_.param_values.push_back(model[key].get<double>());
+      model_.param_std_devs.push_back(kNan);
+    }
+  }
+  model_.num_params = static_cast<int32_t>(model_.param_names.size());
+  model_.trace_p = kNan;
+  model_.condition_number = kNan;
+  model_.excitation = kNan;
+  model_.prediction_error_rms = kNan;
+  model_.flags = 0;
+  Send(prefix_ + "MODEL_" + reach, model_);
+}
+
 void LcmPublisher::PublishExperiment(const std::string& reach, const core::ExperimentState& state,
                                      const core::ExperimentPlan& plan, const std::string& actuator,
                                      double time_s) {

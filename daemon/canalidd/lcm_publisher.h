@@ -6,6 +6,7 @@
 #include <canalid/sample_t.hpp>
 
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -38,6 +39,8 @@ class LcmPublisher final {
                        const char* estimator);
   void PublishBatchId(const std::string& reach, const core::IdPipelineResult& result, double time_s,
                       std::int64_t samples);
+  /// A model from the state directory (estimator "persisted"): the numeric keys of its JSON.
+  void PublishModelJson(const std::string& reach, const nlohmann::json& model, double time_s);
   void PublishExperiment(const std::string& reach, const core::ExperimentState& state,
                          const core::ExperimentPlan& plan, const std::string& actuator,
                          double time_s);

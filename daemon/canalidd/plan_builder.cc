@@ -33,6 +33,7 @@ DaemonPlan BuildDaemonPlan(const core::DaemonConfig& config, const std::string& 
   plan.commands_enabled = config.commands.enabled;
   plan.command_key_file = config.commands.key_file;
   plan.command_max_clock_skew_s = config.commands.max_clock_skew_s;
+  plan.command_kinds = config.commands.accepted;
   for (const core::PlcConfig& plc : config.plcs) {
     PlcWiring wiring;
     wiring.link = BuildModbusConfig(plc);
