@@ -70,6 +70,7 @@ void AddSimulateCommand(CLI::App& app, SimulateOptions& options, int& exit_code)
       "Input columns: the model's \"inputs\" (as identified; --u overrides): id q_in,q_out;\n"
       "arx its inputs (and its output, for the initial values, when present); foptd, soptd,\n"
       "frac-foptd, frac-ss u; lpv u and its schedule column (arx locals).\n"
+      "Process and fractional models start at steady state at the record's first input value.\n"
       "Output: OUT.csv with time_s and y; on stdout a JSON line with the rows written and, when\n"
       "the measured output column is in the input, the metrics. Exit 2 on bad input.");
   cmd->add_option("--model-json", options.model_json, "Model JSON written by canalid identify")

@@ -97,10 +97,17 @@ SimulatedOutput SimulateArxModel(const nlohmann::json& model, const std::string&
   return out;
 }
 
-template <class Record>
-Eigen::VectorXd Deviation(const drivers::CsvTable& table, const std::string& column,
-                          const Record& r) {
-  return RequireColumn(table, column).array() - r.input_offset;
+// The record starts with the plant at steady state at its first input value u[0]:
+//   y = output_offset + K (u[0] - input_offset) + G(s) (u - u[0]),
+// which is the identification's own convention when u[0] = input_offset (a round trip).
+struct Deviations {
+  Eigen::VectorXd du;
+  double start_offset = 0.0;  // u[0] - input_offset
+};
+Deviations FromFirstInput(const drivers::CsvTable& table, const std::string& column,
+                          double input_offset) {
+  const Eigen::VectorXd u = RequireColumn(table, column);
+  return {u.array() - u(0), u(0) - input_offset};
 }
 
 SimulatedOutput SimulateContinuous(const std::string& kind, const nlohmann::json& model,
@@ -111,18 +118,23 @@ SimulatedOutput SimulateContinuous(const std::string& kind, const nlohmann::json
   SimulatedOutput out;
   if (kind == "foptd") {
     const auto r = drivers::FoptdFromJson(model, source);
-    out.y = core::Simulate(r.model, Deviation(table, u, r), ts).array() + r.output_offset;
+    const Deviations d = FromFirstInput(table, u, r.input_offset);
+    out.y = core::Simulate(r.model, d.du, ts).array() +
+            (r.output_offset + r.model.gain * d.start_offset);
   } else if (kind == "soptd") {
     const auto r = drivers::SoptdFromJson(model, source);
-    out.y = core::Simulate(r.model, Deviation(table, u, r), ts).array() + r.output_offset;
+    const Deviations d = FromFirstInput(table, u, r.input_offset);
+    out.y = core::Simulate(r.model, d.du, ts).array() +
+            (r.output_offset + r.model.gain * d.start_offset);
   } else {
     const drivers::FractionalFoptdRecord r = drivers::FractionalFoptdFromJson(model, source);
-    const Eigen::VectorXd du = Deviation(table, u, r.params);
+    const Deviations d = FromFirstInput(table, u, r.params.input_offset);
+    const double level = r.params.output_offset + r.params.model.gain * d.start_offset;
     core::OustaloupFoptdSimulator sim(r.params.model, ts, r.band);
-    out.y.resize(du.size());
-    for (Eigen::Index k = 0; k < du.size(); ++k) {
-      out.y(k) = sim.output() + r.params.output_offset;
-      sim.Advance(du(k));
+    out.y.resize(d.du.size());
+    for (Eigen::Index k = 0; k < d.du.size(); ++k) {
+      out.y(k) = sim.output() + level;
+      sim.Advance(d.du(k));
     }
   }
   return out;
@@ -133,10 +145,11 @@ SimulatedOutput SimulateFracSs(const nlohmann::json& model, const std::string& s
   const drivers::CommensurateRecord r = drivers::CommensurateFromJson(model, source);
   RequireSampleTime(table, r.sample_time_s, source);
   const std::string u = InputNames(model, source, options, {"u"})[0];
+  const Deviations d = FromFirstInput(table, u, r.model.input_offset);
   SimulatedOutput out;
-  out.y = core::SimulateCommensurate(r.model.model, Deviation(table, u, r.model), r.memory_length)
-              .array() +
-          r.model.output_offset;
+  // Seed 1's companion form has unit static gain.
+  out.y = core::SimulateCommensurate(r.model.model, d.du, r.memory_length).array() +
+          (r.model.output_offset + d.start_offset);
   return out;
 }
 
