@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <nlohmann/json.hpp>
 #include <random>
 #include <sstream>
@@ -193,6 +194,20 @@ TEST_F(FractionalCli, CompareOverAFolderPrintsSeed2sTable) {
   }
   // The table and the JSON agree (the table prints 6 decimals).
   EXPECT_NEAR(json["norm_error"]["frac-foptd"]["mean"].get<double>(), means[2], 1e-6);
+}
+
+TEST_F(FractionalCli, CompareShowsProgressWhenStderrIsATerminal) {
+  // util-linux script(1) gives the program a pseudo-terminal; its output is what the terminal
+  // would show (the table goes to /dev/null).
+  if (std::system("command -v script >/dev/null 2>&1") != 0) GTEST_SKIP() << "no script(1)";
+  WriteExperiments(dir_ / "steps");
+  const std::string inner = CanalidProgram() + " identify --compare foptd --u gate --y level " +
+                            "--input '" + (dir_ / "steps").string() + "/*.csv' >/dev/null";
+  const ProgramRun run = RunProgram("script -qec \"" + inner + "\" /dev/null", dir_);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  for (int i = 1; i <= 8; ++i) {
+    EXPECT_NE(run.out.find("file " + std::to_string(i) + "/8: "), std::string::npos) << run.out;
+  }
 }
 
 TEST_F(FractionalCli, BadInputGetsOneClearMessageAndExitCode2) {
