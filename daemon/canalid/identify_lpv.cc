@@ -1,3 +1,4 @@
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -25,6 +26,19 @@ std::string Text(double v) {
 }
 
 std::vector<double> ParseEdges(std::string text, const std::string& option) {
+  // "1,,2" or a trailing comma is a typo, not two edges.
+  bool item_since_comma = false;
+  for (char c : text) {
+    if (c == ',') {
+      if (!item_since_comma) throw InputError(option + ": empty item in '" + text + "'");
+      item_since_comma = false;
+    } else if (!std::isspace(static_cast<unsigned char>(c))) {
+      item_since_comma = true;
+    }
+  }
+  if (!item_since_comma && text.find(',') != std::string::npos) {
+    throw InputError(option + ": empty item in '" + text + "'");
+  }
   for (char& c : text) {
     if (c == ',' || c == ';' || c == '\n' || c == '\t' || c == '\r') c = ' ';
   }

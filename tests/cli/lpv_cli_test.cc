@@ -134,6 +134,8 @@ TEST_F(LpvCli, BadInputGetsOneClearMessageAndExitCode2) {
       {schedule + "--bands 1.0,x,2.0", "--bands: 'x' is not a number"},
       {schedule + "--bands 1.0,1.4,1.2,2.0", "--bands: band edges must increase strictly"},
       {schedule + "--bands 1.0", "needs at least two band edges"},
+      {schedule + "--bands 1.0,,2.0", "--bands: empty item in '1.0,,2.0'"},
+      {schedule + "--bands 1.0,2.0,", "--bands: empty item"},
       {schedule + "--bands " + std::string(kBands) + ",2.5",
        "band [2, 2.5) of 'upstream' has 0 consecutive samples, needs at least 50"},
       {schedule + "--bands " + std::string(kBands) + " --min-band-samples 700",
