@@ -85,7 +85,8 @@ void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code)
   id->add_option("--qout", options.qout, "Outflow column, m3/s")->capture_default_str();
   id->add_option("--level", options.level, "Downstream level column, m")->capture_default_str();
   id->add_option("--max-delay-s", options.max_delay_s,
-                 "Longest delay tried, s (id: a third of the record; frac-ss: min(record/10, "
+                 "Longest delay tried, s (id: a third of the record; frac-foptd: half; frac-ss: "
+                 "min(record/10, "
                  "100 samples); lpv arx/frac-ss locals: 20 samples)")
       ->check(CLI::PositiveNumber);
   id->add_option("--closed-loop", options.closed_loop,
@@ -94,9 +95,9 @@ void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code)
       ->capture_default_str();
   id->add_flag("--keep-outliers", options.keep_outliers,
                "Do not replace level spikes before fitting");
-  auto* io = cmd->add_option_group("Input/output models (--model arx|foptd|soptd)");
-  io->add_option("--u", options.u,
-                 "Input column(s); arx takes a comma-separated list (also lpv, --compare)")
+  auto* io = cmd->add_option_group(
+      "Input/output models (arx, foptd, soptd, frac-foptd, frac-ss, lpv, --compare)");
+  io->add_option("--u", options.u, "Input column(s); arx takes a comma-separated list")
       ->capture_default_str();
   io->add_option("--y", options.y, "Output column")->capture_default_str();
   auto* arx = cmd->add_option_group("ARX (--model arx), MATLAB conventions");
