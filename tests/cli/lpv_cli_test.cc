@@ -96,6 +96,16 @@ TEST_F(LpvCli, RecoversKnownQuadraticParameterLaws) {
     EXPECT_NEAR(band["local_params"]["a1"].get<double>(), Quadratic(kA1, kThetas[i]), 1e-9);
   }
   EXPECT_LT(json["metrics_per_band"][0]["local_mae"].get<double>(), 1e-9);
+
+  // The same edges from a file (one per line, or comma/space separated) give the same model.
+  WriteFile(dir_ / "bands.txt", "1.0\n1.2, 1.4\n1.6 1.8\n2.0\n");
+  const ProgramRun from_file =
+      Identify(LpvCsv(0.0, 1),
+               "--local arx --schedule upstream --bands-file " + (dir_ / "bands.txt").string());
+  ASSERT_EQ(from_file.exit_code, 0) << from_file.err;
+  const auto json2 = nlohmann::json::parse(from_file.out);
+  EXPECT_EQ(json2["bands"], json["bands"]);
+  EXPECT_EQ(json2["coefficients"], json["coefficients"]);
   // Along the whole theta trajectory the LPV model reproduces the record.
   EXPECT_GT(json["metrics"]["fit_percent"].get<double>(), 99.999);
 }
