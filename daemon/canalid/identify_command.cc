@@ -3,6 +3,8 @@
 #include <CLI/CLI.hpp>
 #include <fstream>
 #include <iostream>
+#include <string>
+#include <vector>
 
 #include "daemon/canalid/input_error.h"
 #include "drivers/csv/csv_table.h"
@@ -11,6 +13,8 @@ namespace canalid::cli {
 namespace {
 
 int RunIdentify(const IdentifyOptions& options) {
+  if (!options.compare.empty()) return RunCompare(options);
+  if (options.model.empty()) throw InputError("identify: give --model KIND or --compare KINDS");
   drivers::CsvTable table;
   try {
     table = drivers::CsvTable::Read(options.input);
@@ -22,8 +26,18 @@ int RunIdentify(const IdentifyOptions& options) {
     model = IdentifyId(options, table);
   } else if (options.model == "arx") {
     model = IdentifyArx(options, table);
+  } else if (options.model == "frac-foptd" || options.model == "frac-ss") {
+    model = IdentifyFractional(options, table);
+  } else if (options.model == "lpv") {
+    model = IdentifyLpv(options, table);
   } else {
     model = IdentifyProcessModel(options, table);
+  }
+  // The columns the model was fitted on, so `canalid simulate` finds them again.
+  if (!model.contains("inputs")) {
+    model["inputs"] = options.model == "id" ? std::vector<std::string>{options.qin, options.qout}
+                                            : std::vector<std::string>{options.u};
+    model["output"] = options.model == "id" ? options.level : options.y;
   }
   model["input"] = {
       {"file", options.input}, {"rows", table.rows()}, {"sample_time_s", table.sample_time_s()}};
@@ -45,11 +59,24 @@ void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code)
       "  canalid identify --model id --input pool2.csv --max-delay-s 3600\n"
       "  canalid identify --model foptd --input step.csv --u gate --y level --pretty\n"
       "  canalid identify --model arx --input F.csv --u u1,u2 --y y --na 2 --nb 2,3 --nk 1,2\n"
-      "Output: one JSON object on stdout (keys in docs/model-json.md). Exit 2 on bad input.");
-  cmd->add_option("--model", options.model, "Model kind")
-      ->required()
-      ->check(CLI::IsMember({"id", "arx", "foptd", "soptd"}));
-  cmd->add_option("--input", options.input, "CSV file: header row, time_s first, uniform sampling")
+      "  canalid identify --model frac-foptd --input step.csv --u gate --y level\n"
+      "  canalid identify --model frac-foptd --input step.csv --alpha 0.8\n"
+      "  canalid identify --model frac-ss --input step.csv --q 2 --max-delay-s 6\n"
+      "  canalid identify --model lpv --local arx --schedule level_up --bands 1.0,1.2,1.4,1.6 \\\n"
+      "                   --input F.csv --u q_in --y level\n"
+      "  canalid identify --compare foptd,soptd,frac-foptd --input 'steps/*.csv' [--json]\n"
+      "Output: one JSON object on stdout (keys in docs/model-json.md); --compare prints a table.\n"
+      "Exit 2 on bad input.");
+  auto* model =
+      cmd->add_option("--model", options.model, "Model kind")
+          ->check(CLI::IsMember({"id", "arx", "foptd", "soptd", "frac-foptd", "frac-ss", "lpv"}));
+  auto* compare = cmd->add_option("--compare", options.compare,
+                                  "Comma-separated kinds (foptd, soptd, frac-foptd, frac-ss) to "
+                                  "fit to every file of --input (a glob), then print the table");
+  model->excludes(compare);
+  cmd->add_option("--input", options.input,
+                  "CSV file: header row, time_s first, uniform sampling (--compare: a glob, quote "
+                  "it)")
       ->required();
   cmd->add_option("--out", options.out, "Also write the model JSON to this file");
   cmd->add_flag("--pretty", options.pretty, "Indent the JSON");
@@ -58,7 +85,9 @@ void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code)
   id->add_option("--qout", options.qout, "Outflow column, m3/s")->capture_default_str();
   id->add_option("--level", options.level, "Downstream level column, m")->capture_default_str();
   id->add_option("--max-delay-s", options.max_delay_s,
-                 "Longest delay tried, s (default: a third of the record)")
+                 "Longest delay tried, s (id: a third of the record; frac-foptd: half; frac-ss: "
+                 "min(record/10, "
+                 "100 samples); lpv arx/frac-ss locals: 20 samples)")
       ->check(CLI::PositiveNumber);
   id->add_option("--closed-loop", options.closed_loop,
                  "auto: decide from the data; on: three-step method; off: plain fit")
@@ -66,7 +95,8 @@ void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code)
       ->capture_default_str();
   id->add_flag("--keep-outliers", options.keep_outliers,
                "Do not replace level spikes before fitting");
-  auto* io = cmd->add_option_group("Input/output models (--model arx|foptd|soptd)");
+  auto* io = cmd->add_option_group(
+      "Input/output models (arx, foptd, soptd, frac-foptd, frac-ss, lpv, --compare)");
   io->add_option("--u", options.u, "Input column(s); arx takes a comma-separated list")
       ->capture_default_str();
   io->add_option("--y", options.y, "Output column")->capture_default_str();
@@ -79,6 +109,29 @@ void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code)
   arx->add_option("--nk", options.nk, "Delays in samples: one value, or one per input")
       ->capture_default_str();
   arx->add_flag("--detrend", options.detrend, "Remove linear trends from y and every u first");
+  auto* frac = cmd->add_option_group("Fractional models (--model frac-foptd|frac-ss)");
+  auto* alpha = frac->add_option("--alpha", options.alpha,
+                                 "frac-foptd: hold alpha at this value (0 < A < 2), fit the rest")
+                    ->check(CLI::Range(1e-6, 2.0 - 1e-6));
+  auto* q = frac->add_option("--q", options.q, "frac-ss: commensurate order alpha = 1/q (1, 2, 4)")
+                ->check(CLI::IsMember({1, 2, 4}));
+  alpha->excludes(q);
+  auto* lpv = cmd->add_option_group("LPV (--model lpv)");
+  lpv->add_option("--local", options.local,
+                  "Local model per band: arx (first order with delay), frac-foptd, frac-ss "
+                  "(with --q), integer (seed 1's k e^-tau s/(s(S s^2+M s+1)))");
+  lpv->add_option("--schedule", options.schedule, "Scheduling column (theta)");
+  lpv->add_option("--bands", options.bands, "Band edges b0,b1,...,bn, strictly increasing");
+  lpv->add_option("--bands-file", options.bands_file,
+                  "File with the band edges (numbers separated by commas, spaces or lines)");
+  lpv->add_option("--degree", options.degree, "Polynomial degree of every parameter in theta")
+      ->check(CLI::Range(0, 6))
+      ->capture_default_str();
+  lpv->add_option("--min-band-samples", options.min_band_samples,
+                  "Fewest consecutive samples a band must have")
+      ->check(CLI::Range(10, 100000000))
+      ->capture_default_str();
+  cmd->add_flag("--json", options.json, "--compare: print JSON (summary and per-file) instead");
   cmd->callback([&options, &exit_code] { exit_code = RunIdentify(options); });
 }
 

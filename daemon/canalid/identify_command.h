@@ -32,6 +32,19 @@ struct IdentifyOptions {
   std::string nb = "2";
   std::string nk = "1";
   bool detrend = false;
+  // frac-foptd, frac-ss
+  double alpha = 0.0;  ///< > 0: alpha held at this value (frac-foptd)
+  int q = 0;           ///< commensurate order alpha = 1/q (frac-ss; 0 = the default 2)
+  // lpv
+  std::string local;
+  std::string schedule;
+  std::string bands;
+  std::string bands_file;
+  int degree = 2;
+  int min_band_samples = 50;
+  // --compare
+  std::string compare;
+  bool json = false;
 };
 
 /// Registers `identify` on the app; `exit_code` receives the result when it runs.
@@ -41,5 +54,11 @@ void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code)
 nlohmann::json IdentifyId(const IdentifyOptions& options, const drivers::CsvTable& table);
 nlohmann::json IdentifyArx(const IdentifyOptions& options, const drivers::CsvTable& table);
 nlohmann::json IdentifyProcessModel(const IdentifyOptions& options, const drivers::CsvTable& table);
+nlohmann::json IdentifyFractional(const IdentifyOptions& options, const drivers::CsvTable& table);
+nlohmann::json IdentifyLpv(const IdentifyOptions& options, const drivers::CsvTable& table);
+
+/// `--compare`: fits every listed kind to every file of the glob in options.input and prints
+/// seed 2's Table 1 (mean, max, std of norm_error per model), or JSON with --json.
+int RunCompare(const IdentifyOptions& options);
 
 }  // namespace canalid::cli

@@ -103,4 +103,101 @@ nlohmann::json ToJson(const core::SoptdFit& fit) {
           {"metrics", ToJson(fit.metrics)}};
 }
 
+namespace {
+std::vector<double> ToVector(const Eigen::Ref<const Eigen::VectorXd>& v) {
+  return std::vector<double>(v.data(), v.data() + v.size());
+}
+}  // namespace
+
+nlohmann::json ToJson(const core::FractionalFoptdFitResult& fit,
+                      const core::OustaloupOptions& band) {
+  return {{"model", "frac-foptd"},
+          {"gain", fit.params.gain},
+          {"time_constant_s", fit.params.time_constant_s},
+          {"alpha", fit.params.alpha},
+          {"delay_s", fit.params.delay_s},
+          {"input_offset", fit.input_offset},
+          {"output_offset", fit.output_offset},
+          {"initial",
+           {{"gain", fit.initial.gain},
+            {"time_constant_s", fit.initial.time_constant_s},
+            {"alpha", fit.initial.alpha},
+            {"delay_s", fit.initial.delay_s}}},
+          {"converged", fit.converged},
+          {"simulations", fit.simulations},
+          {"oustaloup",
+           {{"low_frequency_rad_s", band.low_frequency_rad_s},
+            {"high_frequency_rad_s", band.high_frequency_rad_s},
+            {"sections_per_decade", band.sections_per_decade}}},
+          {"metrics", ToJson(fit.metrics)}};
+}
+
+nlohmann::json ToJson(const core::CommensurateFitResult& fit, double sample_time_s,
+                      int memory_length) {
+  const core::CommensurateModel& m = fit.model;
+  const int n = m.order();
+  nlohmann::json a = nlohmann::json::array();
+  for (int i = 0; i < n; ++i) {
+    std::vector<double> row(static_cast<std::size_t>(n), 0.0);
+    if (i + 1 < n) row[static_cast<std::size_t>(i + 1)] = 1.0;
+    // Last row -[a_n, ..., a_1].
+    if (i + 1 == n) {
+      for (int j = 0; j < n; ++j) row[static_cast<std::size_t>(j)] = -m.a(n - 1 - j);
+    }
+    a.push_back(row);
+  }
+  std::vector<double> b(static_cast<std::size_t>(n), 0.0);
+  b.back() = m.a(n - 1);
+  std::vector<double> c{1.0};
+  for (Eigen::Index i = 0; i < m.c.size(); ++i) c.push_back(m.c(i));
+  return {{"model", "frac-ss"},
+          {"q", m.q},
+          {"alpha", m.alpha()},
+          {"A", a},
+          {"B", b},
+          {"C", c},
+          {"delay_samples", m.delay_samples},
+          {"delay_s", m.delay_samples * sample_time_s},
+          {"sample_time_s", sample_time_s},
+          {"memory_length", memory_length},
+          {"input_offset", fit.input_offset},
+          {"output_offset", fit.output_offset},
+          {"converged", fit.converged},
+          {"metrics", ToJson(fit.metrics)}};
+}
+
+nlohmann::json ToJson(const core::LpvIdentification& lpv, double sample_time_s) {
+  const core::LpvModel& model = lpv.model;
+  nlohmann::json coefficients = nlohmann::json::object();
+  for (std::size_t i = 0; i < model.parameter_names.size(); ++i) {
+    coefficients[model.parameter_names[i]] =
+        ToVector(model.coefficients.row(static_cast<Eigen::Index>(i)).transpose());
+  }
+  nlohmann::json bands = nlohmann::json::array();
+  for (const core::LpvOperatingPoint& p : lpv.points) {
+    nlohmann::json local = nlohmann::json::object();
+    const Eigen::VectorXd at_mean = model.Evaluate(p.theta_mean);
+    nlohmann::json interpolated = nlohmann::json::object();
+    for (std::size_t i = 0; i < model.parameter_names.size(); ++i) {
+      local[model.parameter_names[i]] = p.local_params(static_cast<Eigen::Index>(i));
+      interpolated[model.parameter_names[i]] = at_mean(static_cast<Eigen::Index>(i));
+    }
+    bands.push_back({{"theta_low", p.theta_low},
+                     {"theta_high", p.theta_high},
+                     {"theta_mean", p.theta_mean},
+                     {"start_s", static_cast<double>(p.start) * sample_time_s},
+                     {"samples", p.length},
+                     {"local_params", local},
+                     {"lpv_params", interpolated},
+                     {"local_mae", p.local_mae},
+                     {"lpv_mae", p.lpv_mae}});
+  }
+  return {{"model", "lpv"},
+          {"kind", model.kind},
+          {"parameters", model.parameter_names},
+          {"degree", model.degree},
+          {"coefficients", coefficients},
+          {"metrics_per_band", bands}};
+}
+
 }  // namespace canalid::drivers

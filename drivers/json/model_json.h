@@ -2,9 +2,13 @@
 #include <nlohmann/json.hpp>
 
 #include "core/arx.h"
+#include "core/commensurate_state_space.h"
 #include "core/experiment_design.h"
+#include "core/fractional_foptd_fit.h"
+#include "core/fractional_simulator.h"
 #include "core/id_model.h"
 #include "core/id_pipeline.h"
+#include "core/lpv_model.h"
 #include "core/metrics.h"
 #include "core/process_model_fit.h"
 
@@ -23,5 +27,17 @@ nlohmann::json ToJson(const core::ArxModel& model);
 nlohmann::json ToJson(const core::ExperimentDesign& design);
 nlohmann::json ToJson(const core::FoptdFit& fit);
 nlohmann::json ToJson(const core::SoptdFit& fit);
+/// "model": "frac-foptd": gain, time_constant_s, alpha, delay_s, offsets, metrics, and the
+/// Oustaloup band the fit simulated with ("oustaloup"), so a reader reproduces its output.
+nlohmann::json ToJson(const core::FractionalFoptdFitResult& fit,
+                      const core::OustaloupOptions& band);
+/// "model": "frac-ss": q, alpha, the companion matrices A (rows), B, C, delay_samples, delay_s,
+/// sample_time_s, offsets, memory_length (0 = full GL memory) and metrics.
+nlohmann::json ToJson(const core::CommensurateFitResult& fit, double sample_time_s,
+                      int memory_length);
+/// "model": "lpv": kind, parameters (names in order), degree, coefficients (name -> polynomial,
+/// highest degree first) and metrics_per_band (band, theta_mean, run start and length, local
+/// parameters, local and LPV MAE).
+nlohmann::json ToJson(const core::LpvIdentification& lpv, double sample_time_s);
 
 }  // namespace canalid::drivers

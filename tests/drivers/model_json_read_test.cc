@@ -1,0 +1,150 @@
+// The model JSON readers invert the writers (drivers/json/model_json.h) and name the key of any
+// problem.
+#include "drivers/json/model_json_read.h"
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "drivers/json/model_json.h"
+
+namespace canalid::drivers {
+namespace {
+
+// Expects `call` to throw ModelJsonError whose message contains `text`.
+template <class Call>
+void ExpectError(Call call, const std::string& text) {
+  try {
+    call();
+    ADD_FAILURE() << "no error, expected: " << text;
+  } catch (const ModelJsonError& e) {
+    EXPECT_NE(std::string(e.what()).find(text), std::string::npos) << e.what();
+  }
+}
+
+TEST(ModelJsonReadTest, FractionalFoptdRoundTrip) {
+  core::FractionalFoptdFitResult fit;
+  fit.params = {0.372, 10.975, 0.83, 4.05};
+  fit.input_offset = 20.0;
+  fit.output_offset = 60.5;
+  const core::OustaloupOptions band{1e-5, 333.0, 2.0};
+  const nlohmann::json json = nlohmann::json::parse(ToJson(fit, band).dump());
+  const FractionalFoptdRecord r = FractionalFoptdFromJson(json, "m.json");
+  EXPECT_EQ(r.params.model.gain, 0.372);
+  EXPECT_EQ(r.params.model.time_constant_s, 10.975);
+  EXPECT_EQ(r.params.model.alpha, 0.83);
+  EXPECT_EQ(r.params.model.delay_s, 4.05);
+  EXPECT_EQ(r.params.input_offset, 20.0);
+  EXPECT_EQ(r.params.output_offset, 60.5);
+  EXPECT_EQ(r.band.low_frequency_rad_s, 1e-5);
+  EXPECT_EQ(r.band.high_frequency_rad_s, 333.0);
+  EXPECT_EQ(r.band.sections_per_decade, 2.0);
+
+  nlohmann::json bad = json;
+  bad.erase("gain");
+  ExpectError([&] { FractionalFoptdFromJson(bad, "m.json"); }, "m.json: key 'gain': missing");
+  bad = json;
+  bad["alpha"] = 2.0;
+  ExpectError([&] { FractionalFoptdFromJson(bad, "m.json"); }, "key 'alpha': 2.0");
+  bad = json;
+  bad["time_constant_s"] = -1.0;
+  ExpectError([&] { FractionalFoptdFromJson(bad, "m.json"); }, "key 'time_constant_s'");
+  bad = json;
+  bad["delay_s"] = "4";
+  ExpectError([&] { FractionalFoptdFromJson(bad, "m.json"); }, "key 'delay_s': not a number");
+  ExpectError([&] { FoptdFromJson(json, "m.json"); },
+              "key 'model': 'frac-foptd', expected 'foptd'");
+}
+
+TEST(ModelJsonReadTest, CommensurateRoundTripAndCompanionForm) {
+  core::CommensurateFitResult fit;
+  fit.model.q = 2;
+  fit.model.a = Eigen::Vector4d(2.1, 1.4, 0.7, 0.015);
+  fit.model.c = Eigen::Vector3d(1.3, 0.7, 0.18);
+  fit.model.delay_samples = 27;
+  fit.input_offset = 20.0;
+  fit.output_offset = 60.0;
+  const nlohmann::json json = nlohmann::json::parse(ToJson(fit, 0.15, 0).dump());
+  // The writer's A, B, C follow the header's companion form.
+  EXPECT_EQ(json["A"][3][0].get<double>(), -0.015);  // -a_n first
+  EXPECT_EQ(json["A"][3][3].get<double>(), -2.1);
+  EXPECT_EQ(json["A"][0][1].get<double>(), 1.0);
+  EXPECT_EQ(json["B"][3].get<double>(), 0.015);
+  EXPECT_EQ(json["C"][0].get<double>(), 1.0);
+  EXPECT_DOUBLE_EQ(json["delay_s"].get<double>(), 27 * 0.15);
+  const CommensurateRecord r = CommensurateFromJson(json, "ss.json");
+  EXPECT_EQ(r.model.model.q, 2);
+  EXPECT_EQ(r.model.model.a, fit.model.a);
+  EXPECT_EQ(r.model.model.c, fit.model.c);
+  EXPECT_EQ(r.model.model.delay_samples, 27);
+  EXPECT_EQ(r.sample_time_s, 0.15);
+
+  nlohmann::json bad = json;
+  bad["A"][0][0] = 0.5;
+  ExpectError([&] { CommensurateFromJson(bad, "ss.json"); }, "ss.json: key 'A': not in companion");
+  bad = json;
+  bad["B"][3] = 1.0;
+  ExpectError([&] { CommensurateFromJson(bad, "ss.json"); }, "key 'B'");
+  bad = json;
+  bad["q"] = 4;
+  ExpectError([&] { CommensurateFromJson(bad, "ss.json"); }, "key 'A': needs 8 rows");
+}
+
+TEST(ModelJsonReadTest, LpvArxIdAndProcessModelsRoundTrip) {
+  core::LpvIdentification lpv;
+  lpv.model.kind = "first_order_arx";
+  lpv.model.parameter_names = {"a1", "b1", "nk"};
+  lpv.model.degree = 2;
+  lpv.model.coefficients.resize(3, 3);
+  lpv.model.coefficients << 0.05, -0.2, -0.7, -0.02, 0.1, 0.05, 0.0, 0.0, 3.0;
+  nlohmann::json json = ToJson(lpv, 10.0);
+  json["local_model"] = "arx";
+  json["schedule"] = "upstream";
+  json["input_offset"] = 0.0;
+  json["output_offset"] = 1.5;
+  const LpvRecord r = LpvFromJson(nlohmann::json::parse(json.dump()), "lpv.json");
+  EXPECT_EQ(r.model.coefficients, lpv.model.coefficients);
+  EXPECT_EQ(r.model.parameter_names, lpv.model.parameter_names);
+  EXPECT_EQ(r.schedule, "upstream");
+  json["coefficients"].erase("b1");
+  ExpectError([&] { LpvFromJson(json, "lpv.json"); }, "key 'coefficients.b1': missing");
+
+  core::ArxModel arx;
+  arx.orders = {2, {2, 1}, {1, 2}};
+  arx.a = Eigen::Vector2d(-1.5, 0.7);
+  arx.b = {Eigen::Vector2d(1.0, 0.5), Eigen::VectorXd::Constant(1, 0.3)};
+  arx.first_sample = 2;
+  const core::ArxModel a = ArxModelFromJson(ToJson(arx), "arx.json");
+  EXPECT_EQ(a.a, arx.a);
+  EXPECT_EQ(a.b[0], arx.b[0]);
+  EXPECT_EQ(a.b[1], arx.b[1]);
+  EXPECT_EQ(a.orders.nk, arx.orders.nk);
+  EXPECT_EQ(a.first_sample, 2);
+  nlohmann::json bad_arx = ToJson(arx);
+  bad_arx["b_coeffs"][1] = {0.3, 0.1};
+  ExpectError([&] { ArxModelFromJson(bad_arx, "arx.json"); }, "key 'b_coeffs': list 1 has 2");
+
+  core::IdFitResult id;
+  id.model = {60.0 / 34113.0, 11, 60.0};
+  id.wave_front_gain_s_per_m2 = 1e-5;
+  id.offset_m = 2.1;
+  id.drift_m_per_sample = 6e-6;
+  id.first_sample = 40;
+  const IdModelRecord i = IdModelFromJson(ToJson(id), "id.json");
+  EXPECT_EQ(i.model.b, id.model.b);
+  EXPECT_EQ(i.model.nk, 11);
+  EXPECT_DOUBLE_EQ(i.drift_m_per_s * 60.0, 6e-6);
+  EXPECT_EQ(i.fit_from_sample, 40);
+
+  core::SoptdFit soptd;
+  soptd.model = {0.4, {12.0, 3.0}, 2.5};
+  soptd.output_offset = 7.0;
+  const auto s = SoptdFromJson(ToJson(soptd), "s.json");
+  EXPECT_EQ(s.model.time_constants_s[1], 3.0);
+  EXPECT_EQ(s.output_offset, 7.0);
+  ExpectError([&] { SoptdFromJson(nlohmann::json::array(), "s.json"); },
+              "s.json: key 'model': the model is not a JSON object");
+}
+
+}  // namespace
+}  // namespace canalid::drivers
