@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/fractional_simulator.h"
+#include "core/least_squares.h"
 #include "core/levenberg_marquardt.h"
 
 namespace canalid::core {
@@ -51,21 +52,8 @@ double LeastSquaresGain(const Eigen::VectorXd& s, const Eigen::VectorXd& dy) {
   return ss > 0.0 ? s.dot(dy) / ss : 0.0;
 }
 
-// Least squares of dy ~ offset + gain s: the rest value is re-estimated from the whole record,
-// which matters when the record starts at the step (one rest sample).
-struct OffsetGain {
-  double offset = 0.0;
-  double gain = 0.0;
-};
-OffsetGain LeastSquaresOffsetGain(const Eigen::VectorXd& s, const Eigen::VectorXd& dy) {
-  const double n = static_cast<double>(s.size());
-  const double s_mean = s.mean();
-  const double y_mean = dy.mean();
-  const double sxx = s.squaredNorm() - n * s_mean * s_mean;
-  if (!(sxx > 1e-300)) return {y_mean, 0.0};
-  const double gain = (s.dot(dy) - n * s_mean * y_mean) / sxx;
-  return {y_mean - gain * s_mean, gain};
-}
+// The rest value is re-estimated with the gain from the whole record (FitOffsetGain), which
+// matters when the record starts at the step (one rest sample).
 
 void CheckOptions(const FractionalFoptdFitOptions& o) {
   if (!(o.alpha_min > 0.0 && o.alpha_min < o.alpha_max && o.alpha_max < 2.0)) {
@@ -212,7 +200,7 @@ FractionalFoptdFitResult FitFractionalFoptd(const Eigen::Ref<const Eigen::Vector
   if (options.refine) {
     auto residual = [&](const Eigen::VectorXd& p, Eigen::VectorXd& r) {
       const Eigen::VectorXd& s = unit.Simulate(std::exp(p(1) * p(0)), p(1), p(2));
-      const OffsetGain og = LeastSquaresOffsetGain(s, dy);
+      const OffsetGain og = FitOffsetGain(s, dy);
       r = (og.gain * s - dy).array() + og.offset;
       return r.allFinite();
     };
@@ -230,7 +218,7 @@ FractionalFoptdFitResult FitFractionalFoptd(const Eigen::Ref<const Eigen::Vector
     const LmResult fit = LevenbergMarquardt(residual, start, lower, upper, lm);
     const double tc = std::exp(fit.params(1) * fit.params(0));
     const Eigen::VectorXd& s = unit.Simulate(tc, fit.params(1), fit.params(2));
-    const OffsetGain og = LeastSquaresOffsetGain(s, dy);
+    const OffsetGain og = FitOffsetGain(s, dy);
     result.output_offset += og.offset;
     result.params = {og.gain, tc, fit.params(1), fit.params(2)};
     result.converged = fit.converged;

@@ -7,6 +7,7 @@
 
 #include "core/fractional_delay.h"
 #include "core/fractional_zoh.h"
+#include "core/least_squares.h"
 #include "core/levenberg_marquardt.h"
 
 namespace canalid::core {
@@ -32,21 +33,6 @@ Eigen::VectorXd UnitResponse(double s2, double m, double delay_s, const Eigen::V
     x = phi * x + gp * line.previous() + gc * line.current();
   }
   return y;
-}
-
-struct OffsetGain {
-  double offset = 0.0;
-  double gain = 0.0;
-};
-
-OffsetGain LeastSquares(const Eigen::VectorXd& s, const Eigen::VectorXd& dy) {
-  const double n = static_cast<double>(s.size());
-  const double s_mean = s.mean();
-  const double y_mean = dy.mean();
-  const double sxx = s.squaredNorm() - n * s_mean * s_mean;
-  if (!(sxx > 1e-300)) return {y_mean, 0.0};
-  const double gain = (s.dot(dy) - n * s_mean * y_mean) / sxx;
-  return {y_mean - gain * s_mean, gain};
 }
 
 }  // namespace
@@ -112,7 +98,7 @@ IntegerSeed1FitResult FitIntegerSeed1(const Eigen::Ref<const Eigen::VectorXd>& i
 
   auto cost = [&](double s2, double m, double tau) {
     const Eigen::VectorXd s = UnitResponse(s2, m, tau, du, ts);
-    const OffsetGain og = LeastSquares(s, dy);
+    const OffsetGain og = FitOffsetGain(s, dy);
     return ((og.gain * s - dy).array() + og.offset).matrix().squaredNorm();
   };
   double best = std::numeric_limits<double>::infinity();
@@ -136,7 +122,7 @@ IntegerSeed1FitResult FitIntegerSeed1(const Eigen::Ref<const Eigen::VectorXd>& i
   }
   auto residual = [&](const Eigen::VectorXd& p, Eigen::VectorXd& r) {
     const Eigen::VectorXd s = UnitResponse(std::exp(p(0)), std::exp(p(1)), p(2), du, ts);
-    const OffsetGain og = LeastSquares(s, dy);
+    const OffsetGain og = FitOffsetGain(s, dy);
     r = (og.gain * s - dy).array() + og.offset;
     return r.allFinite();
   };
@@ -150,7 +136,7 @@ IntegerSeed1FitResult FitIntegerSeed1(const Eigen::Ref<const Eigen::VectorXd>& i
   const LmResult fit = LevenbergMarquardt(residual, start, lower, upper, lm);
   const Eigen::VectorXd s =
       UnitResponse(std::exp(fit.params(0)), std::exp(fit.params(1)), fit.params(2), du, ts);
-  const OffsetGain og = LeastSquares(s, dy);
+  const OffsetGain og = FitOffsetGain(s, dy);
   result.model = {og.gain, std::exp(fit.params(0)), std::exp(fit.params(1)), fit.params(2)};
   result.output_offset = y_first + og.offset;
   result.simulated = (og.gain * s).array() + result.output_offset;

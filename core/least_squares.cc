@@ -19,4 +19,15 @@ LeastSquaresSolution SolveLeastSquares(const Eigen::Ref<const Eigen::MatrixXd>& 
   return s;
 }
 
+OffsetGain FitOffsetGain(const Eigen::Ref<const Eigen::VectorXd>& s,
+                         const Eigen::Ref<const Eigen::VectorXd>& y) {
+  const double s_mean = s.mean();
+  const double y_mean = y.mean();
+  const double sxx = (s.array() - s_mean).square().sum();
+  OffsetGain fit;
+  fit.gain = sxx > 0.0 ? ((s.array() - s_mean) * (y.array() - y_mean)).sum() / sxx : 0.0;
+  fit.offset = y_mean - fit.gain * s_mean;
+  return fit;
+}
+
 }  // namespace canalid::core

@@ -14,4 +14,14 @@ struct LeastSquaresSolution {
 LeastSquaresSolution SolveLeastSquares(const Eigen::Ref<const Eigen::MatrixXd>& x,
                                        const Eigen::Ref<const Eigen::VectorXd>& y);
 
+/// y ~ offset + gain s by least squares: the gain and offset that fit a unit-gain response s best
+/// (both enter every process model linearly, so the fits eliminate them this way).  Computed on
+/// centred data; a constant s gives gain 0 and the mean of y.  @pre s.size() == y.size() > 0.
+struct OffsetGain {
+  double offset = 0.0;
+  double gain = 0.0;
+};
+OffsetGain FitOffsetGain(const Eigen::Ref<const Eigen::VectorXd>& s,
+                         const Eigen::Ref<const Eigen::VectorXd>& y);
+
 }  // namespace canalid::core

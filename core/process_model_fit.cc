@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "core/least_squares.h"
 #include "core/levenberg_marquardt.h"
 
 namespace canalid::core {
@@ -47,29 +48,13 @@ Problem MakeProblem(const Eigen::Ref<const Eigen::VectorXd>& u,
   return p;
 }
 
-// Least squares of y on [s, 1]: the gain and offset that fit a unit-gain response s best.
-struct LinearPart {
-  double gain = 0.0;
-  double offset = 0.0;
-};
-
-LinearPart SolveLinear(const Eigen::VectorXd& s, const Eigen::VectorXd& y) {
-  const double s_mean = s.mean();
-  const double y_mean = y.mean();
-  const double sxx = (s.array() - s_mean).square().sum();
-  LinearPart part;
-  part.gain = sxx > 0.0 ? ((s.array() - s_mean) * (y.array() - y_mean)).sum() / sxx : 0.0;
-  part.offset = y_mean - part.gain * s_mean;
-  return part;
-}
-
 // Residual y - (K s + c) for a unit-gain response s; K, c eliminated.
 template <class Model, class MakeModel>
 ResidualFunction MakeResidual(const Problem& p, MakeModel make_model) {
   return [&p, make_model](const Eigen::VectorXd& params, Eigen::VectorXd& r) {
     const Model model = make_model(params);
     const Eigen::VectorXd s = Simulate(model, p.u, p.ts);
-    const LinearPart lin = SolveLinear(s, p.y);
+    const OffsetGain lin = FitOffsetGain(s, p.y);
     r = (lin.gain * s).array() + lin.offset - p.y.array();
     return true;
   };
@@ -78,7 +63,7 @@ ResidualFunction MakeResidual(const Problem& p, MakeModel make_model) {
 template <class Model>
 ProcessFit<Model> Finish(const Problem& p, Model unit_model, int iterations) {
   const Eigen::VectorXd s = Simulate(unit_model, p.u, p.ts);
-  const LinearPart lin = SolveLinear(s, p.y);
+  const OffsetGain lin = FitOffsetGain(s, p.y);
   ProcessFit<Model> fit;
   fit.model = unit_model;
   fit.model.gain = lin.gain;

@@ -2,6 +2,8 @@
 // typed errors, reconnect with backoff. The pymodbus suite repeats the I/O part over real TCP.
 #include <gtest/gtest.h>
 
+#include "support/notify_waiter.h"
+
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -23,32 +25,7 @@ using enum RegisterKind;
 
 /// Wakes the test thread on each poller notification; waits are bounded (20 s) but end on the
 /// event, never on elapsed time.
-class Waiter {
- public:
-  std::function<void()> Callback() {
-    return [this] {
-      std::lock_guard lock(mutex_);
-      ++events_;
-      cv_.notify_all();
-    };
-  }
-  bool Until(const std::function<bool()>& done) {
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
-    std::unique_lock lock(mutex_);
-    while (true) {
-      lock.unlock();
-      if (done()) return true;
-      lock.lock();
-      const long seen = events_;
-      if (!cv_.wait_until(lock, deadline, [&] { return events_ != seen; })) return done();
-    }
-  }
-
- private:
-  std::mutex mutex_;
-  std::condition_variable cv_;
-  long events_ = 0;
-};
+using Waiter = canalid::testing::NotifyWaiter;
 
 PollChannel Channel(const char* name, RegisterKind kind, int address, core::RegisterType type,
                     double scale) {

@@ -12,6 +12,8 @@
 
 #include <gtest/gtest.h>
 
+#include "support/notify_waiter.h"
+
 #include <array>
 #include <chrono>
 #include <condition_variable>
@@ -117,33 +119,7 @@ class PymodbusServer {
   int stdout_fd_ = -1;
 };
 
-class Waiter {
- public:
-  std::function<void()> Callback() {
-    return [this] {
-      std::lock_guard lock(mutex_);
-      ++events_;
-      cv_.notify_all();
-    };
-  }
-  /// Waits for notifications until `done` holds (bounded: 30 s).
-  bool Until(const std::function<bool()>& done) {
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
-    std::unique_lock lock(mutex_);
-    while (true) {
-      lock.unlock();
-      if (done()) return true;
-      lock.lock();
-      const long seen = events_;
-      if (!cv_.wait_until(lock, deadline, [&] { return events_ != seen; })) return done();
-    }
-  }
-
- private:
-  std::mutex mutex_;
-  std::condition_variable cv_;
-  long events_ = 0;
-};
+using Waiter = canalid::testing::NotifyWaiter;
 
 ModbusTcpConfig TcpConfig(int port) {
   ModbusTcpConfig c;
