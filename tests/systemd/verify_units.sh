@@ -3,7 +3,7 @@
 # is a failure), and canalidd.service must reach an offline security exposure of 3.0 or less.
 # verify needs every ExecStart binary to exist, so the units are checked as copies whose
 # /usr/local/bin/ paths point into a temporary root, where each program is a link to the one built
-# in this tree when it exists, else a stub (the unit syntax is what is being checked).
+# in this tree when it exists, else an empty placeholder executable (the unit syntax is what is being checked).
 # Usage: verify_units.sh SOURCE_DIR BINARY_DIR
 set -euo pipefail
 source_dir=$1
