@@ -246,6 +246,7 @@ bool Running(const ChildProcess& p) { return p.pid() > 0 && kill(p.pid(), 0) == 
 struct LcmRecord {
   std::vector<canalid::sample_t> samples;
   std::map<std::string, std::map<std::string, int64_t>> last_health;  // component -> counters
+  int configs = 0;
 };
 
 LcmRecord ReadLcmLog(const fs::path& path) {
@@ -253,7 +254,9 @@ LcmRecord ReadLcmLog(const fs::path& path) {
   lcm::LogFile log(path.string(), "r");
   if (!log.good()) return record;
   while (const lcm::LogEvent* e = log.readNextEvent()) {
-    if (e->channel == "CANALID_ASCE2_SAMPLE_asce2") {
+    if (e->channel == "CANALID_ASCE2_CONFIG") {
+      ++record.configs;
+    } else if (e->channel == "CANALID_ASCE2_SAMPLE_asce2") {
       canalid::sample_t m;
       if (m.decode(e->data, 0, e->datalen) == e->datalen) record.samples.push_back(m);
     } else if (e->channel == "CANALID_ASCE2_HEALTH") {
@@ -348,7 +351,8 @@ TEST(DaemonCanalsim, ExceptionRepliesAndSpikesAreCountedNotFatal) {
 
 // Starts canalidd in a private network namespace with a multicast route on its loopback, so
 // canalid-command (entered into the same namespace) and the daemon share a udpm bus.
-constexpr const char* kUdpmUrl = "LCM_DEFAULT_URL=udpm://239.255.76.67:7667?ttl=0";
+constexpr const char* kUdpmUrl = "udpm://239.255.76.67:7667?ttl=0";
+const std::string kUdpmEnv = std::string("LCM_DEFAULT_URL=") + kUdpmUrl;
 
 int SendCommand(const fs::path& dir, pid_t daemon_pid, const fs::path& key,
                 const std::vector<std::string>& args) {
@@ -368,7 +372,7 @@ int SendCommand(const fs::path& dir, pid_t daemon_pid, const fs::path& key,
                                    "--sender",
                                    "test"};
   argv.insert(argv.end(), args.begin(), args.end());
-  ChildProcess command(argv, {kUdpmUrl}, dir / "command.log");
+  ChildProcess command(argv, {kUdpmEnv}, dir / "command.log");
   return command.WaitExit(10000);
 }
 
@@ -408,37 +412,64 @@ TEST(DaemonCanalsim, CommandsStartOnlyWhenGenuine) {
                                          ExplicitExperiment(0.05, 7, "manual", commands));
   ChildProcess daemon({"/usr/bin/nsenter", "--preserve-credentials", "-U", "-n", "-t",
                        std::to_string(canal.pid()), DaemonProgram(), "--config", config},
-                      {kUdpmUrl}, dir / "canalidd.log");
+                      {kUdpmEnv}, dir / "canalidd.log");
   ASSERT_FALSE(daemon.WaitForLine("commands enabled", 20000).empty()) << daemon.output();
   ASSERT_FALSE(daemon.WaitForLine("answers: ready", 20000).empty()) << daemon.output();
+
+  // lcm-logger in the namespace records the bus, for the verdict counts in the daemon's last
+  // health message. It is ready once a configuration the daemon republishes on a genuine
+  // publish-config command shows up in its file (bounded: 50 tries, 100 ms apart).
+  const fs::path bus_log = dir / "bus.lcmlog";
+  ChildProcess logger(
+      {"/usr/bin/nsenter", "--preserve-credentials", "-U", "-n", "-t", std::to_string(canal.pid()),
+       "/usr/bin/lcm-logger", "-f", "--flush-interval=10", std::string("--lcm-url=") + kUdpmUrl,
+       bus_log.string()},
+      {}, dir / "lcm-logger.log");
+  int probes = 0;
+  for (; probes < 50 && ReadLcmLog(bus_log).configs == 0; ++probes) {
+    EXPECT_EQ(SendCommand(dir, canal.pid(), key, {"publish-config"}), 0);
+    logger.WaitForLine("never printed", 100);
+  }
+  ASSERT_LT(probes, 50) << logger.output();
 
   const auto now_us = std::chrono::duration_cast<std::chrono::microseconds>(
                           std::chrono::system_clock::now().time_since_epoch())
                           .count();
-  EXPECT_EQ(SendCommand(dir, canal.pid(), wrong_key, {"start", "--counter", "10"}), 0);
+  // Explicit counters above those of the probes (which default to the time of sending).
+  auto Counter = [&](int n) { return std::to_string(now_us + n); };
+  EXPECT_EQ(SendCommand(dir, canal.pid(), wrong_key, {"start", "--counter", Counter(10)}), 0);
   ASSERT_FALSE(daemon.WaitForLine("command rejected (bad_mac)", 10000).empty()) << daemon.output();
   // One hour old: far outside max_clock_skew_s.
   EXPECT_EQ(SendCommand(dir, canal.pid(), key,
-                        {"start", "--counter", "20", "--utime-us",
+                        {"start", "--counter", Counter(20), "--utime-us",
                          std::to_string(now_us - 3600LL * 1000000LL)}),
             0);
   ASSERT_FALSE(daemon.WaitForLine("command rejected (stale)", 10000).empty()) << daemon.output();
   EXPECT_EQ(daemon.output().find("experiment settling"), std::string::npos) << daemon.output();
   EXPECT_EQ(daemon.output().find("experiment exciting"), std::string::npos) << daemon.output();
 
-  EXPECT_EQ(SendCommand(dir, canal.pid(), key, {"start", "--counter", "30"}), 0);
+  EXPECT_EQ(SendCommand(dir, canal.pid(), key, {"start", "--counter", Counter(30)}), 0);
   const std::string started = daemon.WaitForLine("experiment exciting", 10000);
   ASSERT_FALSE(started.empty()) << daemon.output();
   // The same counter again (a replayed abort) must not stop the experiment.
-  EXPECT_EQ(SendCommand(dir, canal.pid(), key, {"stop", "--counter", "30"}), 0);
+  EXPECT_EQ(SendCommand(dir, canal.pid(), key, {"stop", "--counter", Counter(30)}), 0);
   ASSERT_FALSE(daemon.WaitForLine("command rejected (replayed)", 10000).empty()) << daemon.output();
   EXPECT_EQ(daemon.output().find("experiment aborted"), std::string::npos) << daemon.output();
   // A genuine stop with a new counter does.
-  EXPECT_EQ(SendCommand(dir, canal.pid(), key, {"stop", "--counter", "40"}), 0);
+  EXPECT_EQ(SendCommand(dir, canal.pid(), key, {"stop", "--counter", Counter(40)}), 0);
   EXPECT_FALSE(daemon.WaitForLine("experiment aborted (stopped by operator)", 10000).empty())
       << daemon.output();
   EXPECT_EQ(daemon.Stop(SIGTERM), 0) << daemon.output();
+  EXPECT_EQ(logger.Stop(SIGINT), 0) << logger.output();
   EXPECT_EQ(canal.Stop(SIGTERM), 0) << canal.output();
+  // The health message the daemon publishes as it stops counts every verdict once.
+  const LcmRecord record = ReadLcmLog(bus_log);
+  ASSERT_EQ(record.last_health.count("commands"), 1U);
+  const auto& verdicts = record.last_health.at("commands");
+  EXPECT_EQ(verdicts.at("verdicts.bad_mac"), 1);
+  EXPECT_EQ(verdicts.at("verdicts.stale"), 1);
+  EXPECT_EQ(verdicts.at("verdicts.replayed"), 1);
+  EXPECT_EQ(verdicts.at("verdicts.accepted"), 2 + probes);  // start, stop and the probes
 }
 
 // 7. A broken configuration: exit 78 and one file:line:column line per problem.
