@@ -296,6 +296,49 @@ TEST(DaemonCanalsim, PlcDisconnectAbortsReconnectsAndRestores) {
   EXPECT_GE(plc.at("read_errors.disconnected") + plc.at("connect_failures"), 1);
 }
 
+// canalsim serve on `port` (0: a free one) as a plain child, so it can be restarted on the same
+// port; returns the port from its ready line (0 when it did not come).
+int StartServe(std::unique_ptr<ChildProcess>& serve, const fs::path& dir, int port,
+               const std::string& log_name) {
+  std::vector<std::string> argv = {CanalsimProgram(), "serve", "--listen",
+                                   "127.0.0.1:" + std::to_string(port)};
+  for (const std::string& a : Canal::Args({})) argv.push_back(a);
+  serve = std::make_unique<ChildProcess>(argv, std::vector<std::string>{}, dir / log_name);
+  const std::string ready = serve->WaitForLine("listening on 127.0.0.1:", 60000);
+  if (ready.empty()) return 0;
+  return std::stoi(ready.substr(ready.find("127.0.0.1:") + 10));
+}
+
+// 4b. The PLC restarts (canalsim killed and started again on the same port) mid-experiment: the
+// experiment aborts on the lost link, the daemon reconnects to the new PLC and restores the gate.
+TEST(DaemonCanalsim, PlcRestartAbortsReconnectsAndRestores) {
+  const fs::path dir = TestDir();
+  std::unique_ptr<ChildProcess> serve;
+  const int port = StartServe(serve, dir, 0, "canalsim-1.log");
+  ASSERT_GT(port, 0) << serve->output();
+  double nominal = 0.0;
+  {
+    Master master(port, 2.0);
+    nominal = ReadSetpoint(master);
+  }
+  const std::string config =
+      WriteConfig(dir / "canalidd.toml", BaseKeys(port, dir), ExplicitExperiment(0.05, 7));
+  auto daemon = StartDaemon(dir, config);
+  ASSERT_FALSE(daemon->WaitForLine("experiment exciting", 30000).empty()) << daemon->output();
+  EXPECT_EQ(serve->Stop(SIGKILL), 128 + SIGKILL);
+  const std::string lost = daemon->WaitForLine("experiment aborted (PLC link lost)", 20000);
+  ASSERT_FALSE(lost.empty()) << daemon->output();
+  ASSERT_EQ(StartServe(serve, dir, port, "canalsim-2.log"), port) << serve->output();
+  // The backoff is at most 5 s (backoff_max_s); the restore confirms the new connection.
+  ASSERT_FALSE(daemon->WaitForLine(" restored", 30000, Position(*daemon, lost)).empty())
+      << daemon->output();
+  EXPECT_TRUE(Running(*daemon));
+  Master master(port, 2.0);
+  EXPECT_NEAR(ReadSetpoint(master), nominal, 1e-4);
+  EXPECT_EQ(daemon->Stop(SIGTERM), 0) << daemon->output();
+  EXPECT_EQ(serve->Stop(SIGTERM), 0) << serve->output();
+}
+
 // 5. Exception replies and spiking levels are counted, not fatal: the experiment aborts on the
 // invalid level run, polls come back once the faults are off, and the daemon keeps running.
 TEST(DaemonCanalsim, ExceptionRepliesAndSpikesAreCountedNotFatal) {
