@@ -430,6 +430,7 @@ TEST(DaemonCanalsim, CommandsStartOnlyWhenGenuine) {
   if (!fs::exists("/usr/bin/unshare") || !fs::exists("/usr/bin/nsenter")) {
     GTEST_SKIP() << "unshare/nsenter missing: no private network namespace for the udpm bus";
   }
+  if (!fs::exists("/usr/bin/lcm-logger")) GTEST_SKIP() << "lcm-logger (liblcm-bin) missing";
   const fs::path dir = TestDir();
   const fs::path key = dir / "command.key";
   const fs::path wrong_key = dir / "wrong.key";
