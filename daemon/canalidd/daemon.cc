@@ -30,6 +30,25 @@ std::chrono::steady_clock::duration Seconds(double s) {
       std::chrono::duration<double>(s));
 }
 
+// Health counter suffixes as docs/lcm-channels.md names them (PlcErrorKindName is for people).
+const char* ReadErrorCounterName(drivers::PlcErrorKind kind) {
+  switch (kind) {
+    case drivers::PlcErrorKind::kNone:
+      return "ok";
+    case drivers::PlcErrorKind::kTimeout:
+      return "timeout";
+    case drivers::PlcErrorKind::kException:
+      return "exception";
+    case drivers::PlcErrorKind::kDisconnected:
+      return "disconnected";
+    case drivers::PlcErrorKind::kBadData:
+      return "bad_data";
+    case drivers::PlcErrorKind::kConfig:
+      return "config";
+  }
+  return "unknown";
+}
+
 }  // namespace
 
 struct Daemon::Plc {
@@ -168,6 +187,7 @@ void Daemon::StartBusWatch() {
                         [this, watch](const boost::system::error_code& error) {
                           if (error) return;
                           bus_->Handle(0.0);
+                          LogRejectedCommands();
                           if (!stopping_) (*watch)();
                         });
   };
@@ -433,6 +453,17 @@ void Daemon::OnCommand(const drivers::AcceptedCommand& command) {
   LogWarning("command from " + command.sender + " names an unknown reach '" + command.reach + "'");
 }
 
+void Daemon::LogRejectedCommands() {
+  if (!command_receiver_) return;
+  for (int v = 1; v < core::kNumCommandVerdicts; ++v) {
+    const auto verdict = static_cast<core::CommandVerdict>(v);
+    auto& logged = verdicts_logged_[static_cast<std::size_t>(v)];
+    for (; logged < command_receiver_->count(verdict); ++logged) {
+      LogWarning(std::string("command rejected (") + core::CommandVerdictName(verdict) + ")");
+    }
+  }
+}
+
 void Daemon::PublishHealth() {
   const double wall = WallNowS();
   const double uptime = SteadyNowS() - start_steady_s_;
@@ -450,8 +481,7 @@ void Daemon::PublishHealth() {
                        {"writes_failed", c.writes_failed}};
     for (int k = 1; k < drivers::kPlcErrorKindCount; ++k) {
       report.counters.emplace_back(
-          std::string("read_errors.") +
-              drivers::PlcErrorKindName(static_cast<drivers::PlcErrorKind>(k)),
+          std::string("read_errors.") + ReadErrorCounterName(static_cast<drivers::PlcErrorKind>(k)),
           c.read_errors[static_cast<std::size_t>(k)]);
     }
     report.gauges = {{"last_round_trip_s", c.last_round_trip_s},
@@ -464,6 +494,17 @@ void Daemon::PublishHealth() {
   bus.counters = {{"handler_failures", bus_->handler_failures()},
                   {"publish_failures", publisher_.failures()}};
   publisher_.PublishHealth(bus, uptime, wall);
+  if (command_receiver_) {
+    HealthReport commands;
+    commands.component = "commands";
+    for (int v = 0; v < core::kNumCommandVerdicts; ++v) {
+      const auto verdict = static_cast<core::CommandVerdict>(v);
+      commands.counters.emplace_back(std::string("verdicts.") + core::CommandVerdictName(verdict),
+                                     command_receiver_->count(verdict));
+    }
+    commands.counters.emplace_back("callback_failures", command_receiver_->callback_failures());
+    publisher_.PublishHealth(commands, uptime, wall);
+  }
   for (const auto& reach : reaches_) {
     HealthReport report;
     report.component = "reach." + reach->wiring.name;

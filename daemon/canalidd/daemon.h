@@ -1,6 +1,7 @@
 #pragma once
 #include <utility>  // before Boost.Asio under GCC 12 and C++20 (DESIGN.md)
 
+#include <array>
 #include <boost/asio.hpp>
 #include <functional>
 #include <memory>
@@ -73,6 +74,8 @@ class Daemon final {
   void SaveModel(const Reach& reach, const core::IdPipelineResult& result);
   void StartCommands();
   void OnCommand(const drivers::AcceptedCommand& command);
+  // Logs one warning per command rejected since the last call (an operator's audit trail).
+  void LogRejectedCommands();
   void BeginStop(DaemonExit exit);
   void FinishStopWhenSafe();
   std::string Status() const;
@@ -93,6 +96,7 @@ class Daemon final {
   std::optional<StateStore> store_;
   std::unique_ptr<core::CommandAuthenticator> authenticator_;
   std::unique_ptr<drivers::CommandReceiver> command_receiver_;
+  std::array<int64_t, core::kNumCommandVerdicts> verdicts_logged_{};
   DaemonExit exit_ = DaemonExit::kStopped;
   bool stopping_ = false;
   bool ready_ = false;
