@@ -3,6 +3,7 @@
 // model's JSON keys (docs/model-json.md) plus `estimator` and `health`.
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <memory>
 #include <stdexcept>
@@ -131,6 +132,11 @@ nlohmann::json OnlineId(const IdentifyOptions& options, const drivers::CsvTable&
                                                    : static_cast<int>(n / 3);
   id.wave_front_term = true;
   id.rls = ParseRlsOptions(options, 4);
+  // p21 >= 0 as in the batch fit: a negative wave-front gain lets Q_(nk-1) - b q_in(k-nk+1) mimic
+  // Q_nk, so the delay would be ambiguous by one sample.
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  id.rls.lower = Eigen::Vector4d(-kInf, 0.0, -kInf, -kInf);
+  id.rls.upper = Eigen::Vector4d::Constant(kInf);
   if (id.max_delay_samples + 20 >= n) {
     throw InputError(table.source() + ": " + std::to_string(n) +
                      " samples are too few for delays up to " +
