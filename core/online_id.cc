@@ -28,7 +28,7 @@ void OnlineIdOptions::Validate() const {
   }
   if (!(flow_abs_max_m3s > 0.0)) Fail("flow_abs_max_m3s", flow_abs_max_m3s, "> 0");
   if (!(level_abs_max_m > 0.0)) Fail("level_abs_max_m", level_abs_max_m, "> 0");
-  rls.Validate(3);
+  rls.Validate(wave_front_term ? 4 : 3);
   selector.Validate();
 }
 
@@ -38,8 +38,13 @@ OnlineIdBank::OnlineIdBank(const OnlineIdOptions& options)
                 options.selector),
       q_in_history_(options.max_delay_samples + 1) {
   const int n = options_.max_delay_samples - options_.min_delay_samples + 1;
-  estimators_.reserve(static_cast<std::size_t>(n));
-  for (int i = 0; i < n; ++i) estimators_.emplace_back(options_.rls);
+  if (options_.wave_front_term) {
+    wave_estimators_.reserve(static_cast<std::size_t>(n));
+    for (int i = 0; i < n; ++i) wave_estimators_.emplace_back(options_.rls);
+  } else {
+    estimators_.reserve(static_cast<std::size_t>(n));
+    for (int i = 0; i < n; ++i) estimators_.emplace_back(options_.rls);
+  }
   q_integrated_.assign(static_cast<std::size_t>(n), 0.0);
   q_centre_.assign(static_cast<std::size_t>(n), 0.0);
   k0_ = options_.max_delay_samples + 1;
@@ -72,14 +77,10 @@ bool OnlineIdBank::Update(double q_in_m3s, double q_out_m3s, double level_m) {
     if (recentre_period_ > 0 && t - t_centre_ >= recentre_period_) Recentre();
     const bool level_ok = Good(level_m, options_.level_abs_max_m);
     if (!level_ok) ++health_.bad_level_samples;
-    for (int i = 0; i < num_candidates(); ++i) {
-      const auto ui = static_cast<std::size_t>(i);
-      const int nk = options_.min_delay_samples + i;
-      q_integrated_[ui] += q_in_history_[nk] - q_out_previous_;
-      if (!level_ok) continue;
-      const Eigen::Vector3d phi(q_integrated_[ui] - q_centre_[ui], 1.0, t - t_centre_);
-      const auto result = estimators_[ui].Update(phi, level_m);
-      selector_.Record(i, result.prediction_error);
+    if (options_.wave_front_term) {
+      UpdateCandidates(wave_estimators_, t, level_ok, level_m);
+    } else {
+      UpdateCandidates(estimators_, t, level_ok, level_m);
     }
     if (level_ok) {
       selector_.Commit();
@@ -91,19 +92,50 @@ bool OnlineIdBank::Update(double q_in_m3s, double q_out_m3s, double level_m) {
   return updated;
 }
 
-void OnlineIdBank::Recentre() {
-  // New centre at the current sample.  c' = c + b Q_c + d t_c, so moving the centre by
-  // (dQ, dt) maps theta by the exact linear T below; the fit itself is unchanged.
-  const double t_new = static_cast<double>(k_ - k0_);
-  const double dt = t_new - t_centre_;
+template <int N>
+void OnlineIdBank::UpdateCandidates(std::vector<Rls<N>>& estimators, double t, bool level_ok,
+                                    double level_m) {
+  for (int i = 0; i < num_candidates(); ++i) {
+    const auto ui = static_cast<std::size_t>(i);
+    const int nk = options_.min_delay_samples + i;
+    q_integrated_[ui] += q_in_history_[nk] - q_out_previous_;
+    if (!level_ok) continue;
+    Eigen::Matrix<double, N, 1> phi;
+    if constexpr (N == 4) {
+      phi << q_integrated_[ui] - q_centre_[ui], q_in_history_[nk], 1.0, t - t_centre_;
+    } else {
+      phi << q_integrated_[ui] - q_centre_[ui], 1.0, t - t_centre_;
+    }
+    const auto result = estimators[ui].Update(phi, level_m);
+    selector_.Record(i, result.prediction_error);
+  }
+}
+
+template <int N>
+void OnlineIdBank::RecentreCandidates(std::vector<Rls<N>>& estimators, double dt) {
+  // The offset is the second-last parameter and the drift the last, with or without p21; the
+  // wave-front regressor q_in(k - nk) is bounded and needs no centre.
+  constexpr int kOffset = N - 2;
   for (int i = 0; i < num_candidates(); ++i) {
     const auto ui = static_cast<std::size_t>(i);
     const double dq = q_integrated_[ui] - q_centre_[ui];
-    Eigen::Matrix3d transform = Eigen::Matrix3d::Identity();
-    transform(1, 0) = dq;
-    transform(1, 2) = dt;
-    estimators_[ui].Transform(transform);
+    Eigen::Matrix<double, N, N> transform = Eigen::Matrix<double, N, N>::Identity();
+    transform(kOffset, 0) = dq;
+    transform(kOffset, N - 1) = dt;
+    estimators[ui].Transform(transform);
     q_centre_[ui] = q_integrated_[ui];
+  }
+}
+
+void OnlineIdBank::Recentre() {
+  // New centre at the current sample.  c' = c + b Q_c + d t_c, so moving the centre by
+  // (dQ, dt) maps theta by an exact linear T; the fit itself is unchanged.
+  const double t_new = static_cast<double>(k_ - k0_);
+  const double dt = t_new - t_centre_;
+  if (options_.wave_front_term) {
+    RecentreCandidates(wave_estimators_, dt);
+  } else {
+    RecentreCandidates(estimators_, dt);
   }
   t_centre_ = t_new;
 }
@@ -124,30 +156,44 @@ IdSnapshot OnlineIdBank::CandidateSnapshot(int delay_samples) const {
   const int i = delay_samples - options_.min_delay_samples;
   if (i < 0 || i >= num_candidates()) return s;
   const auto ui = static_cast<std::size_t>(i);
-  const Rls<3>& rls = estimators_[ui];
-  s.valid = rls.health().updates > 0;
   s.sample = k_;
   s.delay_samples = delay_samples;
   s.delay_s = delay_samples * options_.sample_time_s;
-  const Eigen::Vector3d& th = rls.theta();
+  if (options_.wave_front_term) {
+    FillSnapshot(wave_estimators_[ui], ui, s);
+  } else {
+    FillSnapshot(estimators_[ui], ui, s);
+  }
+  s.loss = selector_.loss(i);
+  return s;
+}
+
+template <int N>
+void OnlineIdBank::FillSnapshot(const Rls<N>& rls, std::size_t ui, IdSnapshot& s) const {
+  constexpr int kOffset = N - 2;
+  constexpr int kDrift = N - 1;
+  s.valid = rls.health().updates > 0;
+  const Eigen::Matrix<double, N, 1>& th = rls.theta();
   const double qc = q_centre_[ui];
   s.b = th(0);
-  s.d_m = th(2);
-  s.c_m = th(1) - th(0) * qc - th(2) * t_centre_;
+  if constexpr (N == 4) s.wave_front_gain_s_per_m2 = th(1);
+  s.d_m = th(kDrift);
+  s.c_m = th(kOffset) - th(0) * qc - th(kDrift) * t_centre_;
   s.area_m2 = options_.sample_time_s / s.b;
-  Eigen::Matrix3d p;
+  Eigen::Matrix<double, N, N> p;
   rls.Covariance(p);
   const double s2 = rls.innovation_variance();
-  const Eigen::Vector3d a(-qc, 1.0, -t_centre_);  // c = a' theta
+  Eigen::Matrix<double, N, 1> a = Eigen::Matrix<double, N, 1>::Zero();  // c = a' theta
+  a(0) = -qc;
+  a(kOffset) = 1.0;
+  a(kDrift) = -t_centre_;
   s.b_std = std::sqrt(std::max(0.0, s2 * p(0, 0)));
-  s.d_std_m = std::sqrt(std::max(0.0, s2 * p(2, 2)));
+  s.d_std_m = std::sqrt(std::max(0.0, s2 * p(kDrift, kDrift)));
   s.c_std_m = std::sqrt(std::max(0.0, s2 * a.dot(p * a)));
   s.area_std_m2 = options_.sample_time_s * s.b_std / (s.b * s.b);
   s.prediction_error_m = rls.last_prediction_error();
   s.innovation_std_m = std::sqrt(s2);
-  s.loss = selector_.loss(i);
   s.health = rls.health();
-  return s;
 }
 
 }  // namespace canalid::core

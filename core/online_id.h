@@ -13,7 +13,12 @@ struct OnlineIdOptions {
   double sample_time_s = 1.0;  ///< Ts > 0
   int min_delay_samples = 0;   ///< smallest candidate nk >= 0
   int max_delay_samples = 0;   ///< largest candidate nk >= min_delay_samples
-  RlsOptions rls;              ///< per candidate (n = 3); the default UD method, lambda 1
+  RlsOptions rls;              ///< per candidate (n = 3, or 4 with wave_front_term); UD, lambda 1
+  /// Adds IDZ's wave-front regressor q_in(k - nk) (gain p21) as in the batch FitIdModel, so that
+  /// with lambda = 1 and a large P0 the bank equals FitIdModel's open-loop fit.  Off by default
+  /// here (the daemon's configured banks keep the 3-parameter form); `canalid identify --online`
+  /// turns it on.
+  bool wave_front_term = false;
   BankSelectorOptions selector;
   /// Re-centring period of the regressor (samples): 0 = automatic, i.e. never for lambda = 1 and
   /// ceil(1 / (1 - lambda)) (one memory length) otherwise; < 0 = never.
@@ -32,10 +37,11 @@ struct IdSnapshot {
   int delay_samples = -1;    ///< nk
   double delay_s = 0.0;      ///< nk Ts
   double b = 0.0;            ///< backwater coefficient (s/m^2 per sample): level per m^3/s x sample
-  double c_m = 0.0;          ///< offset at k = k0
-  double d_m = 0.0;          ///< drift per sample
-  double area_m2 = 0.0;      ///< Ts / b
-  double b_std = 0.0;        ///< standard deviations from sigma2 P
+  double wave_front_gain_s_per_m2 = 0.0;  ///< p21 (0 without wave_front_term)
+  double c_m = 0.0;                       ///< offset at k = k0
+  double d_m = 0.0;                       ///< drift per sample
+  double area_m2 = 0.0;                   ///< Ts / b
+  double b_std = 0.0;                     ///< standard deviations from sigma2 P
   double c_std_m = 0.0;
   double d_std_m = 0.0;
   double area_std_m2 = 0.0;         ///< Ts b_std / b^2 (first order)
@@ -58,6 +64,8 @@ struct IdBankHealth {
 /// For the samples k = 0, 1, ... of inflow q_in (m^3/s), outflow q_out (m^3/s) and level y (m):
 ///   v_nk(k) = q_in(k - nk) - q_out(k - 1),   Q_nk(k) = sum_{j=k0..k} v_nk(j)  (m^3/s x samples),
 ///   y(k) = b Q_nk(k) + c + d (k - k0),       k0 = max_delay_samples + 1,
+/// or, with wave_front_term, y(k) = b Q_nk(k) + p21 q_in(k - nk) + c + d (k - k0) (Rls<4>, the
+/// batch FitIdModel's open-loop regression),
 /// i.e. the level against the integrated total flow with an offset and a drift (the low-frequency
 /// form of y(k) - y(k-1) = b (q_in(k - nk) - q_out(k - 1))), fitted by one Rls<3> per candidate
 /// from k = k0 on.  With lambda = 1 and a large P0 each candidate equals batch least squares on the
@@ -85,17 +93,24 @@ class OnlineIdBank final {
   /// Candidate with delay nk.  @pre min_delay_samples <= nk <= max_delay_samples.
   IdSnapshot CandidateSnapshot(int delay_samples) const;
   int selected_delay_samples() const;
-  int num_candidates() const { return static_cast<int>(estimators_.size()); }
+  int num_candidates() const { return options_.max_delay_samples - options_.min_delay_samples + 1; }
   const IdBankHealth& health() const { return health_; }
   const OnlineIdOptions& options() const { return options_; }
 
  private:
+  template <int N>
+  void UpdateCandidates(std::vector<Rls<N>>& estimators, double t, bool level_ok, double level_m);
+  template <int N>
+  void RecentreCandidates(std::vector<Rls<N>>& estimators, double dt);
+  template <int N>
+  void FillSnapshot(const Rls<N>& rls, std::size_t ui, IdSnapshot& s) const;
   void Recentre();
 
   OnlineIdOptions options_;
-  std::vector<Rls<3>> estimators_;
-  std::vector<double> q_integrated_;  // Q_nk(k)
-  std::vector<double> q_centre_;      // Q_c per candidate
+  std::vector<Rls<3>> estimators_;       // without the wave-front term
+  std::vector<Rls<4>> wave_estimators_;  // with it
+  std::vector<double> q_integrated_;     // Q_nk(k)
+  std::vector<double> q_centre_;         // Q_c per candidate
   BankSelector selector_;
   RingBuffer<double> q_in_history_;
   double q_in_good_ = 0.0;

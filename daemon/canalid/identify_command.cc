@@ -22,7 +22,9 @@ int RunIdentify(const IdentifyOptions& options) {
     throw InputError(e.what());
   }
   nlohmann::json model;
-  if (options.model == "id") {
+  if (options.online) {
+    model = IdentifyOnline(options, table);
+  } else if (options.model == "id") {
     model = IdentifyId(options, table);
   } else if (options.model == "arx") {
     model = IdentifyArx(options, table);
@@ -64,6 +66,8 @@ void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code)
       "  canalid identify --model frac-ss --input step.csv --q 2 --max-delay-s 6\n"
       "  canalid identify --model lpv --local arx --schedule level_up --bands 1.0,1.2,1.4,1.6 \\\n"
       "                   --input F.csv --u q_in --y level\n"
+      "  canalid identify --model arx --input F.csv --u u --y y --online --forgetting 0.999\n"
+      "  canalid identify --model id --input pool2.csv --online --trace trace.csv\n"
       "  canalid identify --compare foptd,soptd,frac-foptd --input 'steps/*.csv' [--json]\n"
       "Output: one JSON object on stdout (keys in docs/model-json.md); --compare prints a table.\n"
       "Exit 2 on bad input.");
@@ -131,6 +135,18 @@ void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code)
                   "Fewest consecutive samples a band must have")
       ->check(CLI::Range(10, 100000000))
       ->capture_default_str();
+  auto* online = cmd->add_option_group("Online estimation (--model id|arx --online)");
+  online->add_flag("--online", options.online,
+                   "Run the recursive estimator sample by sample; print its final snapshot");
+  online->add_option("--forgetting", options.forgetting, "Forgetting factor lambda, 0 < L <= 1")
+      ->capture_default_str();
+  online
+      ->add_option("--method", options.method,
+                   "Update law: ud_directional, ud_exponential, exponential, directional, "
+                   "constant_trace, stabilised, kalman, nlms")
+      ->capture_default_str();
+  online->add_option("--trace", options.trace,
+                     "Write the parameter and health trajectory to this CSV (time_s first)");
   cmd->add_flag("--json", options.json, "--compare: print JSON (summary and per-file) instead");
   cmd->callback([&options, &exit_code] { exit_code = RunIdentify(options); });
 }

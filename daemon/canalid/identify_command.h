@@ -42,6 +42,11 @@ struct IdentifyOptions {
   std::string bands_file;
   int degree = 2;
   int min_band_samples = 50;
+  // --online
+  bool online = false;
+  double forgetting = 1.0;
+  std::string method = "ud_directional";
+  std::string trace;  ///< --trace OUT.csv
   // --compare
   std::string compare;
   bool json = false;
@@ -56,6 +61,9 @@ nlohmann::json IdentifyArx(const IdentifyOptions& options, const drivers::CsvTab
 nlohmann::json IdentifyProcessModel(const IdentifyOptions& options, const drivers::CsvTable& table);
 nlohmann::json IdentifyFractional(const IdentifyOptions& options, const drivers::CsvTable& table);
 nlohmann::json IdentifyLpv(const IdentifyOptions& options, const drivers::CsvTable& table);
+/// `--online` with --model id or arx: the recursive estimator run sample by sample over the table,
+/// its final snapshot in the batch keys plus `estimator` and `health`; --trace writes every step.
+nlohmann::json IdentifyOnline(const IdentifyOptions& options, const drivers::CsvTable& table);
 
 /// `--compare`: fits every listed kind to every file of the glob in options.input and prints
 /// seed 2's Table 1 (mean, max, std of norm_error per model), or JSON with --json.

@@ -1,0 +1,72 @@
+#!/usr/bin/env bash
+# Whole-process comparison of issue 4: `canalid identify --model arx --online` over a 100k-sample
+# CSV against the same exponential-forgetting RLS loop in numpy (bench/peers/rls_numpy.py).
+# Checks that both give the same ARX(2,2,1) parameters (1e-6 relative), prints the median of 3
+# wall times of each (hyperfine if installed, else /usr/bin/time) and the speed ratio.
+# Usage: bench/compare_online_numpy.sh [BUILD_DIR] [SAMPLES] [FORGETTING]
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+build=${1:-$root/build}
+samples=${2:-100000}
+lambda=${3:-0.999}
+canalid=$build/daemon/canalid/canalid
+python=/usr/bin/python3
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+csv=$work/arx100k.csv
+
+# A stable ARX(2,2,1) plant, y(t) = 1.5 y(t-1) - 0.7 y(t-2) + u(t-1) + 0.5 u(t-2) + e(t), driven
+# by a seeded random binary input, e ~ N(0, 0.1^2).  Seeded: the same file every run.
+"$python" - "$csv" "$samples" <<'PY'
+import sys
+import numpy as np
+path, n = sys.argv[1], int(sys.argv[2])
+rng = np.random.default_rng(4)
+u = np.where(rng.random(n) < 0.5, -1.0, 1.0)
+e = 0.1 * rng.standard_normal(n)
+y = np.zeros(n)
+for t in range(2, n):
+    y[t] = 1.5 * y[t - 1] - 0.7 * y[t - 2] + u[t - 1] + 0.5 * u[t - 2] + e[t]
+np.savetxt(path, np.column_stack([np.arange(n) * 1.0, u, y]), delimiter=",",
+           header="time_s,u,y", comments="", fmt="%.17g")
+PY
+
+canalid_cmd=("$canalid" identify --model arx --input "$csv" --u u --y y --na 2 --nb 2 --nk 1
+             --online --method exponential --forgetting "$lambda")
+numpy_cmd=("$python" "$root/bench/peers/rls_numpy.py" "$csv" --forgetting "$lambda")
+
+"${canalid_cmd[@]}" >"$work/canalid.json"
+"${numpy_cmd[@]}" >"$work/numpy.json"
+"$python" - "$work/canalid.json" "$work/numpy.json" <<'PY'
+import json, sys
+c = json.load(open(sys.argv[1]))
+n = json.load(open(sys.argv[2]))
+ours = c["a"] + c["b_coeffs"][0]
+theirs = n["a"] + n["b"]
+worst = max(abs(x - y) / abs(y) for x, y in zip(ours, theirs))
+print("canalid [a1 a2 b1 b2] =", ours)
+print("numpy   [a1 a2 b1 b2] =", theirs)
+print("largest relative difference: %.3g" % worst)
+if worst > 1e-6:
+    sys.exit("parameters differ by more than 1e-6 relative")
+PY
+
+median3() {  # prints the median of 3 wall times (s) of the command given
+  if command -v hyperfine >/dev/null 2>&1; then
+    hyperfine -N -r 3 --export-json "$work/h.json" "$(printf '%q ' "$@")" >/dev/null
+    "$python" -c 'import json,sys; print(json.load(open(sys.argv[1]))["results"][0]["median"])' \
+      "$work/h.json"
+  else
+    for _ in 1 2 3; do
+      /usr/bin/time -f %e -o "$work/t" "$@" >/dev/null
+      cat "$work/t"
+    done | sort -g | sed -n 2p
+  fi
+}
+t_canalid=$(median3 "${canalid_cmd[@]}")
+t_numpy=$(median3 "${numpy_cmd[@]}")
+echo "samples: $samples, forgetting: $lambda"
+echo "canalid identify --model arx --online: ${t_canalid} s (median of 3)"
+echo "numpy RLS loop (bench/peers/rls_numpy.py): ${t_numpy} s (median of 3)"
+"$python" -c "import sys; c, n = float(sys.argv[1]), float(sys.argv[2]); \
+print('speed ratio numpy / canalid: %.1f x' % (n / max(c, 0.005)))" "$t_canalid" "$t_numpy"

@@ -1,0 +1,344 @@
+// `canalid identify --model id|arx --online`: the recursive estimators of core/ run sample by
+// sample over a CSV record, as the daemon runs them, and their final snapshot printed in the batch
+// model's JSON keys (docs/model-json.md) plus `estimator` and `health`.
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/arx.h"
+#include "core/detrend.h"
+#include "core/id_pipeline.h"
+#include "core/metrics.h"
+#include "core/online_id.h"
+#include "core/outliers.h"
+#include "core/rls.h"
+#include "daemon/canalid/identify_command.h"
+#include "daemon/canalid/input_error.h"
+#include "daemon/canalid/table_columns.h"
+#include "drivers/json/model_json.h"
+
+namespace canalid::cli {
+namespace {
+
+// A large initial covariance, so that with forgetting 1 the estimates are the batch least-squares
+// ones (the prior's weight ||theta||^2 / P0 is negligible against the data's information).
+constexpr double kInitialCovariance = 1e10;
+
+core::RlsOptions ParseRlsOptions(const IdentifyOptions& options, int num_params) {
+  static const std::map<std::string, core::RlsMethod> kMethods = {
+      {"ud_directional", core::RlsMethod::kUdDirectional},
+      {"ud_exponential", core::RlsMethod::kUdExponential},
+      {"exponential", core::RlsMethod::kExponential},
+      {"directional", core::RlsMethod::kDirectional},
+      {"constant_trace", core::RlsMethod::kConstantTrace},
+      {"stabilised", core::RlsMethod::kStabilised},
+      {"kalman", core::RlsMethod::kKalman},
+      {"nlms", core::RlsMethod::kNlms}};
+  const auto method = kMethods.find(options.method);
+  if (method == kMethods.end()) {
+    throw InputError("--method " + options.method +
+                     ": unknown (allowed: ud_directional, ud_exponential, exponential, "
+                     "directional, constant_trace, stabilised, kalman, nlms)");
+  }
+  if (!(options.forgetting > 0.0 && options.forgetting <= 1.0)) {
+    char value[32];
+    std::snprintf(value, sizeof value, "%g", options.forgetting);
+    throw InputError(std::string("--forgetting ") + value + ": out of range (0 < L <= 1)");
+  }
+  core::RlsOptions rls;
+  rls.method = method->second;
+  rls.forgetting = options.forgetting;
+  rls.initial_covariance = kInitialCovariance;
+  // Constant trace needs a finite trace to hold: the initial one.
+  if (rls.method == core::RlsMethod::kConstantTrace) {
+    rls.trace_max = num_params * kInitialCovariance;
+  }
+  return rls;
+}
+
+nlohmann::json HealthJson(const core::RlsHealth& h) {
+  return {{"trace_p", h.trace_p},
+          {"condition", h.condition_estimate},
+          {"excitation", h.excitation},
+          {"innovation_variance", h.innovation_variance},
+          {"frozen", h.frozen},
+          {"wound_up", h.wound_up},
+          {"updates", h.updates},
+          {"rejected_invalid", h.rejected_invalid},
+          {"rejected_outliers", h.rejected_outliers},
+          {"clipped", h.clipped},
+          {"dead_zone", h.dead_zone},
+          {"frozen_count", h.frozen_count},
+          {"projections", h.projections},
+          {"resets", h.resets},
+          {"trace_bounded", h.trace_bounded}};
+}
+
+// The trajectory file: time_s first, then the given columns, 17 significant digits, one row per
+// sample with a valid estimate.
+class TraceWriter {
+ public:
+  TraceWriter(const std::string& path, const std::vector<std::string>& names) : path_(path) {
+    if (path.empty()) return;
+    file_.reset(std::fopen(path.c_str(), "w"));
+    if (!file_) throw InputError("--trace " + path + ": cannot open for writing");
+    std::fputs("time_s", file_.get());
+    for (const auto& name : names) std::fprintf(file_.get(), ",%s", name.c_str());
+    std::fputc('\n', file_.get());
+  }
+  bool enabled() const { return file_ != nullptr; }
+  void Row(double time_s, const double* values, std::size_t count) {
+    std::fprintf(file_.get(), "%.17g", time_s);
+    for (std::size_t i = 0; i < count; ++i) std::fprintf(file_.get(), ",%.17g", values[i]);
+    std::fputc('\n', file_.get());
+  }
+  void Close() {
+    if (file_ && std::fclose(file_.release()) != 0) {
+      throw InputError("--trace " + path_ + ": cannot write");
+    }
+  }
+
+ private:
+  struct Closer {
+    void operator()(std::FILE* f) const { std::fclose(f); }
+  };
+  std::string path_;
+  std::unique_ptr<std::FILE, Closer> file_;
+};
+
+nlohmann::json OnlineId(const IdentifyOptions& options, const drivers::CsvTable& table) {
+  const Eigen::VectorXd q_in = RequireMovingColumn(table, options.qin);
+  const Eigen::VectorXd q_out = RequireColumn(table, options.qout);
+  Eigen::VectorXd level = RequireColumn(table, options.level);
+  const double ts = table.sample_time_s();
+  const auto n = level.size();
+  // The batch pipeline's cleaning, so online and batch see the same level.
+  const core::IdPipelineOptions pipeline;
+  core::OutlierReport outliers;
+  if (!options.keep_outliers) {
+    core::OutlierResult cleaned = core::RemoveOutliers(level, pipeline.level_outliers);
+    level = cleaned.cleaned;
+    outliers = cleaned.report;
+  }
+  core::OnlineIdOptions id;
+  id.sample_time_s = ts;
+  id.min_delay_samples = 0;
+  id.max_delay_samples = options.max_delay_s > 0.0 ? static_cast<int>(options.max_delay_s / ts)
+                                                   : static_cast<int>(n / 3);
+  id.wave_front_term = true;
+  id.rls = ParseRlsOptions(options, 4);
+  // p21 >= 0 as in the batch fit: a negative wave-front gain lets Q_(nk-1) - b q_in(k-nk+1) mimic
+  // Q_nk, so the delay would be ambiguous by one sample.
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  id.rls.lower = Eigen::Vector4d(-kInf, 0.0, -kInf, -kInf);
+  id.rls.upper = Eigen::Vector4d::Constant(kInf);
+  if (id.max_delay_samples + 20 >= n) {
+    throw InputError(table.source() + ": " + std::to_string(n) +
+                     " samples are too few for delays up to " +
+                     std::to_string(id.max_delay_samples) + " samples (--max-delay-s)");
+  }
+  std::unique_ptr<core::OnlineIdBank> bank;
+  try {
+    bank = std::make_unique<core::OnlineIdBank>(id);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(e.what());
+  }
+  const Eigen::VectorXd time_s = table.time_s();
+  TraceWriter trace(options.trace,
+                    {"delay_s", "area_m2", "b", "p21_s_per_m2", "offset_m", "drift_m_per_s",
+                     "trace_p", "prediction_error", "condition", "excitation", "frozen", "wound_up",
+                     "updates", "rejected", "switches"});
+  for (Eigen::Index k = 0; k < n; ++k) {
+    bank->Update(q_in(k), q_out(k), level(k));
+    if (!trace.enabled()) continue;
+    const core::IdSnapshot s = bank->Snapshot();
+    if (!s.valid) continue;
+    const double row[] = {
+        s.delay_s,
+        s.area_m2,
+        s.b,
+        s.wave_front_gain_s_per_m2,
+        s.c_m,
+        s.d_m / ts,
+        s.health.trace_p,
+        s.prediction_error_m,
+        s.health.condition_estimate,
+        s.health.excitation,
+        s.health.frozen ? 1.0 : 0.0,
+        s.health.wound_up ? 1.0 : 0.0,
+        static_cast<double>(s.health.updates),
+        static_cast<double>(s.health.rejected_invalid + s.health.rejected_outliers),
+        static_cast<double>(bank->health().switches)};
+    trace.Row(time_s(k), row, std::size(row));
+  }
+  trace.Close();
+  const core::IdSnapshot s = bank->Snapshot();
+  if (!s.valid) throw InputError(table.source() + ": the online bank made no estimate");
+  const core::IdBankHealth& bank_health = bank->health();
+  nlohmann::json health = HealthJson(s.health);
+  health["samples"] = bank_health.samples;
+  health["bad_flow_samples"] = bank_health.bad_flow_samples;
+  health["bad_level_samples"] = bank_health.bad_level_samples;
+  health["dropped_samples"] = bank_health.dropped_samples;
+  health["switches"] = bank_health.switches;
+  health["candidates"] = bank->num_candidates();
+  return {{"model", "id"},
+          {"delay_s", s.delay_s},
+          {"nk", s.delay_samples},
+          {"b", s.b},
+          {"area_m2", s.area_m2},
+          {"sample_time_s", ts},
+          {"p21_s_per_m2", s.wave_front_gain_s_per_m2},
+          {"offset_m", s.c_m},
+          {"drift_m_per_s", s.d_m / ts},
+          {"closed_loop", false},
+          {"fit_from_sample", id.max_delay_samples + 1},
+          {"b_std", s.b_std},
+          {"area_std_m2", s.area_std_m2},
+          {"prediction_error_m", s.prediction_error_m},
+          {"innovation_std_m", s.innovation_std_m},
+          {"estimator", "online-" + options.method},
+          {"forgetting", options.forgetting},
+          {"health", health},
+          {"preprocessing", {{"level_outliers_replaced", outliers.count}}},
+          {"warnings", nlohmann::json::array()}};
+}
+
+nlohmann::json OnlineArx(const IdentifyOptions& options, const drivers::CsvTable& table) {
+  const std::vector<std::string> inputs = SplitList(options.u, "--u");
+  core::ArxOrders orders;
+  orders.na = options.na;
+  orders.nb = ParseIntList(options.nb, "--nb");
+  orders.nk = ParseIntList(options.nk, "--nk");
+  if (orders.nb.size() == 1) orders.nb.resize(inputs.size(), orders.nb.front());
+  if (orders.nk.size() == 1) orders.nk.resize(inputs.size(), orders.nk.front());
+  if (orders.nb.size() != inputs.size() || orders.nk.size() != inputs.size()) {
+    throw InputError("--nb and --nk need one value, or one per input column (" +
+                     std::to_string(inputs.size()) + ")");
+  }
+  try {
+    orders.Validate(static_cast<Eigen::Index>(inputs.size()));
+  } catch (const std::invalid_argument& e) {
+    throw InputError(e.what());
+  }
+  Eigen::VectorXd y = RequireColumn(table, options.y);
+  Eigen::MatrixXd u(table.rows(), static_cast<Eigen::Index>(inputs.size()));
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    u.col(static_cast<Eigen::Index>(i)) = RequireMovingColumn(table, inputs[i]);
+  }
+  nlohmann::json preprocessing = {{"detrended", options.detrend}};
+  if (options.detrend) {
+    const core::DetrendResult line = core::RemoveLinearTrend(y);
+    y = line.detrended;
+    preprocessing["y_trend"] = {{"intercept", line.intercept},
+                                {"slope_per_sample", line.slope_per_sample}};
+    for (Eigen::Index i = 0; i < u.cols(); ++i)
+      u.col(i) = core::RemoveLinearTrend(u.col(i)).detrended;
+  }
+  const int d = orders.num_parameters();
+  const Eigen::Index first = orders.min_first_sample();
+  const Eigen::Index n = y.size();
+  if (n - first < d) {
+    throw InputError(table.source() + ": " + std::to_string(n - first) + " equations for " +
+                     std::to_string(d) + " ARX parameters");
+  }
+  core::Rls<Eigen::Dynamic> rls(ParseRlsOptions(options, d), d);
+  std::vector<std::string> names;
+  for (int j = 1; j <= orders.na; ++j) names.push_back("a" + std::to_string(j));
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    for (int j = 1; j <= orders.nb[i]; ++j) {
+      names.push_back("b" + std::to_string(i + 1) + "_" + std::to_string(j));
+    }
+  }
+  for (const char* name : {"trace_p", "prediction_error", "condition", "excitation", "frozen",
+                           "wound_up", "updates", "rejected"}) {
+    names.emplace_back(name);
+  }
+  const Eigen::VectorXd time_s = table.time_s();
+  TraceWriter trace(options.trace, names);
+  Eigen::VectorXd phi(d);
+  std::vector<double> row(names.size());
+  // Row t of core::ArxRegressors: [-y(t-1)..-y(t-na), u_i(t-nk_i)..u_i(t-nk_i-nb_i+1)].
+  for (Eigen::Index t = first; t < n; ++t) {
+    Eigen::Index c = 0;
+    for (int j = 1; j <= orders.na; ++j) phi(c++) = -y(t - j);
+    for (std::size_t i = 0; i < inputs.size(); ++i) {
+      const auto col = static_cast<Eigen::Index>(i);
+      for (int j = 0; j < orders.nb[i]; ++j) phi(c++) = u(t - orders.nk[i] - j, col);
+    }
+    rls.Update(phi, y(t));
+    if (!trace.enabled()) continue;
+    const core::RlsHealth& h = rls.health();
+    for (int j = 0; j < d; ++j) row[static_cast<std::size_t>(j)] = rls.theta()(j);
+    const double extra[] = {h.trace_p,
+                            rls.last_prediction_error(),
+                            h.condition_estimate,
+                            h.excitation,
+                            h.frozen ? 1.0 : 0.0,
+                            h.wound_up ? 1.0 : 0.0,
+                            static_cast<double>(h.updates),
+                            static_cast<double>(h.rejected_invalid + h.rejected_outliers)};
+    std::copy(std::begin(extra), std::end(extra), row.begin() + d);
+    trace.Row(time_s(t), row.data(), row.size());
+  }
+  trace.Close();
+
+  // The snapshot in core::ArxModel form, so the JSON has the batch keys.  loss, aic and fpe are
+  // those of the final parameters over the equations used (with forgetting 1: the batch ones).
+  core::ArxModel model;
+  model.orders = orders;
+  model.parameters = rls.theta();
+  model.a = model.parameters.head(orders.na);
+  Eigen::Index c = orders.na;
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    model.b.push_back(model.parameters.segment(c, orders.nb[i]));
+    c += orders.nb[i];
+  }
+  model.parameter_std.resize(d);
+  rls.StandardDeviations(model.parameter_std);
+  model.first_sample = first;
+  model.num_samples = n - first;
+  const Eigen::MatrixXd regressors = core::ArxRegressors(y, u, orders, first);
+  const double ssr = (y.tail(n - first) - regressors * model.parameters).squaredNorm();
+  const double equations = static_cast<double>(n - first);
+  const double ratio = d / equations;
+  model.loss = ssr / equations;
+  model.noise_variance = ssr / (equations - d);
+  model.aic = std::log(model.loss) + 2.0 * ratio;
+  model.fpe = model.loss * (1.0 + ratio) / (1.0 - ratio);
+  nlohmann::json json = drivers::ToJson(model);
+  if (!std::isfinite(model.aic)) json["aic"] = nullptr;
+  json["inputs"] = inputs;
+  json["output"] = options.y;
+  json["sample_time_s"] = table.sample_time_s();
+  json["preprocessing"] = preprocessing;
+  json["estimator"] = "online-" + options.method;
+  json["forgetting"] = options.forgetting;
+  json["prediction_error"] = rls.last_prediction_error();
+  json["health"] = HealthJson(rls.health());
+  try {
+    const Eigen::Index warmup = std::max<Eigen::Index>(model.first_sample, 1);
+    const Eigen::VectorXd simulated = core::SimulateArx(model, u, y.head(warmup));
+    json["metrics"] = drivers::ToJson(core::ComputeMetrics(
+        y.tail(n - warmup), simulated.tail(n - warmup), table.sample_time_s()));
+  } catch (const std::invalid_argument& e) {
+    throw InputError(table.source() + ": " + e.what());
+  }
+  return json;
+}
+
+}  // namespace
+
+nlohmann::json IdentifyOnline(const IdentifyOptions& options, const drivers::CsvTable& table) {
+  if (options.model == "id") return OnlineId(options, table);
+  if (options.model == "arx") return OnlineArx(options, table);
+  throw InputError("--online: --model " + options.model +
+                   " has no online estimator (online: id, arx)");
+}
+
+}  // namespace canalid::cli
