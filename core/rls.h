@@ -73,6 +73,8 @@ class Rls final {
   void Covariance(Matrix& out) const;
   /// sqrt(sigma2 P_ii); NaN for NLMS.
   void StandardDeviations(Vector& out) const;
+  /// sqrt(sigma2 P_ii) of one parameter (O(n)); NaN for NLMS.  @pre 0 <= i < num_params().
+  double StandardDeviation(int i) const;
   /// sigma2, the innovation variance estimate.
   double innovation_variance() const { return health_.innovation_variance; }
   double last_prediction_error() const { return last_error_; }
@@ -247,22 +249,21 @@ void Rls<N>::Transform(const Matrix& t) {
 }
 
 template <int N>
+double Rls<N>::StandardDeviation(int i) const {
+  if (options_.method == RlsMethod::kNlms) return std::numeric_limits<double>::quiet_NaN();
+  double pii = 0.0;
+  if (UsesUd()) {
+    for (int j = i; j < n_; ++j) pii += u_(i, j) * u_(i, j) * d_(j);
+  } else {
+    pii = p_(i, i);
+  }
+  return std::sqrt(std::max(0.0, health_.innovation_variance * pii));
+}
+
+template <int N>
 void Rls<N>::StandardDeviations(Vector& out) const {
   out.resize(n_);
-  if (options_.method == RlsMethod::kNlms) {
-    out.setConstant(std::numeric_limits<double>::quiet_NaN());
-    return;
-  }
-  const double s2 = health_.innovation_variance;
-  for (int i = 0; i < n_; ++i) {
-    double pii = 0.0;
-    if (UsesUd()) {
-      for (int j = i; j < n_; ++j) pii += u_(i, j) * u_(i, j) * d_(j);
-    } else {
-      pii = p_(i, i);
-    }
-    out(i) = std::sqrt(std::max(0.0, s2 * pii));
-  }
+  for (int i = 0; i < n_; ++i) out(i) = StandardDeviation(i);
 }
 
 template <int N>
