@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/online_arx.h"
+#include "core/online_fractional.h"
 #include "core/online_id.h"
 #include "core/rls.h"
 
@@ -98,6 +100,55 @@ void BM_IdBank64(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_IdBank64);
+
+// One sample through 8 fractional estimators (alpha grid 0.5..1.4, GL memory L = 200).
+void BM_FractionalBank8(benchmark::State& state) {
+  OnlineFractionalOptions options;
+  options.sample_time_s = 0.5;
+  options.memory_samples = 200;
+  options.delay_samples = 2;
+  options.rls.forgetting = 0.999;
+  OnlineFractionalBank bank(options);
+  std::uint64_t seed = 5;
+  std::vector<double> u(kPool);
+  std::vector<double> y(kPool);
+  double x = 0.0;
+  for (int k = 0; k < kPool; ++k) {
+    u[k] = Lcg(seed) > 0 ? 1.0 : -1.0;
+    x = 0.95 * x + 0.05 * u[k];
+    y[k] = x;
+  }
+  int k = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(bank.Update(u[k], y[k]));
+    k = (k + 1) & (kPool - 1);
+  }
+}
+BENCHMARK(BM_FractionalBank8);
+
+// One sample through an ARX(2, 2) bank over 16 delays (Rls<Dynamic>, n = 4).
+void BM_ArxBank16(benchmark::State& state) {
+  OnlineArxOptions options;
+  options.min_delay_samples = 1;
+  options.max_delay_samples = 16;
+  options.rls.forgetting = 0.99;
+  OnlineArxBank bank(options);
+  std::uint64_t seed = 7;
+  std::vector<double> u(kPool);
+  std::vector<double> y(kPool);
+  double x = 0.0;
+  for (int k = 0; k < kPool; ++k) {
+    u[k] = Lcg(seed) > 0 ? 1.0 : -1.0;
+    x = 0.9 * x + 0.1 * u[k] + 0.01 * Lcg(seed);
+    y[k] = x;
+  }
+  int k = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(bank.Update(u[k], y[k]));
+    k = (k + 1) & (kPool - 1);
+  }
+}
+BENCHMARK(BM_ArxBank16);
 
 }  // namespace
 }  // namespace canalid::core
