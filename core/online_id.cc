@@ -38,10 +38,17 @@ OnlineIdBank::OnlineIdBank(const OnlineIdOptions& options)
                 options.selector),
       q_in_history_(options.max_delay_samples + 1) {
   const int n = options_.max_delay_samples - options_.min_delay_samples + 1;
-  estimators_.reserve(static_cast<std::size_t>(n));
-  for (int i = 0; i < n; ++i) estimators_.emplace_back(options_.rls);
+  for (int i = 0; i < n; ++i) {
+    if (options_.closed_loop_iv) {
+      iv_estimators_.emplace_back(options_.rls);
+    } else {
+      estimators_.emplace_back(options_.rls);
+    }
+  }
   q_integrated_.assign(static_cast<std::size_t>(n), 0.0);
   q_centre_.assign(static_cast<std::size_t>(n), 0.0);
+  qin_integrated_.assign(static_cast<std::size_t>(n), 0.0);
+  qin_centre_.assign(static_cast<std::size_t>(n), 0.0);
   k0_ = options_.max_delay_samples + 1;
   const double lambda = options_.rls.forgetting;
   if (options_.recentre_samples > 0) {
@@ -60,6 +67,7 @@ bool OnlineIdBank::Update(double q_in_m3s, double q_out_m3s, double level_m) {
     return false;
   }
   if (!in_ok || !out_ok) ++health_.bad_flow_samples;
+  if (!have_good_) q_ref_ = q_in_m3s;
   if (in_ok) q_in_good_ = q_in_m3s;
   if (out_ok) q_out_good_ = q_out_m3s;
   have_good_ = true;
@@ -76,10 +84,17 @@ bool OnlineIdBank::Update(double q_in_m3s, double q_out_m3s, double level_m) {
       const auto ui = static_cast<std::size_t>(i);
       const int nk = options_.min_delay_samples + i;
       q_integrated_[ui] += q_in_history_[nk] - q_out_previous_;
+      qin_integrated_[ui] += q_in_history_[nk] - q_ref_;
       if (!level_ok) continue;
       const Eigen::Vector3d phi(q_integrated_[ui] - q_centre_[ui], 1.0, t - t_centre_);
-      const auto result = estimators_[ui].Update(phi, level_m);
-      selector_.Record(i, result.prediction_error);
+      double error = 0.0;
+      if (options_.closed_loop_iv) {
+        const Eigen::Vector3d z(qin_integrated_[ui] - qin_centre_[ui], 1.0, t - t_centre_);
+        error = iv_estimators_[ui].Update(phi, z, level_m).prediction_error;
+      } else {
+        error = estimators_[ui].Update(phi, level_m).prediction_error;
+      }
+      selector_.Record(i, error);
     }
     if (level_ok) {
       selector_.Commit();
@@ -102,7 +117,15 @@ void OnlineIdBank::Recentre() {
     Eigen::Matrix3d transform = Eigen::Matrix3d::Identity();
     transform(1, 0) = dq;
     transform(1, 2) = dt;
-    estimators_[ui].Transform(transform);
+    if (options_.closed_loop_iv) {
+      Eigen::Matrix3d instrument = Eigen::Matrix3d::Identity();
+      instrument(1, 0) = qin_integrated_[ui] - qin_centre_[ui];
+      instrument(1, 2) = dt;
+      iv_estimators_[ui].Transform(transform, instrument);
+      qin_centre_[ui] = qin_integrated_[ui];
+    } else {
+      estimators_[ui].Transform(transform);
+    }
     q_centre_[ui] = q_integrated_[ui];
   }
   t_centre_ = t_new;
@@ -120,12 +143,20 @@ IdSnapshot OnlineIdBank::Snapshot() const {
 }
 
 IdSnapshot OnlineIdBank::CandidateSnapshot(int delay_samples) const {
-  IdSnapshot s;
   const int i = delay_samples - options_.min_delay_samples;
-  if (i < 0 || i >= num_candidates()) return s;
+  if (i < 0 || i >= num_candidates()) return IdSnapshot{};
   const auto ui = static_cast<std::size_t>(i);
-  const Rls<3>& rls = estimators_[ui];
-  s.valid = rls.health().updates > 0;
+  return options_.closed_loop_iv ? MakeSnapshot(iv_estimators_[ui], i)
+                                 : MakeSnapshot(estimators_[ui], i);
+}
+
+template <typename Estimator>
+IdSnapshot OnlineIdBank::MakeSnapshot(const Estimator& rls, int i) const {
+  IdSnapshot s;
+  const auto ui = static_cast<std::size_t>(i);
+  const int delay_samples = options_.min_delay_samples + i;
+  const RlsHealth health = rls.health();
+  s.valid = health.updates > 0;
   s.sample = k_;
   s.delay_samples = delay_samples;
   s.delay_s = delay_samples * options_.sample_time_s;
@@ -139,14 +170,14 @@ IdSnapshot OnlineIdBank::CandidateSnapshot(int delay_samples) const {
   rls.Covariance(p);
   const double s2 = rls.innovation_variance();
   const Eigen::Vector3d a(-qc, 1.0, -t_centre_);  // c = a' theta
-  s.b_std = std::sqrt(std::max(0.0, s2 * p(0, 0)));
-  s.d_std_m = std::sqrt(std::max(0.0, s2 * p(2, 2)));
-  s.c_std_m = std::sqrt(std::max(0.0, s2 * a.dot(p * a)));
+  s.b_std = std::sqrt(std::abs(s2 * p(0, 0)));
+  s.d_std_m = std::sqrt(std::abs(s2 * p(2, 2)));
+  s.c_std_m = std::sqrt(std::abs(s2 * a.dot(p * a)));
   s.area_std_m2 = options_.sample_time_s * s.b_std / (s.b * s.b);
   s.prediction_error_m = rls.last_prediction_error();
   s.innovation_std_m = std::sqrt(s2);
   s.loss = selector_.loss(i);
-  s.health = rls.health();
+  s.health = health;
   return s;
 }
 
