@@ -73,10 +73,14 @@ class Rls final {
   void Covariance(Matrix& out) const;
   /// sqrt(sigma2 P_ii); NaN for NLMS.
   void StandardDeviations(Vector& out) const;
+  /// sqrt(sigma2 P_ii) of one parameter (O(n)); NaN for NLMS.  @pre 0 <= i < num_params().
+  double StandardDeviation(int i) const;
   /// sigma2, the innovation variance estimate.
   double innovation_variance() const { return health_.innovation_variance; }
   double last_prediction_error() const { return last_error_; }
-  const RlsHealth& health() const { return health_; }
+  /// Counters and flags of the last update; trace(P) and the condition estimate are computed
+  /// here (O(n^2), no allocation) so that Update does not pay for them.
+  RlsHealth health() const;
   const RlsOptions& options() const { return options_; }
   /// Exact condition number of P by an eigen decomposition; O(n^3); not for the sample path.
   double ConditionNumber() const;
@@ -102,7 +106,6 @@ class Rls final {
   void ScaleP(double factor);
   void BoundCovariance();
   void Project();
-  void RefreshHealth();
 
   RlsOptions options_;
   int n_;
@@ -110,14 +113,16 @@ class Rls final {
   Vector lower_;
   Vector upper_;
   bool has_box_ = false;
-  Matrix u_;  // UD: unit upper triangular U
-  Vector d_;  // UD: diagonal D
-  Matrix p_;  // covariance forms: P
-  Vector f_;  // work: U' phi (UD)
-  Vector g_;  // work: D f (UD) or P phi
-  Vector k_;  // work: gain accumulator
-  Vector h_;  // work: P phi (UD directional)
-  Matrix w_;  // work matrices (stabilised, transform)
+  Matrix u_;             // UD: unit upper triangular U
+  Vector d_;             // UD: diagonal D
+  Matrix p_;             // covariance forms: P
+  Vector f_;             // work: U' phi (UD)
+  Vector g_;             // work: D f (UD) or P phi
+  Vector k_;             // work: gain accumulator, P phi
+  Vector alpha_;         // work: Bierman partial sums
+  Vector inv_alpha_;     // work: their inverses
+  bool guards_ = false;  // any innovation guard configured
+  Matrix w_;             // work matrices (stabilised, transform)
   Matrix w2_;
   Eigen::LLT<Matrix> llt_;
   Eigen::SelfAdjointEigenSolver<Matrix> eig_;
@@ -160,7 +165,10 @@ Rls<N>::Rls(const RlsOptions& options, int num_params)
   f_.setZero(n_);
   g_.setZero(n_);
   k_.setZero(n_);
-  h_.setZero(n_);
+  alpha_.setZero(n_);
+  inv_alpha_.setZero(n_);
+  guards_ = std::isfinite(options_.reject) || std::isfinite(options_.huber) ||
+            options_.dead_zone > 0.0 || std::isfinite(options_.cusum_threshold);
   w_.setZero(n_, n_);
   w2_.setZero(n_, n_);
   if (options_.noise_forgetting > 0.0) {
@@ -183,7 +191,6 @@ void Rls<N>::Reset() {
   accepted_ = 0;
   last_error_ = std::numeric_limits<double>::quiet_NaN();
   health_ = RlsHealth{};
-  RefreshHealth();
 }
 
 template <int N>
@@ -239,26 +246,24 @@ void Rls<N>::Transform(const Matrix& t) {
   SetCovariance(w_);
   k_.noalias() = t * theta_;
   theta_ = k_;
-  RefreshHealth();
+}
+
+template <int N>
+double Rls<N>::StandardDeviation(int i) const {
+  if (options_.method == RlsMethod::kNlms) return std::numeric_limits<double>::quiet_NaN();
+  double pii = 0.0;
+  if (UsesUd()) {
+    for (int j = i; j < n_; ++j) pii += u_(i, j) * u_(i, j) * d_(j);
+  } else {
+    pii = p_(i, i);
+  }
+  return std::sqrt(std::max(0.0, health_.innovation_variance * pii));
 }
 
 template <int N>
 void Rls<N>::StandardDeviations(Vector& out) const {
   out.resize(n_);
-  if (options_.method == RlsMethod::kNlms) {
-    out.setConstant(std::numeric_limits<double>::quiet_NaN());
-    return;
-  }
-  const double s2 = health_.innovation_variance;
-  for (int i = 0; i < n_; ++i) {
-    double pii = 0.0;
-    if (UsesUd()) {
-      for (int j = i; j < n_; ++j) pii += u_(i, j) * u_(i, j) * d_(j);
-    } else {
-      pii = p_(i, i);
-    }
-    out(i) = std::sqrt(std::max(0.0, s2 * pii));
-  }
+  for (int i = 0; i < n_; ++i) out(i) = StandardDeviation(i);
 }
 
 template <int N>
@@ -294,18 +299,28 @@ template <int N>
 void Rls<N>::UpdateUdFactors(double measurement_variance) {
   // Bierman's measurement update of U and D with f_ = U' phi and g_ = D f (from Excitation):
   // P <- P - P phi phi' P / (R + r).  k_ accumulates P phi for the gain P phi / (R + r).
+  // The partial sums alpha_j = R + sum_{i<=j} f_i g_i and their inverses are formed first, so
+  // that the divisions do not sit on the dependency chain of the main loop.
   double alpha = measurement_variance;
   for (int j = 0; j < n_; ++j) {
-    const double alpha_prev = alpha;
     alpha += f_(j) * g_(j);
-    d_(j) *= alpha_prev / alpha;
-    const double pj = -f_(j) / alpha_prev;
-    k_(j) = g_(j);
+    alpha_(j) = alpha;
+  }
+  inv_alpha_ = alpha_.cwiseInverse();
+  double alpha_prev = measurement_variance;
+  double inv_prev = 1.0 / measurement_variance;
+  for (int j = 0; j < n_; ++j) {
+    d_(j) *= alpha_prev * inv_alpha_(j);
+    const double pj = -f_(j) * inv_prev;
+    const double gj = g_(j);
     for (int i = 0; i < j; ++i) {
       const double uij = u_(i, j);
       u_(i, j) = uij + k_(i) * pj;
-      k_(i) += uij * g_(j);
+      k_(i) += uij * gj;
     }
+    k_(j) = gj;
+    alpha_prev = alpha_(j);
+    inv_prev = inv_alpha_(j);
   }
 }
 
@@ -343,7 +358,7 @@ typename Rls<N>::Result Rls<N>::Update(const Eigen::MatrixBase<Derived>& phi, do
   const double scale = has_p ? 1.0 + r / lambda : 1.0;
   double e_used = e;
   const double s2 = health_.innovation_variance;
-  if (accepted_ > n_ + options_.warmup_samples && s2 > 0.0) {
+  if (guards_ && accepted_ > n_ + options_.warmup_samples && s2 > 0.0) {
     const double sd = std::sqrt(s2 * scale);
     double z = e / sd;
     if (std::abs(z) > options_.reject) {
@@ -366,7 +381,6 @@ typename Rls<N>::Result Rls<N>::Update(const Eigen::MatrixBase<Derived>& phi, do
       ++accepted_;
       ++health_.dead_zone;
       UpdateNoise(e_used, scale);
-      RefreshHealth();
       return {e, RlsOutcome::kDeadZone};
     }
   }
@@ -374,7 +388,6 @@ typename Rls<N>::Result Rls<N>::Update(const Eigen::MatrixBase<Derived>& phi, do
   if (norm2 <= options_.regressor_norm_min || (has_p && r <= options_.excitation_min)) {
     ++health_.frozen_count;
     UpdateNoise(e_used, scale);
-    RefreshHealth();
     health_.frozen = true;
     return {e, RlsOutcome::kFrozen};
   }
@@ -387,15 +400,18 @@ typename Rls<N>::Result Rls<N>::Update(const Eigen::MatrixBase<Derived>& phi, do
       break;
     }
     case RlsMethod::kUdDirectional: {
-      // P phi = U D U' phi = U g_, needed before the factors change.
-      for (int i = 0; i < n_; ++i) {
-        double s = 0.0;
-        for (int j = i; j < n_; ++j) s += u_(i, j) * g_(j);
-        h_(i) = s;
-      }
       const double forget = 1.0 - lambda;
-      if (r > forget) UpdateUdFactors(r / (r - forget));
-      theta_ += h_ * (e_used / (lambda + r));
+      if (r > forget) {
+        // Bierman's accumulator ends as P_prior phi whatever R is, so it is the gain numerator.
+        UpdateUdFactors(r / (r - forget));
+      } else {
+        for (int i = 0; i < n_; ++i) {
+          double s = 0.0;
+          for (int j = i; j < n_; ++j) s += u_(i, j) * g_(j);
+          k_(i) = s;
+        }
+      }
+      theta_ += k_ * (e_used / (lambda + r));
       break;
     }
     case RlsMethod::kExponential:
@@ -444,7 +460,6 @@ typename Rls<N>::Result Rls<N>::Update(const Eigen::MatrixBase<Derived>& phi, do
   UpdateNoise(e_used, scale);
   Project();
   BoundCovariance();
-  RefreshHealth();
   return {e, RlsOutcome::kUpdated};
 }
 
@@ -491,11 +506,12 @@ template <int N>
 void Rls<N>::BoundCovariance() {
   bounded_ = false;
   if (options_.method == RlsMethod::kNlms) return;
-  const double t = Trace();
-  if (t > options_.trace_max && options_.method != RlsMethod::kConstantTrace) {
+  const bool trace_bounds = std::isfinite(options_.trace_max) || options_.trace_min > 0.0;
+  const double t = trace_bounds ? Trace() : 0.0;
+  if (trace_bounds && t > options_.trace_max && options_.method != RlsMethod::kConstantTrace) {
     ScaleP(options_.trace_max / t);
     bounded_ = true;
-  } else if (t < options_.trace_min) {
+  } else if (trace_bounds && t < options_.trace_min) {
     ScaleP(options_.trace_min / t);
     bounded_ = true;
   }
@@ -525,9 +541,10 @@ void Rls<N>::Project() {
 }
 
 template <int N>
-void Rls<N>::RefreshHealth() {
+RlsHealth Rls<N>::health() const {
+  RlsHealth h = health_;
   const double t = options_.method == RlsMethod::kNlms ? n_ * options_.initial_covariance : Trace();
-  health_.trace_p = t;
+  h.trace_p = t;
   double lo = std::numeric_limits<double>::infinity();
   double hi = 0.0;
   for (int i = 0; i < n_; ++i) {
@@ -535,9 +552,10 @@ void Rls<N>::RefreshHealth() {
     lo = std::min(lo, v);
     hi = std::max(hi, v);
   }
-  health_.condition_estimate = lo > 0.0 ? hi / lo : std::numeric_limits<double>::infinity();
-  health_.wound_up = (bounded_ && t >= options_.trace_max * (1.0 - 1e-12)) ||
-                     t > n_ * options_.initial_covariance * (1.0 + 1e-9);
+  h.condition_estimate = lo > 0.0 ? hi / lo : std::numeric_limits<double>::infinity();
+  h.wound_up = (bounded_ && t >= options_.trace_max * (1.0 - 1e-12)) ||
+               t > n_ * options_.initial_covariance * (1.0 + 1e-9);
+  return h;
 }
 
 }  // namespace canalid::core

@@ -6,6 +6,8 @@
 #include <cstdlib>
 #include <new>
 
+#include "core/online_arx.h"
+#include "core/online_fractional.h"
 #include "core/online_id.h"
 #include "core/rls.h"
 #include "tests/core/online_test_data.h"
@@ -119,6 +121,51 @@ TEST(OnlineAllocation, IdBankUpdateAndSnapshotNeverAllocate) {
     bank.Update(d.q_in[k], k == 300 ? std::numeric_limits<double>::quiet_NaN() : d.q_out[k],
                 d.level[k]);
     sum += bank.Snapshot().b;
+  }
+  const long allocations = g_allocations - before;
+  EXPECT_EQ(allocations, 0);
+  EXPECT_TRUE(std::isfinite(sum));
+}
+
+TEST(OnlineAllocation, ArxBankUpdateAndSnapshotNeverAllocate) {
+  OnlineArxOptions o;
+  o.na = 3;
+  o.nb = 3;
+  o.min_delay_samples = 1;
+  o.max_delay_samples = 10;
+  o.rls.forgetting = 0.99;
+  OnlineArxBank bank(o);
+  testdata::TestRandom rnd(3);
+  const long before = g_allocations;
+  double sum = 0.0;
+  double y = 0.0;
+  for (int k = 0; k < 500; ++k) {
+    const double u = rnd.Uniform() < 0.5 ? -1.0 : 1.0;
+    y = 0.9 * y + 0.1 * u + 0.01 * rnd.Normal();
+    bank.Update(u, k == 100 ? std::numeric_limits<double>::quiet_NaN() : y);
+    sum += bank.Snapshot().a_std(0);
+  }
+  const long allocations = g_allocations - before;
+  EXPECT_EQ(allocations, 0);
+  EXPECT_TRUE(std::isfinite(sum));
+}
+
+TEST(OnlineAllocation, FractionalBankUpdateAndSnapshotNeverAllocate) {
+  OnlineFractionalOptions o;
+  o.sample_time_s = 0.5;
+  o.memory_samples = 100;
+  o.delay_samples = 1;
+  OnlineFractionalBank bank(o);
+  testdata::TestRandom rnd(4);
+  const long before = g_allocations;
+  double sum = 0.0;
+  double y = 0.0;
+  for (int k = 0; k < 400; ++k) {
+    const double u = rnd.Uniform() < 0.5 ? -1.0 : 1.0;
+    y = 0.9 * y + 0.1 * u + 0.01 * rnd.Normal();
+    bank.Update(k == 50 ? std::numeric_limits<double>::quiet_NaN() : u,
+                k == 100 ? std::numeric_limits<double>::quiet_NaN() : y);
+    sum += bank.Snapshot().theta1;
   }
   const long allocations = g_allocations - before;
   EXPECT_EQ(allocations, 0);

@@ -212,6 +212,94 @@ TEST(Rls, ZeroRegressorFreezes) {
   EXPECT_EQ(rls.health().trace_p, trace);  // no forgetting while frozen
 }
 
+// Each variant converges on a stationary problem (2 % of truth after 2000 samples, noise 0.05).
+TEST(Rls, EveryVariantConverges) {
+  Eigen::VectorXd truth(3);
+  truth << 1.0, -0.5, 2.0;
+  const Regression data = MakeRegression(2000, truth, 0.05, 21);
+  for (RlsMethod m : {RlsMethod::kUdDirectional, RlsMethod::kUdExponential, RlsMethod::kExponential,
+                      RlsMethod::kDirectional, RlsMethod::kConstantTrace, RlsMethod::kStabilised,
+                      RlsMethod::kKalman, RlsMethod::kNlms}) {
+    RlsOptions options;
+    options.method = m;
+    options.forgetting = 0.99;
+    options.trace_max = m == RlsMethod::kConstantTrace ? 0.1 : options.trace_max;
+    options.process_noise = 1e-5;
+    Rls<3> rls(options);
+    for (int k = 0; k < data.y.size(); ++k) {
+      rls.Update(Eigen::Vector3d(data.phi.row(k).transpose()), data.y(k));
+    }
+    EXPECT_LT(RelativeError(rls.theta(), truth), 0.02) << static_cast<int>(m);
+    if (m == RlsMethod::kConstantTrace) {
+      EXPECT_NEAR(rls.health().trace_p, 0.1, 1e-12);
+    }
+  }
+}
+
+// Without excitation (phi = 0 except a constant) only the known direction is refreshed:
+// exponential forgetting grows P like lambda^-k in the others, directional and stabilised
+// forgetting keep it bounded (stabilised tends to p_prior), and a trace bound caps the UD form.
+TEST(Rls, CovarianceStaysBoundedWithoutExcitationExceptPlainExponential) {
+  Eigen::VectorXd truth(2);
+  truth << 1.0, 2.0;
+  const Regression data = MakeRegression(300, truth, 0.01, 23);
+  auto final_trace = [&](RlsMethod m, double trace_max) {
+    RlsOptions options;
+    options.method = m;
+    options.forgetting = 0.95;
+    options.trace_max = trace_max;
+    options.prior_covariance = 1.0;
+    Rls<2> rls(options);
+    for (int k = 0; k < data.y.size(); ++k) {
+      rls.Update(Eigen::Vector2d(data.phi.row(k).transpose()), data.y(k));
+    }
+    for (int k = 0; k < 400; ++k) rls.Update(Eigen::Vector2d(1.0, 0.0), truth(0));
+    return rls.health().trace_p;
+  };
+  const double inf = std::numeric_limits<double>::infinity();
+  EXPECT_GT(final_trace(RlsMethod::kExponential, inf), 1e6);  // 0.95^-400 ~ 8e8
+  EXPECT_LT(final_trace(RlsMethod::kDirectional, inf), 1.0);
+  EXPECT_LT(final_trace(RlsMethod::kUdDirectional, inf), 1.0);
+  EXPECT_LT(final_trace(RlsMethod::kStabilised, inf), 1.5);
+  EXPECT_LE(final_trace(RlsMethod::kUdExponential, 10.0), 10.0 + 1e-9);
+}
+
+// The CUSUM on normalised innovations resets P when the parameters jump; estimates then follow
+// the new values within 50 samples (lambda = 1, so without the reset they would barely move).
+TEST(Rls, CusumResetFollowsAParameterJump) {
+  Eigen::VectorXd before(2);
+  before << 1.0, 2.0;
+  Eigen::VectorXd after(2);
+  after << 1.5, 1.0;
+  const Regression a = MakeRegression(1000, before, 0.05, 29);
+  const Regression b = MakeRegression(50, after, 0.05, 31);
+  RlsOptions options;
+  options.cusum_threshold = 10.0;
+  Rls<2> rls(options);
+  for (int k = 0; k < a.y.size(); ++k)
+    rls.Update(Eigen::Vector2d(a.phi.row(k).transpose()), a.y(k));
+  for (int k = 0; k < b.y.size(); ++k)
+    rls.Update(Eigen::Vector2d(b.phi.row(k).transpose()), b.y(k));
+  EXPECT_GE(rls.health().resets, 1);
+  EXPECT_LT(RelativeError(rls.theta(), after), 0.05);
+}
+
+TEST(Rls, DeadZoneSkipsSmallInnovations) {
+  Eigen::VectorXd truth(2);
+  truth << 1.0, 2.0;
+  const Regression data = MakeRegression(500, truth, 0.05, 37);
+  RlsOptions options;
+  options.dead_zone = 1.0;  // about 68 % of Gaussian innovations fall inside
+  Rls<2> rls(options);
+  for (int k = 0; k < data.y.size(); ++k) {
+    rls.Update(Eigen::Vector2d(data.phi.row(k).transpose()), data.y(k));
+  }
+  const double fraction = static_cast<double>(rls.health().dead_zone) / 500.0;
+  EXPECT_GT(fraction, 0.5);
+  EXPECT_LT(fraction, 0.8);
+  EXPECT_LT(RelativeError(rls.theta(), truth), 0.02);
+}
+
 TEST(Rls, BadOptionsThrowNamingTheOption) {
   RlsOptions options;
   options.forgetting = 1.5;

@@ -1,0 +1,154 @@
+// Cost of one RLS update per method and size, and of one sample through the online banks.
+// Run: build/bench/rls_bench --benchmark_min_time=0.2
+#include <benchmark/benchmark.h>
+
+#include <cstdint>
+#include <vector>
+
+#include "core/online_arx.h"
+#include "core/online_fractional.h"
+#include "core/online_id.h"
+#include "core/rls.h"
+
+namespace canalid::core {
+namespace {
+
+constexpr int kPool = 1024;  // pre-generated samples, cycled
+
+double Lcg(std::uint64_t& state) {  // deterministic uniform in [-1, 1)
+  state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+  return static_cast<double>(state >> 11) * 0x1.0p-52 - 1.0;
+}
+
+const char* Name(RlsMethod m) {
+  switch (m) {
+    case RlsMethod::kUdDirectional:
+      return "ud_directional(default)";
+    case RlsMethod::kUdExponential:
+      return "ud_exponential";
+    case RlsMethod::kExponential:
+      return "exponential";
+    case RlsMethod::kDirectional:
+      return "directional";
+    case RlsMethod::kConstantTrace:
+      return "constant_trace";
+    case RlsMethod::kStabilised:
+      return "stabilised";
+    case RlsMethod::kKalman:
+      return "kalman";
+    case RlsMethod::kNlms:
+      return "nlms";
+  }
+  return "?";
+}
+
+template <int N>
+void BM_RlsUpdate(benchmark::State& state) {
+  const auto method = static_cast<RlsMethod>(state.range(0));
+  RlsOptions options;
+  options.method = method;
+  options.forgetting = 0.99;
+  options.process_noise = 1e-6;
+  if (method == RlsMethod::kConstantTrace) options.trace_max = 10.0;
+  Rls<N> rls(options);
+  std::vector<Eigen::Matrix<double, N, 1>> phis(kPool);
+  std::vector<double> ys(kPool);
+  std::uint64_t seed = 1;
+  for (int k = 0; k < kPool; ++k) {
+    for (int i = 0; i < N; ++i) phis[k](i) = Lcg(seed);
+    ys[k] = phis[k].sum() + 0.01 * Lcg(seed);
+  }
+  int k = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(rls.Update(phis[k], ys[k]));
+    k = (k + 1) & (kPool - 1);
+  }
+  state.SetLabel(Name(method));
+}
+
+void Methods(benchmark::internal::Benchmark* b) {
+  for (int m = 0; m <= static_cast<int>(RlsMethod::kNlms); ++m) b->Arg(m);
+}
+
+BENCHMARK_TEMPLATE(BM_RlsUpdate, 2)->Apply(Methods);
+BENCHMARK_TEMPLATE(BM_RlsUpdate, 4)->Apply(Methods);
+BENCHMARK_TEMPLATE(BM_RlsUpdate, 8)->Apply(Methods);
+BENCHMARK_TEMPLATE(BM_RlsUpdate, 16)->Apply(Methods);
+
+// One sample through a bank of 64 ID candidates (nk = 0..63), lambda 0.99 with re-centring.
+void BM_IdBank64(benchmark::State& state) {
+  OnlineIdOptions options;
+  options.sample_time_s = 60.0;
+  options.max_delay_samples = 63;
+  options.rls.forgetting = 0.99;
+  OnlineIdBank bank(options);
+  std::uint64_t seed = 3;
+  std::vector<double> q_in(kPool);
+  std::vector<double> q_out(kPool);
+  std::vector<double> level(kPool);
+  double y = 2.0;
+  for (int k = 0; k < kPool; ++k) {
+    q_in[k] = 2.0 + 0.2 * (Lcg(seed) > 0 ? 1 : -1);
+    q_out[k] = 2.0 + 0.1 * Lcg(seed);
+    y += 0.01 * (q_in[k] - q_out[k]);
+    level[k] = y;
+  }
+  int k = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(bank.Update(q_in[k], q_out[k], level[k]));
+    k = (k + 1) & (kPool - 1);
+  }
+}
+BENCHMARK(BM_IdBank64);
+
+// One sample through 8 fractional estimators (alpha grid 0.5..1.4, GL memory L = 200).
+void BM_FractionalBank8(benchmark::State& state) {
+  OnlineFractionalOptions options;
+  options.sample_time_s = 0.5;
+  options.memory_samples = 200;
+  options.delay_samples = 2;
+  options.rls.forgetting = 0.999;
+  OnlineFractionalBank bank(options);
+  std::uint64_t seed = 5;
+  std::vector<double> u(kPool);
+  std::vector<double> y(kPool);
+  double x = 0.0;
+  for (int k = 0; k < kPool; ++k) {
+    u[k] = Lcg(seed) > 0 ? 1.0 : -1.0;
+    x = 0.95 * x + 0.05 * u[k];
+    y[k] = x;
+  }
+  int k = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(bank.Update(u[k], y[k]));
+    k = (k + 1) & (kPool - 1);
+  }
+}
+BENCHMARK(BM_FractionalBank8);
+
+// One sample through an ARX(2, 2) bank over 16 delays (Rls<Dynamic>, n = 4).
+void BM_ArxBank16(benchmark::State& state) {
+  OnlineArxOptions options;
+  options.min_delay_samples = 1;
+  options.max_delay_samples = 16;
+  options.rls.forgetting = 0.99;
+  OnlineArxBank bank(options);
+  std::uint64_t seed = 7;
+  std::vector<double> u(kPool);
+  std::vector<double> y(kPool);
+  double x = 0.0;
+  for (int k = 0; k < kPool; ++k) {
+    u[k] = Lcg(seed) > 0 ? 1.0 : -1.0;
+    x = 0.9 * x + 0.1 * u[k] + 0.01 * Lcg(seed);
+    y[k] = x;
+  }
+  int k = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(bank.Update(u[k], y[k]));
+    k = (k + 1) & (kPool - 1);
+  }
+}
+BENCHMARK(BM_ArxBank16);
+
+}  // namespace
+}  // namespace canalid::core
