@@ -1,5 +1,6 @@
 #include "sim/sampled_plant.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -84,6 +85,63 @@ void IdLevelPlant::Advance(const Eigen::Ref<const Eigen::VectorXd>& inputs) {
     head_ = (head_ + 1) % model_.nk;
   }
   previous_outflow_m3s_ = inputs(1);
+  ++sample_;
+}
+
+ArxPlant::ArxPlant(const core::ArxModel& model, double sample_time_s,
+                   const Eigen::Ref<const Eigen::VectorXd>& initial_outputs)
+    : model_(model), sample_time_s_(sample_time_s), initial_outputs_(initial_outputs) {
+  if (!(sample_time_s > 0.0)) {
+    throw std::invalid_argument("ArxPlant: sample_time_s = " + std::to_string(sample_time_s) +
+                                ", must be > 0");
+  }
+  const std::size_t inputs = model.b.size();
+  if (model.a.size() != model.orders.na || model.orders.nk.size() != inputs || inputs == 0) {
+    throw std::invalid_argument("ArxPlant: a has " + std::to_string(model.a.size()) +
+                                " coefficients for na = " + std::to_string(model.orders.na) +
+                                ", b has " + std::to_string(inputs) + " inputs and nk " +
+                                std::to_string(model.orders.nk.size()) +
+                                " (need equal, at least one input)");
+  }
+  Eigen::Index lags = 1;
+  for (std::size_t i = 0; i < inputs; ++i) {
+    if (model.orders.nk[i] < 0) {
+      throw std::invalid_argument("ArxPlant: nk[" + std::to_string(i) +
+                                  "] = " + std::to_string(model.orders.nk[i]) + ", must be >= 0");
+    }
+    lags = std::max<Eigen::Index>(lags, model.orders.nk[i] + model.b[i].size());
+  }
+  input_ring_ = Eigen::MatrixXd::Zero(lags, static_cast<Eigen::Index>(inputs));
+  output_ring_ = Eigen::VectorXd::Zero(std::max(model.orders.na, 1));
+}
+
+double ArxPlant::Output(const Eigen::Ref<const Eigen::VectorXd>& inputs) const {
+  RequireInputs(inputs, input_count());
+  if (sample_ < initial_outputs_.size()) return initial_outputs_(sample_);
+  const Eigen::Index lags = input_ring_.rows();
+  double value = 0.0;
+  for (Eigen::Index i = 0; i < inputs.size(); ++i) {
+    const Eigen::VectorXd& b = model_.b[static_cast<std::size_t>(i)];
+    const Eigen::Index nk = model_.orders.nk[static_cast<std::size_t>(i)];
+    for (Eigen::Index j = 0; j < b.size(); ++j) {
+      const Eigen::Index m = nk + j;  // u_i(t - m)
+      if (m > sample_) continue;      // before sample 0: zero
+      value += b(j) * (m == 0 ? inputs(i) : input_ring_((input_head_ - m + lags) % lags, i));
+    }
+  }
+  const Eigen::Index na = output_ring_.size();
+  for (Eigen::Index j = 1; j <= model_.a.size() && j <= sample_; ++j) {
+    value -= model_.a(j - 1) * output_ring_((output_head_ - j + na) % na);
+  }
+  return value;
+}
+
+void ArxPlant::Advance(const Eigen::Ref<const Eigen::VectorXd>& inputs) {
+  const double y = Output(inputs);
+  output_ring_(output_head_) = y;
+  output_head_ = (output_head_ + 1) % output_ring_.size();
+  input_ring_.row(input_head_) = inputs.transpose();
+  input_head_ = (input_head_ + 1) % input_ring_.rows();
   ++sample_;
 }
 

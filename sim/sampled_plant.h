@@ -2,6 +2,7 @@
 #include <Eigen/Core>
 #include <memory>
 
+#include "core/arx.h"
 #include "core/fractional_foptd.h"
 #include "core/fractional_simulator.h"
 #include "core/id_model.h"
@@ -71,6 +72,31 @@ class IdLevelPlant final : public SampledPlant {
   long sample_ = 0;
   double previous_outflow_m3s_ = 0.0;
   double integrated_m3s_ = 0.0;  // Q(k - 1)
+};
+
+/// The ARX model of `canalid identify --model arx` run as a simulation (core::SimulateArx):
+///   y(t) = -sum_j a_j y(t-j) + sum_i sum_j b_ij u_i(t - nk_i - j + 1),
+/// with inputs before sample 0 taken as 0 and the first outputs given (y(t) = initial_outputs(t)
+/// for t < its size, as `canalid simulate` starts from the measured ones).  Any number of inputs.
+class ArxPlant final : public SampledPlant {
+ public:
+  /// @throws std::invalid_argument on sample_time_s <= 0 or orders that disagree with a and b.
+  ArxPlant(const core::ArxModel& model, double sample_time_s,
+           const Eigen::Ref<const Eigen::VectorXd>& initial_outputs);
+  double sample_time_s() const override { return sample_time_s_; }
+  int input_count() const override { return static_cast<int>(model_.b.size()); }
+  double Output(const Eigen::Ref<const Eigen::VectorXd>& inputs) const override;
+  void Advance(const Eigen::Ref<const Eigen::VectorXd>& inputs) override;
+
+ private:
+  core::ArxModel model_;
+  double sample_time_s_;
+  Eigen::VectorXd initial_outputs_;
+  Eigen::MatrixXd input_ring_;   // row (head - m) mod rows = u(t - m), m = 1..rows
+  Eigen::VectorXd output_ring_;  // (head - j) mod na = y(t - j), j = 1..na
+  Eigen::Index input_head_ = 0;
+  Eigen::Index output_head_ = 0;
+  Eigen::Index sample_ = 0;
 };
 
 /// A sampled plant seen as a pool (PoolPlant): one input = the inflow (the outflow is ignored),

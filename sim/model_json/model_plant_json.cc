@@ -15,24 +15,35 @@ void RequireInitialInputs(const Eigen::Ref<const Eigen::VectorXd>& initial_input
   }
 }
 
+// Discrete models (nk, ARX coefficients) mean nothing at another sampling.
+void RequireSampleTime(double model_s, double sample_time_s, const std::string& source) {
+  if (std::abs(sample_time_s - model_s) > 1e-9 * model_s) {
+    throw std::invalid_argument(source + ": sample_time_s = " + std::to_string(sample_time_s) +
+                                " but the model is discrete at " + std::to_string(model_s) + " s");
+  }
+}
+
 }  // namespace
 
 std::unique_ptr<SampledPlant> PlantFromModelJson(
     const nlohmann::json& json, const std::string& source, double sample_time_s,
-    const Eigen::Ref<const Eigen::VectorXd>& initial_inputs) {
+    const Eigen::Ref<const Eigen::VectorXd>& initial_inputs,
+    const Eigen::VectorXd& initial_outputs) {
   RequireInitialInputs(initial_inputs, source);
   const std::string kind = drivers::ModelKind(json, source);
   if (kind == "id") {
     const drivers::IdModelRecord r = drivers::IdModelFromJson(json, source);
-    // nk counts samples: the model means nothing at another sampling.
-    if (std::abs(sample_time_s - r.model.sample_time_s) > 1e-9 * r.model.sample_time_s) {
-      throw std::invalid_argument(source + ": sample_time_s = " + std::to_string(sample_time_s) +
-                                  " but the id model is discrete at " +
-                                  std::to_string(r.model.sample_time_s) + " s");
-    }
+    RequireSampleTime(r.model.sample_time_s, sample_time_s, source);
     return std::make_unique<IdLevelPlant>(r.model, r.p21_s_per_m2, r.offset_m,
                                           r.drift_m_per_s * r.model.sample_time_s,
                                           r.fit_from_sample, initial_inputs(0));
+  }
+  if (kind == "arx") {
+    const core::ArxModel arx = drivers::ArxModelFromJson(json, source);
+    if (json.contains("sample_time_s") && json.at("sample_time_s").is_number()) {
+      RequireSampleTime(json.at("sample_time_s").get<double>(), sample_time_s, source);
+    }
+    return std::make_unique<ArxPlant>(arx, sample_time_s, initial_outputs);
   }
   if (kind == "foptd") {
     const auto r = drivers::FoptdFromJson(json, source);
@@ -50,7 +61,7 @@ std::unique_ptr<SampledPlant> PlantFromModelJson(
                                                   initial_inputs(0));
   }
   throw std::invalid_argument(source + ": key 'model': '" + kind +
-                              "' has no plant (id, foptd, frac-foptd)");
+                              "' has no plant (id, arx, foptd, frac-foptd)");
 }
 
 }  // namespace canalid::sim

@@ -12,6 +12,7 @@
 #include <random>
 #include <sstream>
 #include <stdexcept>
+#include <vector>
 
 #include "core/fractional_foptd.h"
 #include "drivers/csv/csv_table.h"
@@ -88,7 +89,12 @@ class ModelPlantJson : public ::testing::Test {
       u.col(static_cast<Eigen::Index>(i)) = table.Column(inputs[i]);
     }
     const Eigen::VectorXd first = u.row(0).transpose();
-    auto plant = PlantFromModelJson(model, "model.json", table.sample_time_s(), first);
+    // arx starts from the measured outputs before first_row, as canalid simulate does.
+    const Eigen::VectorXd initial_outputs = model["model"] == "arx"
+                                                ? Eigen::VectorXd(table.Column("y").head(first_row))
+                                                : Eigen::VectorXd();
+    auto plant =
+        PlantFromModelJson(model, "model.json", table.sample_time_s(), first, initial_outputs);
     ASSERT_EQ(simulated.size(), table.rows() - first_row);
     double worst = 0.0;
     for (Eigen::Index k = 0; k < table.rows(); ++k) {
@@ -129,9 +135,35 @@ TEST_F(ModelPlantJson, FoptdAndFractionalPlantsEqualCanalidSimulateOnAnotherInpu
   }
 }
 
+// Two inputs through y(t) = 1.2 y(t-1) - 0.5 y(t-2) + 0.8 u1(t-1) + 0.4 u2(t-3) + noise.
+std::string ArxCsv() {
+  std::mt19937 rng(23);
+  std::normal_distribution<double> noise(0.0, 0.02);
+  std::ostringstream csv;
+  csv.precision(17);
+  csv << "time_s,u1,u2,y\n";
+  std::vector<double> u1(500), u2(500), y(500, 0.0);
+  for (int t = 0; t < 500; ++t) {
+    u1[t] = (rng() & 1U) ? 1.0 : -1.0;
+    u2[t] = (rng() & 1U) ? 2.0 : 0.0;
+    if (t >= 3) y[t] = 1.2 * y[t - 1] - 0.5 * y[t - 2] + 0.8 * u1[t - 1] + 0.4 * u2[t - 3];
+    y[t] += noise(rng);
+    csv << t * 5.0 << "," << u1[t] << "," << u2[t] << "," << y[t] << "\n";
+  }
+  return csv.str();
+}
+
+TEST_F(ModelPlantJson, ArxPlantEqualsCanalidSimulate) {
+  WriteFile(dir_ / "arx.csv", ArxCsv());
+  const auto model =
+      Identify((dir_ / "arx.csv").string(), "--model arx --u u1,u2 --y y --na 2 --nb 1,1 --nk 1,3");
+  ASSERT_EQ(model["model"], "arx");
+  ExpectPlantEqualsSimulate(model, (dir_ / "arx.csv").string(), {"u1", "u2"});
+}
+
 TEST_F(ModelPlantJson, RejectsKindsWithoutPlantAndWrongSampling) {
-  const nlohmann::json arx = {{"model", "arx"}};
-  EXPECT_THROW(PlantFromModelJson(arx, "m.json", 1.0, Eigen::VectorXd::Zero(1)),
+  const nlohmann::json soptd = {{"model", "soptd"}};
+  EXPECT_THROW(PlantFromModelJson(soptd, "m.json", 1.0, Eigen::VectorXd::Zero(1)),
                std::invalid_argument);
   const std::string csv = std::string(CANALID_SOURCE_DIR) + "/tests/data/sim/asce2-pool2-prbs.csv";
   const auto model = Identify(csv, "--model id --max-delay-s 3600");

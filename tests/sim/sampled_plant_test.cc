@@ -108,6 +108,22 @@ TEST(IdLevelPlant, ZeroDelayHasDirectFeedthrough) {
                std::invalid_argument);
 }
 
+TEST(ArxPlant, FirstOrderStepIsTheGeometricSeries) {
+  // y(t) = 0.5 y(t-1) + u(t-1) with u = 1 from t = 0 and y(0) = 0: y(t) = 2 (1 - 0.5^t).
+  core::ArxModel model;
+  model.orders = core::ArxOrders{1, {1}, {1}};
+  model.a = Eigen::VectorXd::Constant(1, -0.5);
+  model.b = {Eigen::VectorXd::Constant(1, 1.0)};
+  ArxPlant plant(model, 1.0, Eigen::VectorXd::Zero(1));
+  const Eigen::VectorXd u = Eigen::VectorXd::Ones(1);
+  for (int t = 0; t < 30; ++t) {
+    ASSERT_NEAR(plant.Output(u), 2.0 * (1.0 - std::pow(0.5, t)), 1e-12) << t;
+    plant.Advance(u);
+  }
+  model.orders.nk = {-1};
+  EXPECT_THROW(ArxPlant(model, 1.0, Eigen::VectorXd()), std::invalid_argument);
+}
+
 TEST(SampledPoolPlant, StepsWholeSamplesOnly) {
   const core::IdModel model{0.002, 2, 60.0};
   auto make = [&] {
