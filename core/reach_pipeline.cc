@@ -71,6 +71,13 @@ ReachActions ReachPipeline::StopExperiment() {
   return Apply(event);
 }
 
+ReachActions ReachPipeline::OnLinkLost() {
+  ExperimentEvent event;
+  event.kind = ExperimentEventKind::kSample;
+  event.sample.link_ok = false;
+  return Apply(event);
+}
+
 ReachActions ReachPipeline::OnWriteFailed() {
   ExperimentEvent event;
   event.kind = ExperimentEventKind::kWriteFailed;

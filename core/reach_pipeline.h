@@ -49,6 +49,9 @@ class ReachPipeline final {
   ReachActions OnSample(const ReachSample& sample);
   ReachActions StartExperiment();
   ReachActions StopExperiment();
+  /// The PLC link is down and no samples come (the poller is reconnecting): abort if running.
+  /// Nothing else changes (no estimator update, no sample counted).
+  ReachActions OnLinkLost();
   /// A setpoint write of this reach failed: abort if exciting.
   ReachActions OnWriteFailed();
   /// Installs (or replaces) the experiment plan, e.g. once the actuator's nominal setpoint has

@@ -224,6 +224,14 @@ void Daemon::Drain(int index) {
   plc.drain_pending = false;
   plc.poller->DrainSamples([&](const drivers::PollSample& s) { OnPoll(index, s); });
   plc.poller->DrainWriteResults([&](const drivers::WriteResult& r) { OnWriteResult(index, r); });
+  // While the poller reconnects no samples arrive, so a running experiment would never hear of
+  // the lost link from a sample (after timeouts the link drops without a disconnected poll).
+  if (!plc.poller->counters().connected) {
+    for (const int r : plc.reaches) {
+      Reach& reach = *reaches_[static_cast<std::size_t>(r)];
+      Handle(reach, reach.pipeline.OnLinkLost(), reach.last_time_s);
+    }
+  }
 }
 
 void Daemon::OnPoll(int index, const drivers::PollSample& s) {

@@ -84,6 +84,19 @@ TEST(ReachPipeline, ALevelOutOfBandAbortsAndRestoresNominalOnTheSameSample) {
   EXPECT_DOUBLE_EQ(*a.write_setpoint, 0.5);
 }
 
+TEST(ReachPipeline, ALostLinkAbortsWithoutASample) {
+  ReachPipeline pipeline(Options());
+  pipeline.StartExperiment();
+  for (int k = 0; k < 8; ++k) pipeline.OnSample({10.0, 10.0, 2.1, true, true, true, true});
+  const ReachActions a = pipeline.OnLinkLost();
+  EXPECT_EQ(pipeline.experiment_state().phase, ExperimentPhase::kAborted);
+  EXPECT_EQ(pipeline.experiment_state().abort_reason, AbortReason::kLinkLost);
+  EXPECT_TRUE(a.restore_nominal);
+  EXPECT_EQ(pipeline.samples(), 8);
+  // Idle: nothing to do.
+  EXPECT_FALSE(ReachPipeline(Options()).OnLinkLost().write_setpoint.has_value());
+}
+
 TEST(ReachPipeline, InvalidSamplesNeitherCorruptTheEstimateNorCrash) {
   ReachPipeline pipeline(Options());
   const double nan = std::nan("");
