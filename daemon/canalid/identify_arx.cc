@@ -10,33 +10,47 @@
 
 namespace canalid::cli {
 
-nlohmann::json IdentifyArx(const IdentifyOptions& options, const drivers::CsvTable& table) {
-  const std::vector<std::string> inputs = SplitList(options.u, "--u");
-  core::ArxOrders orders;
+ArxData ReadArxData(const IdentifyOptions& options, const drivers::CsvTable& table) {
+  ArxData data;
+  data.inputs = SplitList(options.u, "--u");
+  const std::size_t m = data.inputs.size();
+  core::ArxOrders& orders = data.orders;
   orders.na = options.na;
   orders.nb = ParseIntList(options.nb, "--nb");
   orders.nk = ParseIntList(options.nk, "--nk");
   // One value of nb or nk applies to every input, as in MATLAB's arx.
-  if (orders.nb.size() == 1) orders.nb.resize(inputs.size(), orders.nb.front());
-  if (orders.nk.size() == 1) orders.nk.resize(inputs.size(), orders.nk.front());
-  if (orders.nb.size() != inputs.size() || orders.nk.size() != inputs.size()) {
-    throw InputError("--nb and --nk need one value, or one per input column (" +
-                     std::to_string(inputs.size()) + ")");
+  if (orders.nb.size() == 1) orders.nb.resize(m, orders.nb.front());
+  if (orders.nk.size() == 1) orders.nk.resize(m, orders.nk.front());
+  if (orders.nb.size() != m || orders.nk.size() != m) {
+    throw InputError("--nb and --nk need one value, or one per input column (" + std::to_string(m) +
+                     ")");
   }
-  Eigen::VectorXd y = RequireColumn(table, options.y);
-  Eigen::MatrixXd u(table.rows(), static_cast<Eigen::Index>(inputs.size()));
-  for (std::size_t i = 0; i < inputs.size(); ++i) {
-    u.col(static_cast<Eigen::Index>(i)) = RequireMovingColumn(table, inputs[i]);
+  try {
+    orders.Validate(static_cast<Eigen::Index>(m));
+  } catch (const std::invalid_argument& e) {
+    throw InputError(e.what());
   }
-  nlohmann::json preprocessing = {{"detrended", options.detrend}};
+  data.y = RequireColumn(table, options.y);
+  data.u.resize(table.rows(), static_cast<Eigen::Index>(m));
+  for (std::size_t i = 0; i < m; ++i) {
+    data.u.col(static_cast<Eigen::Index>(i)) = RequireMovingColumn(table, data.inputs[i]);
+  }
+  data.preprocessing = {{"detrended", options.detrend}};
   if (options.detrend) {
-    const core::DetrendResult line = core::RemoveLinearTrend(y);
-    y = line.detrended;
-    preprocessing["y_trend"] = {{"intercept", line.intercept},
-                                {"slope_per_sample", line.slope_per_sample}};
-    for (Eigen::Index i = 0; i < u.cols(); ++i)
-      u.col(i) = core::RemoveLinearTrend(u.col(i)).detrended;
+    const core::DetrendResult line = core::RemoveLinearTrend(data.y);
+    data.y = line.detrended;
+    data.preprocessing["y_trend"] = {{"intercept", line.intercept},
+                                     {"slope_per_sample", line.slope_per_sample}};
+    for (Eigen::Index i = 0; i < data.u.cols(); ++i) {
+      data.u.col(i) = core::RemoveLinearTrend(data.u.col(i)).detrended;
+    }
   }
+  return data;
+}
+
+nlohmann::json IdentifyArx(const IdentifyOptions& options, const drivers::CsvTable& table) {
+  const ArxData data = ReadArxData(options, table);
+  const auto& [inputs, orders, y, u, preprocessing] = data;
   try {
     const core::ArxModel model = core::FitArx(y, u, orders);
     nlohmann::json json = drivers::ToJson(model);

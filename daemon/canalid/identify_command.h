@@ -1,6 +1,10 @@
 #pragma once
+#include <Eigen/Core>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
+
+#include "core/arx.h"
 
 namespace CLI {
 class App;
@@ -58,6 +62,17 @@ void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code)
 /// One model kind each; they return the model JSON (DESIGN.md keys).  @throws InputError.
 nlohmann::json IdentifyId(const IdentifyOptions& options, const drivers::CsvTable& table);
 nlohmann::json IdentifyArx(const IdentifyOptions& options, const drivers::CsvTable& table);
+
+/// The ARX problem as the options describe it: orders (one nb/nk for all inputs, or one each),
+/// the output and input columns (inputs must move), optionally detrended.  @throws InputError.
+struct ArxData {
+  std::vector<std::string> inputs;
+  core::ArxOrders orders;
+  Eigen::VectorXd y;
+  Eigen::MatrixXd u;
+  nlohmann::json preprocessing;
+};
+ArxData ReadArxData(const IdentifyOptions& options, const drivers::CsvTable& table);
 nlohmann::json IdentifyProcessModel(const IdentifyOptions& options, const drivers::CsvTable& table);
 nlohmann::json IdentifyFractional(const IdentifyOptions& options, const drivers::CsvTable& table);
 nlohmann::json IdentifyLpv(const IdentifyOptions& options, const drivers::CsvTable& table);

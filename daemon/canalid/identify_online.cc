@@ -210,36 +210,8 @@ nlohmann::json OnlineId(const IdentifyOptions& options, const drivers::CsvTable&
 }
 
 nlohmann::json OnlineArx(const IdentifyOptions& options, const drivers::CsvTable& table) {
-  const std::vector<std::string> inputs = SplitList(options.u, "--u");
-  core::ArxOrders orders;
-  orders.na = options.na;
-  orders.nb = ParseIntList(options.nb, "--nb");
-  orders.nk = ParseIntList(options.nk, "--nk");
-  if (orders.nb.size() == 1) orders.nb.resize(inputs.size(), orders.nb.front());
-  if (orders.nk.size() == 1) orders.nk.resize(inputs.size(), orders.nk.front());
-  if (orders.nb.size() != inputs.size() || orders.nk.size() != inputs.size()) {
-    throw InputError("--nb and --nk need one value, or one per input column (" +
-                     std::to_string(inputs.size()) + ")");
-  }
-  try {
-    orders.Validate(static_cast<Eigen::Index>(inputs.size()));
-  } catch (const std::invalid_argument& e) {
-    throw InputError(e.what());
-  }
-  Eigen::VectorXd y = RequireColumn(table, options.y);
-  Eigen::MatrixXd u(table.rows(), static_cast<Eigen::Index>(inputs.size()));
-  for (std::size_t i = 0; i < inputs.size(); ++i) {
-    u.col(static_cast<Eigen::Index>(i)) = RequireMovingColumn(table, inputs[i]);
-  }
-  nlohmann::json preprocessing = {{"detrended", options.detrend}};
-  if (options.detrend) {
-    const core::DetrendResult line = core::RemoveLinearTrend(y);
-    y = line.detrended;
-    preprocessing["y_trend"] = {{"intercept", line.intercept},
-                                {"slope_per_sample", line.slope_per_sample}};
-    for (Eigen::Index i = 0; i < u.cols(); ++i)
-      u.col(i) = core::RemoveLinearTrend(u.col(i)).detrended;
-  }
+  const ArxData data = ReadArxData(options, table);
+  const auto& [inputs, orders, y, u, preprocessing] = data;
   const int d = orders.num_parameters();
   const Eigen::Index first = orders.min_first_sample();
   const Eigen::Index n = y.size();
