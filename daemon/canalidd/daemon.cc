@@ -119,6 +119,7 @@ std::unique_ptr<drivers::PlcPort> Daemon::MakeModbusPort(const PlcWiring& wiring
 
 DaemonExit Daemon::Run() {
   start_steady_s_ = SteadyNowS();
+  watchdog_period_s_ = WatchdogPeriodS();
   publisher_.PublishConfig(plan_.config_path, plan_.config_text, WallNowS());
   LoadState();
   StartCommands();
@@ -244,8 +245,7 @@ void Daemon::OnPoll(int index, const drivers::PollSample& s) {
     LogInfo("PLC " + plc.wiring.poller.plc_name + " answers: ready");
   }
   const double now = SteadyNowS();
-  const double watchdog = WatchdogPeriodS();
-  if (watchdog > 0.0 && now - last_watchdog_s_ > watchdog / 4.0) {
+  if (watchdog_period_s_ > 0.0 && now - last_watchdog_s_ > watchdog_period_s_ / 4.0) {
     NotifyWatchdog();
     NotifyStatus(Status());
     last_watchdog_s_ = now;

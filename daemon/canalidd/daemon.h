@@ -103,6 +103,7 @@ class Daemon final {
   double start_steady_s_ = 0.0;
   double stop_deadline_s_ = 0.0;
   double last_watchdog_s_ = 0.0;
+  double watchdog_period_s_ = 0.0;  ///< WatchdogSec from systemd, read once at start
 };
 
 }  // namespace canalid::daemon

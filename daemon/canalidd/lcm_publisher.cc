@@ -46,6 +46,14 @@ void SetParams(canalid::model_snapshot_t& m,
 LcmPublisher::LcmPublisher(drivers::Bus& bus, std::string prefix)
     : bus_(bus), prefix_(std::move(prefix)) {}
 
+const std::string& LcmPublisher::Channel(std::map<std::string, std::string, std::less<>>& cache,
+                                         const char* kind, const std::string& name) {
+  // Built once per name: the per-sample path does not allocate channel names.
+  auto it = cache.find(name);
+  if (it == cache.end()) it = cache.emplace(name, prefix_ + kind + name).first;
+  return it->second;
+}
+
 template <class Message>
 void LcmPublisher::Send(const std::string& channel, const Message& message) {
   if (!drivers::PublishMessage(bus_, channel, message, buffer_)) ++failures_;
@@ -67,7 +75,7 @@ void LcmPublisher::PublishSample(const std::string& plc,
   sample_.quality.resize(s.quality.size());
   for (std::size_t i = 0; i < s.quality.size(); ++i)
     sample_.quality[i] = static_cast<int8_t>(s.quality[i]);
-  Send(prefix_ + "SAMPLE_" + plc, sample_);
+  Send(Channel(sample_channels_, "SAMPLE_", plc), sample_);
 }
 
 void LcmPublisher::PublishOnlineId(const std::string& reach, const core::IdSnapshot& snapshot,
@@ -91,7 +99,7 @@ void LcmPublisher::PublishOnlineId(const std::string& reach, const core::IdSnaps
   if (snapshot.health.wound_up) flags |= canalid::model_snapshot_t::FLAG_WINDUP;
   if (snapshot.health.frozen) flags |= canalid::model_snapshot_t::FLAG_FROZEN;
   model_.flags = flags;
-  Send(prefix_ + "MODEL_" + reach, model_);
+  Send(Channel(model_channels_, "MODEL_", reach), model_);
 }
 
 void LcmPublisher::PublishBatchId(const std::string& reach, const core::IdPipelineResult& result,
@@ -113,7 +121,7 @@ void LcmPublisher::PublishBatchId(const std::string& reach, const core::IdPipeli
   model_.excitation = kNan;
   model_.prediction_error_rms = fit.metrics.rmse;
   model_.flags = std::isfinite(fit.model.b) ? 0 : canalid::model_snapshot_t::FLAG_NAN;
-  Send(prefix_ + "MODEL_" + reach, model_);
+  Send(Channel(model_channels_, "MODEL_", reach), model_);
 }
 
 void LcmPublisher::PublishModelJson(const std::string& reach, const nlohmann::json& model,
@@ -140,7 +148,7 @@ void LcmPublisher::PublishModelJson(const std::string& reach, const nlohmann::js
   model_.excitation = kNan;
   model_.prediction_error_rms = kNan;
   model_.flags = 0;
-  Send(prefix_ + "MODEL_" + reach, model_);
+  Send(Channel(model_channels_, "MODEL_", reach), model_);
 }
 
 void LcmPublisher::PublishExperiment(const std::string& reach, const core::ExperimentState& state,
@@ -157,7 +165,7 @@ void LcmPublisher::PublishExperiment(const std::string& reach, const core::Exper
   experiment_.reason = state.phase == core::ExperimentPhase::kAborted
                            ? core::AbortReasonName(state.abort_reason)
                            : core::ExperimentPhaseName(state.phase);
-  Send(prefix_ + "EXPERIMENT_" + reach, experiment_);
+  Send(Channel(experiment_channels_, "EXPERIMENT_", reach), experiment_);
 }
 
 void LcmPublisher::PublishHealth(const HealthReport& report, double uptime_s, double time_s) {

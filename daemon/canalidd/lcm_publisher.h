@@ -6,6 +6,7 @@
 #include <canalid/sample_t.hpp>
 
 #include <cstdint>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -53,10 +54,14 @@ class LcmPublisher final {
  private:
   template <class Message>
   void Send(const std::string& channel, const Message& message);
+  const std::string& Channel(std::map<std::string, std::string, std::less<>>& cache,
+                             const char* kind, const std::string& name);
 
   drivers::Bus& bus_;
   std::string prefix_;
   std::vector<std::uint8_t> buffer_;
+  std::map<std::string, std::string, std::less<>> sample_channels_, model_channels_,
+      experiment_channels_;
   canalid::sample_t sample_;
   canalid::model_snapshot_t model_;
   canalid::experiment_state_t experiment_;
