@@ -17,6 +17,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -522,6 +523,163 @@ TEST(DaemonCanalsim, CommandsStartOnlyWhenGenuine) {
   EXPECT_EQ(verdicts.at("verdicts.stale"), 1);
   EXPECT_EQ(verdicts.at("verdicts.replayed"), 1);
   EXPECT_EQ(verdicts.at("verdicts.accepted"), 2 + probes);  // start, stop and the probes
+}
+
+// Every message on the bus log by channel, and the sample_t, health_t and experiment_t ones
+// decoded.
+struct BusRecord {
+  std::map<std::string, int> count;                                // channel -> messages
+  std::map<std::string, std::vector<canalid::sample_t>> samples;   // channel -> samples
+  std::map<std::string, std::set<std::string>> health_components;  // channel -> components
+};
+
+BusRecord ReadBus(const fs::path& path) {
+  BusRecord record;
+  lcm::LogFile log(path.string(), "r");
+  if (!log.good()) return record;
+  while (const lcm::LogEvent* e = log.readNextEvent()) {
+    ++record.count[e->channel];
+    if (e->channel.find("_SAMPLE_") != std::string::npos) {
+      canalid::sample_t m;
+      if (m.decode(e->data, 0, e->datalen) == e->datalen) record.samples[e->channel].push_back(m);
+    } else if (e->channel.size() > 7 && e->channel.ends_with("_HEALTH")) {
+      canalid::health_t m;
+      if (m.decode(e->data, 0, e->datalen) == e->datalen)
+        record.health_components[e->channel].insert(m.component);
+    }
+  }
+  return record;
+}
+
+// The mean of channel `name` over the valid values of `samples`; NaN without any.
+double MeanValue(const std::vector<canalid::sample_t>& samples, const std::string& name) {
+  double sum = 0.0;
+  int n = 0;
+  for (const canalid::sample_t& m : samples) {
+    for (int c = 0; c < m.num_channels; ++c) {
+      if (m.channel_names[c] == name && m.quality[c] == canalid::sample_t::QUALITY_VALID) {
+        sum += m.values[c];
+        ++n;
+      }
+    }
+  }
+  return n > 0 ? sum / n : std::nan("");
+}
+
+// 6b. Scale-out: two canalsim PLCs and two daemons with their own channel prefixes on one udpm
+// bus; one lcm-logger sees both daemons' samples, experiments and health on their own channels.
+// The second canal runs 1 m3/s less into pool 1; the offtakes are fixed flows, so its pool 2
+// inflow is the first's minus 1 m3/s: a sample on the wrong prefix would show it.
+TEST(DaemonCanalsim, TwoDaemonsShareOneBusOnTheirOwnPrefixes) {
+  if (!fs::exists("/usr/bin/unshare") || !fs::exists("/usr/bin/nsenter")) {
+    GTEST_SKIP() << "unshare/nsenter missing: no private network namespace for the udpm bus";
+  }
+  if (!fs::exists("/usr/bin/lcm-logger")) GTEST_SKIP() << "lcm-logger (liblcm-bin) missing";
+  const fs::path dir = TestDir();
+  ChildProcess probe({"/usr/bin/unshare", "-rn", "true"}, {}, dir / "probe.log");
+  if (probe.WaitExit(10000) != 0) GTEST_SKIP() << "unshare -rn is not permitted here";
+
+  // The second canal: config/sim/asce-canal2.toml with 10 instead of 11 m3/s at the head (more
+  // does not pass the gates at their level setpoints).
+  std::string canal_b_text = ReadText(SourcePath("config/sim/asce-canal2.toml"));
+  const std::string head_flow = "flow_m3s = 11.0";
+  ASSERT_NE(canal_b_text.find(head_flow), std::string::npos);
+  canal_b_text.replace(canal_b_text.find(head_flow), head_flow.size(), "flow_m3s = 10.0");
+  const fs::path canal_b_path = dir / "canal-b.toml";
+  std::ofstream(canal_b_path) << canal_b_text;
+
+  auto ServeArgs = [&](const std::string& canal) {
+    return std::vector<std::string>{
+        CanalsimProgram(), "serve", "--listen", "127.0.0.1:0",
+        "--canal",         canal,   "--plc",    SourcePath("config/sim/plc/asce2.toml"),
+        "--time-scale",    "600"};
+  };
+  std::vector<std::string> argv_a = {"/usr/bin/unshare", "-rn", "sh", "-c",
+                                     "ip link set lo up && ip route add 224.0.0.0/4 dev lo && "
+                                     "exec \"$0\" \"$@\""};
+  for (const std::string& a : ServeArgs(SourcePath("config/sim/asce-canal2.toml")))
+    argv_a.push_back(a);
+  ChildProcess canal_a(argv_a, {}, dir / "canalsim-a.log");
+  const std::string ready_a = canal_a.WaitForLine("listening on 127.0.0.1:", 60000);
+  ASSERT_FALSE(ready_a.empty()) << canal_a.output();
+  const int port_a = std::stoi(ready_a.substr(ready_a.find("127.0.0.1:") + 10));
+  const std::vector<std::string> enter = {
+      "/usr/bin/nsenter",           "--preserve-credentials", "-U", "-n", "-t",
+      std::to_string(canal_a.pid())};
+  auto InNamespace = [&](const std::vector<std::string>& argv) {
+    std::vector<std::string> all = enter;
+    all.insert(all.end(), argv.begin(), argv.end());
+    return all;
+  };
+  ChildProcess canal_b(InNamespace(ServeArgs(canal_b_path.string())), {}, dir / "canalsim-b.log");
+  const std::string ready_b = canal_b.WaitForLine("listening on 127.0.0.1:", 60000);
+  ASSERT_FALSE(ready_b.empty()) << canal_b.output();
+  const int port_b = std::stoi(ready_b.substr(ready_b.find("127.0.0.1:") + 10));
+
+  const fs::path bus_log = dir / "bus.lcmlog";
+  ChildProcess logger(InNamespace({"/usr/bin/lcm-logger", "-f", "--flush-interval=10",
+                                   std::string("--lcm-url=") + kUdpmUrl, bus_log.string()}),
+                      {}, dir / "lcm-logger.log");
+
+  // Daemon B: its own state folder, prefix and PLC name ("asce2b" wherever "asce2" is quoted).
+  fs::create_directories(dir / "state-b");
+  const std::string config_a =
+      WriteConfig(dir / "canalidd-a.toml", BaseKeys(port_a, dir), ExplicitExperiment(0.02, 4));
+  auto keys_b = BaseKeys(port_b, dir);
+  keys_b[1].second = "\"" + (dir / "state-b").string() + "\"";
+  keys_b.emplace_back("channel_prefix", "\"CANALID_B_\"");
+  const fs::path config_b = dir / "canalidd-b.toml";
+  std::string text_b = ReadText(WriteConfig(config_b, keys_b, ExplicitExperiment(0.02, 4)));
+  for (std::size_t at = text_b.find("\"asce2\""); at != std::string::npos;
+       at = text_b.find("\"asce2\"", at))
+    text_b.replace(at, 7, "\"asce2b\"");
+  std::ofstream(config_b) << text_b;
+
+  ChildProcess daemon_a(InNamespace({DaemonProgram(), "--config", config_a}), {kUdpmEnv},
+                        dir / "canalidd-a.log");
+  ChildProcess daemon_b(InNamespace({DaemonProgram(), "--config", config_b.string()}), {kUdpmEnv},
+                        dir / "canalidd-b.log");
+  // Order 4, two samples per bit: 30 samples (3 s) of excitation; wait until both have started.
+  ASSERT_FALSE(daemon_a.WaitForLine("experiment exciting", 30000).empty()) << daemon_a.output();
+  ASSERT_FALSE(daemon_b.WaitForLine("experiment exciting", 30000).empty()) << daemon_b.output();
+  daemon_a.WaitForLine("never printed", 3000);  // bounded: 30 more polls on the bus
+  EXPECT_EQ(daemon_a.Stop(SIGTERM), 0) << daemon_a.output();
+  EXPECT_EQ(daemon_b.Stop(SIGTERM), 0) << daemon_b.output();
+  EXPECT_EQ(logger.Stop(SIGINT), 0) << logger.output();
+  EXPECT_EQ(canal_b.Stop(SIGTERM), 0) << canal_b.output();
+  EXPECT_EQ(canal_a.Stop(SIGTERM), 0) << canal_a.output();
+
+  const BusRecord bus = ReadBus(bus_log);
+  // Only the two daemons' channels, each under its own prefix and PLC name (and the udpm
+  // provider's own self test).
+  for (const auto& [channel, n] : bus.count) {
+    if (channel == "LCM_SELF_TEST") continue;
+    EXPECT_TRUE(channel.starts_with("CANALID_ASCE2_") || channel.starts_with("CANALID_B_"))
+        << channel;
+    EXPECT_NE(channel, "CANALID_ASCE2_SAMPLE_asce2b");
+    EXPECT_NE(channel, "CANALID_B_SAMPLE_asce2");
+  }
+  const auto& samples_a = bus.samples.at("CANALID_ASCE2_SAMPLE_asce2");
+  const auto& samples_b = bus.samples.at("CANALID_B_SAMPLE_asce2b");
+  // At 10 polls per second over at least 3 s each, half of them as a margin for a loaded machine.
+  EXPECT_GE(samples_a.size(), 15U);
+  EXPECT_GE(samples_b.size(), 15U);
+  for (const auto& m : samples_a) EXPECT_EQ(m.source, "asce2");
+  for (const auto& m : samples_b) EXPECT_EQ(m.source, "asce2b");
+  // Pool 2 inflow: 10 m3/s in the first canal (domain/README.md, high regime); the PRBS on gate 1
+  // moves it by a few percent, hence 0.5 m3/s; the second canal's is 1 m3/s less (fixed offtakes).
+  const double inflow_a = MeanValue(samples_a, "pool2_inflow");
+  const double inflow_b = MeanValue(samples_b, "pool2_inflow");
+  EXPECT_NEAR(inflow_a, 10.0, 0.5);
+  EXPECT_NEAR(inflow_a - inflow_b, 1.0, 0.3);
+  for (const std::string prefix : {"CANALID_ASCE2_", "CANALID_B_"}) {
+    EXPECT_GE(bus.count.count(prefix + "EXPERIMENT_pool2"), 1U) << prefix;
+    ASSERT_EQ(bus.health_components.count(prefix + "HEALTH"), 1U) << prefix;
+  }
+  EXPECT_EQ(bus.health_components.at("CANALID_ASCE2_HEALTH").count("plc.asce2"), 1U);
+  EXPECT_EQ(bus.health_components.at("CANALID_ASCE2_HEALTH").count("plc.asce2b"), 0U);
+  EXPECT_EQ(bus.health_components.at("CANALID_B_HEALTH").count("plc.asce2b"), 1U);
+  EXPECT_EQ(bus.health_components.at("CANALID_B_HEALTH").count("plc.asce2"), 0U);
 }
 
 // 7. A broken configuration: exit 78 and one file:line:column line per problem.
