@@ -73,16 +73,15 @@ struct Daemon::Reach {
   double last_time_s = 0.0;
 };
 
-Daemon::Daemon(DaemonPlan plan, std::unique_ptr<drivers::Bus> bus, PortFactory make_port,
-               ReloadFunction reload)
+Daemon::Daemon(DaemonPlan plan, drivers::Bus& bus, PortFactory make_port, ReloadFunction reload)
     : plan_(std::move(plan)),
-      bus_(std::move(bus)),
+      bus_(bus),
       make_port_(std::move(make_port)),
       reload_(std::move(reload)),
       signals_(io_, SIGINT, SIGTERM, SIGHUP),
       health_timer_(io_),
       stop_timer_(io_),
-      publisher_(*bus_, plan_.channel_prefix) {
+      publisher_(bus_, plan_.channel_prefix) {
   for (std::size_t i = 0; i < plan_.plcs.size(); ++i) {
     auto plc = std::make_unique<Plc>(plan_.plcs[i], io_);
     for (const auto& channel : plan_.plcs[i].poller.channels)
@@ -179,7 +178,7 @@ void Daemon::StartSignals() {
 }
 
 void Daemon::StartBusWatch() {
-  auto* lcm = dynamic_cast<drivers::LcmBus*>(bus_.get());
+  auto* lcm = dynamic_cast<drivers::LcmBus*>(&bus_);
   if (lcm == nullptr) return;  // a fake bus in tests is pumped by the test
   bus_fd_ = std::make_unique<boost::asio::posix::stream_descriptor>(io_, ::dup(lcm->fileno()));
   auto watch = std::make_shared<std::function<void()>>();
@@ -187,7 +186,7 @@ void Daemon::StartBusWatch() {
     bus_fd_->async_wait(boost::asio::posix::stream_descriptor::wait_read,
                         [this, watch](const boost::system::error_code& error) {
                           if (error) return;
-                          bus_->Handle(0.0);
+                          bus_.Handle(0.0);
                           LogRejectedCommands();
                           if (!stopping_) (*watch)();
                         });
@@ -413,7 +412,7 @@ void Daemon::StartCommands() {
     if (!problem.empty()) LogWarning("state: " + problem);
   }
   command_receiver_ = std::make_unique<drivers::CommandReceiver>(
-      *bus_, plan_.channel_prefix + "COMMAND", *authenticator_, [] { return ToUtime(WallNowS()); },
+      bus_, plan_.channel_prefix + "COMMAND", *authenticator_, [] { return ToUtime(WallNowS()); },
       [this](const drivers::AcceptedCommand& command) { OnCommand(command); });
   LogInfo("commands enabled on " + plan_.channel_prefix + "COMMAND");
 }
@@ -499,7 +498,7 @@ void Daemon::PublishHealth() {
   }
   HealthReport bus;
   bus.component = "lcm";
-  bus.counters = {{"handler_failures", bus_->handler_failures()},
+  bus.counters = {{"handler_failures", bus_.handler_failures()},
                   {"publish_failures", publisher_.failures()}};
   publisher_.PublishHealth(bus, uptime, wall);
   if (command_receiver_) {

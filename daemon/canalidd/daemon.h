@@ -39,8 +39,9 @@ class Daemon final {
   using ReloadFunction = std::function<std::optional<DaemonPlan>()>;
 
   /// @throws std::invalid_argument / std::runtime_error on a plan the drivers refuse (start-up).
-  Daemon(DaemonPlan plan, std::unique_ptr<drivers::Bus> bus, PortFactory make_port,
-         ReloadFunction reload);
+  /// `bus` outlives the daemon; it is kept across reloads so an LCM log being written is not
+  /// reopened (and truncated) by the next daemon.
+  Daemon(DaemonPlan plan, drivers::Bus& bus, PortFactory make_port, ReloadFunction reload);
   ~Daemon();
   Daemon(const Daemon&) = delete;
   Daemon& operator=(const Daemon&) = delete;
@@ -81,7 +82,7 @@ class Daemon final {
   std::string Status() const;
 
   DaemonPlan plan_;
-  std::unique_ptr<drivers::Bus> bus_;
+  drivers::Bus& bus_;
   PortFactory make_port_;
   ReloadFunction reload_;
   boost::asio::io_context io_;

@@ -78,9 +78,16 @@ int main(int argc, char** argv) {
   }
   canalid::daemon::SetLogLevel(ToLogLevel(level));
   try {
+    std::unique_ptr<canalid::drivers::LcmBus> bus;
+    std::string bus_url;
     while (true) {
-      auto bus = std::make_unique<canalid::drivers::LcmBus>(plan->lcm_url);
-      canalid::daemon::Daemon daemon(std::move(*plan), std::move(bus),
+      // A reload keeps the bus unless its URL changed: reopening a file:// log would truncate it.
+      if (!bus || plan->lcm_url != bus_url) {
+        bus.reset();
+        bus = std::make_unique<canalid::drivers::LcmBus>(plan->lcm_url);
+        bus_url = plan->lcm_url;
+      }
+      canalid::daemon::Daemon daemon(std::move(*plan), *bus,
                                      canalid::daemon::Daemon::MakeModbusPort,
                                      [&config_path] { return LoadPlan(config_path, nullptr); });
       if (daemon.Run() != canalid::daemon::DaemonExit::kReload) return 0;

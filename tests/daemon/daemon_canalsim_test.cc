@@ -683,6 +683,40 @@ TEST(DaemonCanalsim, TwoDaemonsShareOneBusOnTheirOwnPrefixes) {
 }
 
 // 7. A broken configuration: exit 78 and one file:line:column line per problem.
+// SIGHUP: an invalid configuration is refused and the daemon carries on; a valid one is taken
+// (here a new LCM channel prefix), without restarting the process or truncating its LCM log.
+TEST(DaemonCanalsim, SighupReloadsAValidConfigurationOnly) {
+  const fs::path dir = TestDir();
+  Canal canal(dir);
+  const fs::path config_path = dir / "canalidd.toml";
+  const std::string config = WriteConfig(config_path, BaseKeys(canal.serve.port(), dir),
+                                         ExplicitExperiment(0.05, 4, "manual"));
+  auto daemon = StartDaemon(dir, config);
+  ASSERT_FALSE(daemon->WaitForLine("answers: ready", 30000).empty()) << daemon->output();
+
+  WriteConfig(config_path, {{"port", "70000"}}, ExplicitExperiment(0.05, 4, "manual"));
+  kill(daemon->pid(), SIGHUP);
+  ASSERT_FALSE(daemon->WaitForLine("not valid; carrying on", 20000).empty()) << daemon->output();
+  EXPECT_NE(daemon->output().find("plc[0].port"), std::string::npos) << daemon->output();
+  EXPECT_TRUE(Running(*daemon));
+
+  std::vector<std::pair<std::string, std::string>> keys = BaseKeys(canal.serve.port(), dir);
+  keys.emplace_back("channel_prefix", "\"CANALID_RELOADED_\"");
+  WriteConfig(config_path, keys, ExplicitExperiment(0.05, 4, "manual"));
+  const std::size_t before = daemon->output().size();
+  kill(daemon->pid(), SIGHUP);
+  ASSERT_FALSE(daemon->WaitForLine("LCM prefix CANALID_RELOADED_", 20000, before).empty())
+      << daemon->output();
+  EXPECT_NE(daemon->output().find("reloading the configuration", before), std::string::npos);
+  EXPECT_FALSE(daemon->WaitForLine("answers: ready", 20000, before).empty()) << daemon->output();
+  EXPECT_TRUE(Running(*daemon));
+  EXPECT_EQ(daemon->Stop(SIGTERM), 0) << daemon->output();
+  // The log kept what the first configuration published, and holds the reloaded channels too.
+  const std::string log = ReadText(dir / "run.lcmlog");
+  EXPECT_NE(log.find("CANALID_ASCE2_SAMPLE_asce2"), std::string::npos);
+  EXPECT_NE(log.find("CANALID_RELOADED_SAMPLE_asce2"), std::string::npos);
+}
+
 TEST(DaemonCanalsim, CheckConfigReportsProblemsWithPositions) {
   const fs::path dir = TestDir();
   const fs::path config = dir / "broken.toml";
