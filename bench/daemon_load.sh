@@ -21,7 +21,7 @@ build=${1:-$here/build}
 duration_s=${DURATION_S:-60}
 warmup_s=${WARMUP_S:-205}
 runs=${RUNS:-5}
-work=$(mktemp -d /tmp/canalid-daemon-load.XXXXXX)
+work=$(mktemp -d)
 trap 'kill $(jobs -p) 2>/dev/null || true' EXIT
 
 "$build/sim/canalsim" serve --canal "$here/config/sim/asce-canal2.toml" \
