@@ -190,7 +190,9 @@ void ValidateChannels(const DaemonConfig& c, Collector& out) {
     if (!std::isfinite(ch.offset)) {
       out.Add(at + "offset", Num(ch.offset) + " is out of range (allowed: finite)");
     }
-    if (std::isnan(ch.valid_min)) out.Add(at + "valid_min", "nan is out of range");
+    if (std::isnan(ch.valid_min)) {
+      out.Add(at + "valid_min", "nan is out of range (allowed: a number, -inf = no bound)");
+    }
     if (std::isnan(ch.valid_max) || ch.valid_max < ch.valid_min) {
       out.Add(at + "valid_max", Num(ch.valid_max) + " is out of range (allowed: >= valid_min " +
                                     Num(ch.valid_min) + ")");
