@@ -4,6 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -385,6 +388,40 @@ TEST(ConfigLoaderTest, RoundTripIsExact) {
   EXPECT_THAT(text, HasSubstr("max_rate_per_s = inf\n"));
 }
 
+std::string ReadSource(const char* relative) {
+  std::ifstream in(std::string(CANALID_SOURCE_DIR) + "/" + relative);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// Every key the renderer writes (both transports, both modes, every optional key) is documented
+// in the example file, as `key =` either live or in a comment, and in docs/configuration.md as a
+// table row.
+TEST(ConfigLoaderTest, ExampleAndDocsDocumentEveryKey) {
+  const std::string example = ReadSource("config/canalidd.example.toml");
+  const std::string docs = ReadSource("docs/configuration.md");
+  core::DaemonConfig c = LoadShipped("canalidd.example.toml");
+  core::PlcConfig rtu = c.plcs[0];
+  rtu.transport = core::PlcTransport::kRtu;
+  c.plcs.push_back(rtu);
+  c.reaches[0].nominal_setpoint = 1.0;
+  c.reaches[0].actuator_gain_m3s_per_unit = 1.0;
+  std::set<std::string> keys;
+  std::istringstream rendered(RenderDaemonConfig(c));
+  for (std::string line; std::getline(rendered, line);) {
+    const std::size_t eq = line.find(" = ");
+    if (eq != std::string::npos) keys.insert(line.substr(0, eq));
+  }
+  EXPECT_GE(keys.size(), 60u);
+  for (const std::string& key : keys) {
+    EXPECT_TRUE(example.find("\n" + key + " = ") != std::string::npos ||
+                example.find(" " + key + " = ") != std::string::npos)
+        << key;
+    EXPECT_NE(docs.find("| `" + key + "` |"), std::string::npos) << key;
+  }
+}
+
 // The asce2 demo file against docs/register-map.md: pool record r of the float input block at
 // 300 + 16 r + 2 field (fields 0 inflow, 1 outflow, 2 downstream level, 3 gate position), the
 // gate setpoint of record r at holding 300 + 4 r; pool 2 is record 1, its inflow gate record 0.
@@ -406,6 +443,8 @@ TEST(ConfigLoaderTest, Asce2MapsOntoThePoller) {
                                {"pool2_level", drivers::RegisterKind::kInput, 320},
                                {"gate1_position", drivers::RegisterKind::kInput, 306},
                                {"gate1_setpoint", drivers::RegisterKind::kHolding, 300}};
+  EXPECT_EQ(PollerChannelIndex(poller, "pool2_level"), 3);
+  EXPECT_EQ(PollerChannelIndex(poller, "nope"), -1);
   for (std::size_t i = 0; i < poller.channels.size(); ++i) {
     EXPECT_EQ(poller.channels[i].name, expected[i].name);
     EXPECT_EQ(poller.channels[i].kind, expected[i].kind) << expected[i].name;
