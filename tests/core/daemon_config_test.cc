@@ -234,6 +234,16 @@ TEST(DaemonPlanTest, DesignedExperimentInSamplesOfThePlc) {
   EXPECT_EQ(plan.prbs.seed, 1u);
 }
 
+TEST(DaemonPlanTest, DesignOfAnExperimentExplainsItself) {
+  DaemonConfig c = ValidConfig();
+  const ExperimentDesign design = DesignExperiment(c, c.experiments[0]);
+  EXPECT_DOUBLE_EQ(design.amplitude_m3s, 0.75);  // 7.5 % of 10 m3/s
+  EXPECT_DOUBLE_EQ(design.clock_period_s, 340.0);
+  EXPECT_FALSE(design.explanation.empty());
+  c.experiments[0].mode = ExperimentMode::kExplicit;
+  EXPECT_THROW(DesignExperiment(c, c.experiments[0]), std::invalid_argument);
+}
+
 TEST(DaemonPlanTest, DesignWithAnActuatorGain) {
   DaemonConfig c = ValidConfig();
   c.reaches[0].actuator_gain_m3s_per_unit = -15.0;  // sign does not matter for an amplitude
