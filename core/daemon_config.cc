@@ -50,8 +50,8 @@ std::string Quoted(const std::string& s) { return "\"" + s + "\""; }
 bool ValidName(const std::string& name) {
   if (name.empty() || name.size() > 64) return false;
   for (char c : name) {
-    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-                    c == '_' || c == '.' || c == '-';
+    const bool ok =
+        (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_';
     if (!ok) return false;
   }
   return true;
@@ -80,7 +80,7 @@ class Collector {
   }
   void Name(const std::string& path, const std::string& name) {
     if (!ValidName(name)) {
-      Add(path, Quoted(name) + " is not a valid name (allowed: 1 to 64 of A-Z a-z 0-9 _ . -)");
+      Add(path, Quoted(name) + " is not a valid name (allowed: 1 to 64 of A-Z a-z 0-9 _)");
     }
   }
   std::vector<ConfigProblem> Take() { return std::move(problems_); }
@@ -192,7 +192,9 @@ void ValidateChannels(const DaemonConfig& c, Collector& out) {
     if (!std::isfinite(ch.offset)) {
       out.Add(at + "offset", Num(ch.offset) + " is out of range (allowed: finite)");
     }
-    if (std::isnan(ch.valid_min)) out.Add(at + "valid_min", "nan is out of range");
+    if (std::isnan(ch.valid_min)) {
+      out.Add(at + "valid_min", "nan is out of range (allowed: a number, -inf = no bound)");
+    }
     if (std::isnan(ch.valid_max) || ch.valid_max < ch.valid_min) {
       out.Add(at + "valid_max", Num(ch.valid_max) + " is out of range (allowed: >= valid_min " +
                                     Num(ch.valid_min) + ")");
@@ -228,6 +230,16 @@ void ValidateChannels(const DaemonConfig& c, Collector& out) {
                                        " is out of range (allowed: >= "
                                        "setpoint_min " +
                                        Num(ch.setpoint_min) + ")");
+    }
+    // Two writers of one register would defeat each other's clamp and rate limit.
+    for (std::size_t j = 0; j < i; ++j) {
+      const ChannelConfig& other = c.channels[j];
+      if (other.writable && other.plc == ch.plc && other.table == ch.table &&
+          ch.address < other.address + RegisterCount(other.type) &&
+          other.address < ch.address + RegisterCount(ch.type)) {
+        out.Add(at + "address", std::to_string(ch.address) + " overlaps writable channel " +
+                                    Quoted(other.name) + " (allowed: one writer per register)");
+      }
     }
     if (!(ch.max_rate_per_s > 0.0)) {
       out.Add(at + "max_rate_per_s",
@@ -406,6 +418,16 @@ void ValidateExperiments(const DaemonConfig& c, Collector& out) {
       out.Add(at + "seed", std::to_string(e.seed) + " has no nonzero bit among the low " +
                                std::to_string(order) + " (the LFSR order) (allowed: seed mod 2^" +
                                std::to_string(order) + " != 0)");
+    }
+    if (e.start == ExperimentStart::kOnStart) {
+      for (std::size_t j = 0; j < i; ++j) {
+        if (c.experiments[j].start == ExperimentStart::kOnStart &&
+            c.experiments[j].reach == e.reach) {
+          out.Add(at + "start", "experiment " + Quoted(c.experiments[j].name) + " already starts " +
+                                    "reach " + Quoted(e.reach) +
+                                    " on start (allowed: one per reach)");
+        }
+      }
     }
     out.Range(at + "settle_s", e.settle_s, 0.0, 1e7);
     out.IntRange(at + "max_invalid_samples", e.max_invalid_samples, 0, 1000);

@@ -182,9 +182,10 @@ struct ConfigProblem {
   bool operator==(const ConfigProblem&) const = default;
 };
 
-/// Every problem of `config` (none: valid): ranges, names (unique, [A-Za-z0-9_.-]), references
-/// (channel -> plc, reach -> channels with the right roles on one plc, experiment -> reach,
-/// heartbeat -> channel), encodability of setpoint limits, designs that cannot be built. Pure.
+/// Every problem of `config` (none: valid): ranges, names (unique, [A-Za-z0-9_]{1,64}: they end LCM
+/// channel names), references (channel -> plc, reach -> channels with the right roles on one plc,
+/// experiment -> reach, heartbeat -> channel), encodability of setpoint limits, designs that cannot
+/// be built. Pure.
 std::vector<ConfigProblem> Validate(const DaemonConfig& config);
 
 /// poll_period_s * time_scale of the reach's PLC (the PLC of its level channel).

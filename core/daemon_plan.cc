@@ -9,6 +9,21 @@
 
 namespace canalid::core {
 
+ExperimentDesign DesignExperiment(const DaemonConfig& config, const ExperimentConfig& experiment) {
+  const ReachConfig* reach = config.FindReach(experiment.reach);
+  if (experiment.mode != ExperimentMode::kDesign || reach == nullptr) {
+    throw std::invalid_argument("experiment \"" + experiment.name +
+                                "\": not a design-mode experiment of a known reach");
+  }
+  ExperimentDesignRequest request;
+  request.nominal_flow_m3s = reach->nominal_inflow_m3s;
+  request.expected_delay_s = reach->expected_delay_s;
+  request.sample_time_s = ReachSampleTimeS(config, *reach);
+  request.amplitude_percent = experiment.amplitude_percent;
+  request.duration_factor = experiment.duration_factor;
+  return DesignPrbsExperiment(request);
+}
+
 ExperimentPlan BuildExperimentPlan(const DaemonConfig& config, const ExperimentConfig& experiment,
                                    double nominal_setpoint) {
   const std::string where = "experiment \"" + experiment.name + "\": ";
@@ -23,13 +38,7 @@ ExperimentPlan BuildExperimentPlan(const DaemonConfig& config, const ExperimentC
   plan.prbs.nominal = nominal_setpoint;
   plan.prbs.seed = static_cast<std::uint32_t>(experiment.seed);
   if (experiment.mode == ExperimentMode::kDesign) {
-    ExperimentDesignRequest request;
-    request.nominal_flow_m3s = reach->nominal_inflow_m3s;
-    request.expected_delay_s = reach->expected_delay_s;
-    request.sample_time_s = ts;
-    request.amplitude_percent = experiment.amplitude_percent;
-    request.duration_factor = experiment.duration_factor;
-    const ExperimentDesign design = DesignPrbsExperiment(request);
+    const ExperimentDesign design = DesignExperiment(config, experiment);
     plan.prbs.amplitude = reach->actuator_gain_m3s_per_unit
                               ? design.amplitude_m3s / std::abs(*reach->actuator_gain_m3s_per_unit)
                               : experiment.amplitude_percent / 100.0 * std::abs(nominal_setpoint);

@@ -1,9 +1,16 @@
 #pragma once
 #include "core/daemon_config.h"
 #include "core/experiment.h"
+#include "core/experiment_design.h"
 #include "core/online_id.h"
 
 namespace canalid::core {
+
+/// The design of a mode = "design" experiment: core::DesignPrbsExperiment with the reach's nominal
+/// inflow and expected delay, Ts of its PLC, amplitude_percent and duration_factor (the
+/// explanation lines are for the daemon's log).
+/// @throws std::invalid_argument for an explicit experiment or one whose reach does not resolve.
+ExperimentDesign DesignExperiment(const DaemonConfig& config, const ExperimentConfig& experiment);
 
 /// The ExperimentPlan of `experiment` (of a valid `config`), in samples of its reach's PLC,
 /// Ts = poll_period_s * time_scale plant seconds:

@@ -50,4 +50,11 @@ drivers::PollerConfig BuildPollerConfig(const core::DaemonConfig& config,
   return poller;
 }
 
+int PollerChannelIndex(const drivers::PollerConfig& poller, const std::string& name) {
+  for (std::size_t i = 0; i < poller.channels.size(); ++i) {
+    if (poller.channels[i].name == name) return static_cast<int>(i);
+  }
+  return -1;
+}
+
 }  // namespace canalid::daemon

@@ -1,4 +1,5 @@
 #pragma once
+#include <string>
 #include <variant>
 
 #include "core/daemon_config.h"
@@ -17,5 +18,9 @@ std::variant<drivers::ModbusTcpConfig, drivers::ModbusRtuConfig> BuildModbusConf
 /// poller: multiplied by time_scale).  PollSample::values[i] is then the i-th such channel.
 drivers::PollerConfig BuildPollerConfig(const core::DaemonConfig& config,
                                         const core::PlcConfig& plc);
+
+/// Index of the channel `name` in poller.channels (so in PollSample::values and for
+/// PlcPoller::RequestWrite), or -1 when it is not polled by this poller.
+int PollerChannelIndex(const drivers::PollerConfig& poller, const std::string& name);
 
 }  // namespace canalid::daemon

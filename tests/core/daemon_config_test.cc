@@ -179,6 +179,37 @@ TEST(DaemonConfigTest, CommandsNeedAKeyFileWhenEnabled) {
                           "commands.accepted[1]: duplicate command \"start_experiment\""));
 }
 
+TEST(DaemonConfigTest, OneWriterPerRegisterAndOneAutomaticExperimentPerReach) {
+  DaemonConfig c = ValidConfig();
+  ChannelConfig& copy = c.channels.emplace_back(c.channels[3]);  // the gate, f32 at 300-301
+  copy.name = "gate_low_word";
+  copy.address = 301;
+  copy.type = RegisterType::kU16;
+  c.experiments[0].start = ExperimentStart::kOnStart;
+  ExperimentConfig& second = c.experiments.emplace_back(c.experiments[0]);
+  second.name = "prbs2";
+  EXPECT_THAT(Problems(c),
+              ElementsAre("channel[4].address: 301 overlaps writable channel \"gate\" (allowed: "
+                          "one writer per register)",
+                          "experiment[1].start: experiment \"prbs\" already starts reach "
+                          "\"pool2\" on start (allowed: one per reach)"));
+  c.channels[4].address = 302;  // next to it: fine
+  c.experiments[1].start = ExperimentStart::kManual;
+  EXPECT_THAT(Problems(c), IsEmpty());
+}
+
+TEST(DaemonConfigTest, NamesEndLcmChannelNames) {
+  DaemonConfig c = ValidConfig();
+  c.experiments[0].name = "pool2.prbs";
+  c.channels[0].name = std::string(65, 'x');
+  c.reaches[0].inflow = c.channels[0].name;
+  EXPECT_THAT(Problems(c),
+              ElementsAre("channel[0].name: \"" + std::string(65, 'x') +
+                              "\" is not a valid name (allowed: 1 to 64 of A-Z a-z 0-9 _)",
+                          "experiment[0].name: \"pool2.prbs\" is not a valid name (allowed: 1 to "
+                          "64 of A-Z a-z 0-9 _)"));
+}
+
 TEST(DaemonConfigTest, DelayBankIsBoundedInSamples) {
   DaemonConfig c = ValidConfig();
   c.reaches[0].max_delay_s = 20010.0;  // Ts = 10 s: 2001 samples
@@ -201,6 +232,16 @@ TEST(DaemonPlanTest, DesignedExperimentInSamplesOfThePlc) {
   EXPECT_DOUBLE_EQ(plan.level_max_m, 2.3);
   EXPECT_EQ(plan.max_invalid_samples, 3);
   EXPECT_EQ(plan.prbs.seed, 1u);
+}
+
+TEST(DaemonPlanTest, DesignOfAnExperimentExplainsItself) {
+  DaemonConfig c = ValidConfig();
+  const ExperimentDesign design = DesignExperiment(c, c.experiments[0]);
+  EXPECT_DOUBLE_EQ(design.amplitude_m3s, 0.75);  // 7.5 % of 10 m3/s
+  EXPECT_DOUBLE_EQ(design.clock_period_s, 340.0);
+  EXPECT_FALSE(design.explanation.empty());
+  c.experiments[0].mode = ExperimentMode::kExplicit;
+  EXPECT_THROW(DesignExperiment(c, c.experiments[0]), std::invalid_argument);
 }
 
 TEST(DaemonPlanTest, DesignWithAnActuatorGain) {

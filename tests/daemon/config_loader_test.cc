@@ -4,6 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -178,6 +181,137 @@ TEST(ConfigLoaderTest, CommandsKeyFileRequiredWhenEnabled) {
                           "/..., required when enabled)"));
 }
 
+TEST(ConfigLoaderTest, EmptyFileNeedsAPlc) {
+  EXPECT_THAT(Issues(""), ElementsAre("t.toml:1:1: plc: no [[plc]] table (allowed: at least one)"));
+}
+
+TEST(ConfigLoaderTest, DaemonLcmAndCommandsSections) {
+  EXPECT_THAT(Issues(R"([daemon]
+state_directory = "var/lib"
+time_scale = 20000
+[daemon.heartbeat]
+channel = "level"
+period_s = 0
+[lcm]
+url = "http://x"
+channel_prefix = "SITE-1"
+[commands]
+max_clock_skew_s = -1
+accepted = ["start_experiment", "reboot"]
+)" + kMinimal),
+              ElementsAre("t.toml:2:19: daemon.state_directory: \"var/lib\" is not an absolute "
+                          "path (allowed: /...)",
+                          "t.toml:3:14: daemon.time_scale: 20000 is out of range (allowed: (0, "
+                          "10000])",
+                          "t.toml:5:11: daemon.heartbeat.channel: channel \"level\" is not a "
+                          "writable heartbeat channel (allowed: role = \"heartbeat\", writable = "
+                          "true)",
+                          "t.toml:6:12: daemon.heartbeat.period_s: 0 is out of range (allowed: (0, "
+                          "3600])",
+                          "t.toml:8:7: lcm.url: \"http://x\" is not an LCM URL (allowed: \"\", "
+                          "udpm://, memq://, file://, tcpq://)",
+                          "t.toml:9:18: lcm.channel_prefix: \"SITE-1\" is not a channel prefix "
+                          "(allowed: 0 to 32 of A-Z a-z 0-9 _)",
+                          "t.toml:11:20: commands.max_clock_skew_s: -1 is out of range (allowed: "
+                          "(0, 3600])",
+                          "t.toml:12:33: commands.accepted[1]: \"reboot\" is not allowed "
+                          "(allowed: start_experiment, abort_experiment, reset_estimator, "
+                          "publish_config)"));
+}
+
+TEST(ConfigLoaderTest, RtuPlc) {
+  const std::string channel = kMinimal.substr(kMinimal.find("[[channel]]"));
+  const core::DaemonConfig c = ParseDaemonConfig(
+      "[[plc]]\nname = \"p\"\ntransport = \"rtu\"\ndevice = \"/dev/ttyUSB0\"\nbaud = 9600\n"
+      "parity = \"N\"\ndata_bits = 7\nstop_bits = 2\nunit_id = 17\n" +
+          channel,
+      "t.toml");
+  EXPECT_EQ(c.plcs[0].transport, core::PlcTransport::kRtu);
+  EXPECT_EQ(c.plcs[0].device, "/dev/ttyUSB0");
+  EXPECT_EQ(c.plcs[0].baud, 9600);
+  EXPECT_EQ(c.plcs[0].parity, 'N');
+  EXPECT_EQ(c.plcs[0].data_bits, 7);
+  EXPECT_EQ(c.plcs[0].stop_bits, 2);
+  EXPECT_EQ(c.plcs[0].unit_id, 17);
+  EXPECT_THAT(
+      Issues("[[plc]]\nname = \"p\"\ntransport = \"rtu\"\nbaud = 100\ndata_bits = 9\n"
+             "stop_bits = 3\nunit_id = 0\nresponse_timeout_s = 0.5\npoll_period_s = 0.5\n"
+             "backoff_initial_s = 2\nbackoff_max_s = 1\n" +
+             channel),
+      ElementsAre("t.toml:1:1: plc[0].device: missing (required)",
+                  "t.toml:4:8: plc[0].baud: 100 is out of range (allowed: 300..4000000)",
+                  "t.toml:5:13: plc[0].data_bits: 9 is out of range (allowed: 5..8)",
+                  "t.toml:6:13: plc[0].stop_bits: 3 is out of range (allowed: 1..2)",
+                  "t.toml:7:11: plc[0].unit_id: 0 is out of range (allowed: 1..247)",
+                  "t.toml:9:17: plc[0].poll_period_s: 0.5 is out of range (allowed: (0.5, "
+                  "3600])",
+                  "t.toml:11:17: plc[0].backoff_max_s: 1 is out of range (allowed: [2, 3600])"));
+}
+
+TEST(ConfigLoaderTest, ExplicitExperimentKeys) {
+  const std::string reach = R"(
+[[channel]]
+name = "q"
+plc = "p"
+role = "flow"
+register = "input"
+address = 11
+type = "i16"
+
+[[channel]]
+name = "gate"
+plc = "p"
+role = "gate"
+register = "holding"
+address = 100
+type = "i16"
+scale = 0.001
+writable = true
+setpoint_min = 0.05
+setpoint_max = 40.0
+max_rate_per_s = 0.005
+
+[[reach]]
+name = "r"
+inflow = "q"
+outflow = "q"
+level = "level"
+actuator = "gate"
+nominal_inflow_m3s = 10
+expected_delay_s = 600
+level_min_m = 1.9
+level_max_m = 2.3
+)";
+  // kMinimal is lines 1-12, `reach` 13-44 (setpoint_max on 32), the experiment from 45 on.
+  EXPECT_THAT(Issues(kMinimal + reach + R"(
+[[experiment]]
+name = "e"
+reach = "r"
+mode = "explicit"
+clock_period_s = 2.5
+order = 40
+seed = 4294967296
+amplitude_percent = 5
+)"),
+              ElementsAre("t.toml:32:16: channel[2].setpoint_max: 40 does not fit register type "
+                          "\"i16\" with this scale and offset",
+                          "t.toml:46:1: experiment[0].amplitude: missing (required)",
+                          "t.toml:50:18: experiment[0].clock_period_s: 2.5 is not a whole number "
+                          "of samples (allowed: n * sample time 1 s, n >= 1)",
+                          "t.toml:51:9: experiment[0].order: 40 is out of range (allowed: 2..31)",
+                          "t.toml:52:8: experiment[0].seed: 4294967296 is out of range (allowed: "
+                          "1..2147483647)",
+                          "t.toml:53:1: experiment[0].amplitude_percent: only allowed when mode "
+                          "= \"design\""));
+}
+
+TEST(ConfigLoaderTest, IntegersMustFitTheirField) {
+  std::string text = kMinimal;
+  text.replace(text.find("address = 10"), 12, "address = 9999999999");
+  EXPECT_THAT(Issues(text), ElementsAre("t.toml:10:11: channel[0].address: 9999999999 is out of "
+                                        "range (allowed: a 32-bit integer)"));
+}
+
 TEST(ConfigLoaderTest, PlcArrayMustBeAnArrayOfTables) {
   EXPECT_THAT(Issues("plc = 3\n"),
               // Validate's "no [[plc]] table" on the same key is not repeated.
@@ -254,6 +388,40 @@ TEST(ConfigLoaderTest, RoundTripIsExact) {
   EXPECT_THAT(text, HasSubstr("max_rate_per_s = inf\n"));
 }
 
+std::string ReadSource(const char* relative) {
+  std::ifstream in(std::string(CANALID_SOURCE_DIR) + "/" + relative);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// Every key the renderer writes (both transports, both modes, every optional key) is documented
+// in the example file, as `key =` either live or in a comment, and in docs/configuration.md as a
+// table row.
+TEST(ConfigLoaderTest, ExampleAndDocsDocumentEveryKey) {
+  const std::string example = ReadSource("config/canalidd.example.toml");
+  const std::string docs = ReadSource("docs/configuration.md");
+  core::DaemonConfig c = LoadShipped("canalidd.example.toml");
+  core::PlcConfig rtu = c.plcs[0];
+  rtu.transport = core::PlcTransport::kRtu;
+  c.plcs.push_back(rtu);
+  c.reaches[0].nominal_setpoint = 1.0;
+  c.reaches[0].actuator_gain_m3s_per_unit = 1.0;
+  std::set<std::string> keys;
+  std::istringstream rendered(RenderDaemonConfig(c));
+  for (std::string line; std::getline(rendered, line);) {
+    const std::size_t eq = line.find(" = ");
+    if (eq != std::string::npos) keys.insert(line.substr(0, eq));
+  }
+  EXPECT_GE(keys.size(), 60u);
+  for (const std::string& key : keys) {
+    EXPECT_TRUE(example.find("\n" + key + " = ") != std::string::npos ||
+                example.find(" " + key + " = ") != std::string::npos)
+        << key;
+    EXPECT_NE(docs.find("| `" + key + "` |"), std::string::npos) << key;
+  }
+}
+
 // The asce2 demo file against docs/register-map.md: pool record r of the float input block at
 // 300 + 16 r + 2 field (fields 0 inflow, 1 outflow, 2 downstream level, 3 gate position), the
 // gate setpoint of record r at holding 300 + 4 r; pool 2 is record 1, its inflow gate record 0.
@@ -275,6 +443,8 @@ TEST(ConfigLoaderTest, Asce2MapsOntoThePoller) {
                                {"pool2_level", drivers::RegisterKind::kInput, 320},
                                {"gate1_position", drivers::RegisterKind::kInput, 306},
                                {"gate1_setpoint", drivers::RegisterKind::kHolding, 300}};
+  EXPECT_EQ(PollerChannelIndex(poller, "pool2_level"), 3);
+  EXPECT_EQ(PollerChannelIndex(poller, "nope"), -1);
   for (std::size_t i = 0; i < poller.channels.size(); ++i) {
     EXPECT_EQ(poller.channels[i].name, expected[i].name);
     EXPECT_EQ(poller.channels[i].kind, expected[i].kind) << expected[i].name;
