@@ -1,5 +1,6 @@
 #include "core/daemon_plan.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <stdexcept>
@@ -85,6 +86,35 @@ OnlineIdOptions BuildOnlineIdOptions(const DaemonConfig& config, const ReachConf
   options.rls.method = reach.rls_method;
   options.rls.forgetting = reach.forgetting;
   options.Validate();
+  return options;
+}
+
+ReachRunnerOptions BuildReachRunnerOptions(
+    const std::shared_ptr<const DaemonConfig>& config, const ReachConfig& reach,
+    const std::function<int(const std::string& channel)>& channel_index) {
+  ReachRunnerOptions options;
+  options.name = reach.name;
+  options.channels.q_in = channel_index(reach.inflow);
+  options.channels.q_out = channel_index(reach.outflow);
+  options.channels.level = channel_index(reach.level);
+  options.channels.actuator = channel_index(reach.actuator);
+  ReachPipelineOptions& pipeline = options.pipeline;
+  pipeline.sample_time_s = ReachSampleTimeS(*config, reach);
+  pipeline.online_id_enabled = std::find(reach.online_models.begin(), reach.online_models.end(),
+                                         OnlineModel::kId) != reach.online_models.end();
+  pipeline.online_id = BuildOnlineIdOptions(*config, reach);
+  pipeline.batch.fit.min_nk = pipeline.online_id.min_delay_samples;
+  pipeline.batch.fit.max_nk = pipeline.online_id.max_delay_samples;
+  pipeline.batch.fit.closed_loop = reach.closed_loop;
+  options.nominal_setpoint = reach.nominal_setpoint;
+  for (const ExperimentConfig& experiment : config->experiments) {
+    if (experiment.reach != reach.name) continue;
+    options.start_experiment_on_start = experiment.start == ExperimentStart::kOnStart;
+    options.experiment_for_nominal = [config, name = experiment.name](double nominal) {
+      return BuildExperimentPlan(*config, *config->FindExperiment(name), nominal);
+    };
+    break;
+  }
   return options;
 }
 

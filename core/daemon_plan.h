@@ -1,8 +1,13 @@
 #pragma once
+#include <functional>
+#include <memory>
+#include <string>
+
 #include "core/daemon_config.h"
 #include "core/experiment.h"
 #include "core/experiment_design.h"
 #include "core/online_id.h"
+#include "core/reach_runner.h"
 
 namespace canalid::core {
 
@@ -33,5 +38,15 @@ ExperimentPlan BuildExperimentPlan(const DaemonConfig& config, const ExperimentC
 /// (rounded to the nearest sample), the reach's RLS method and forgetting, other options default.
 /// @throws std::invalid_argument when the reach does not resolve or an option is out of range.
 OnlineIdOptions BuildOnlineIdOptions(const DaemonConfig& config, const ReachConfig& reach);
+
+/// Everything `reach` runs (the daemon live, `canalid replay` from a log): its channels in its
+/// PLC's poll (`channel_index(name)`, which throws std::invalid_argument for a channel not polled),
+/// sample time, online estimator, batch options (delay range of the bank, closed-loop setting),
+/// nominal setpoint, and its experiment factory (the first experiment of the reach; the factory
+/// keeps `config` alive).
+/// @throws std::invalid_argument when the reach does not resolve.
+ReachRunnerOptions BuildReachRunnerOptions(
+    const std::shared_ptr<const DaemonConfig>& config, const ReachConfig& reach,
+    const std::function<int(const std::string& channel)>& channel_index);
 
 }  // namespace canalid::core

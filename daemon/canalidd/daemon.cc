@@ -63,14 +63,14 @@ struct Daemon::Plc {
 };
 
 struct Daemon::Reach {
-  Reach(const ReachWiring& w) : wiring(w), pipeline(w.pipeline) {}
+  explicit Reach(const ReachWiring& w) : wiring(w), runner(w.runner) {}
   const ReachWiring& wiring;
-  core::ReachPipeline pipeline;
-  bool nominal_known = false;
-  double nominal = 0.0;
+  core::ReachRunner runner;
   bool restore_pending = false;  // a nominal setpoint not yet confirmed by the PLC
-  bool started = false;          // on_start experiment already started
   double last_time_s = 0.0;
+  const std::string& name() const { return runner.name(); }
+  core::ReachPipeline& pipeline() { return runner.pipeline(); }
+  const core::ReachPipeline& pipeline() const { return runner.pipeline(); }
 };
 
 Daemon::Daemon(DaemonPlan plan, drivers::Bus& bus, PortFactory make_port, ReloadFunction reload)
@@ -98,7 +98,8 @@ Daemon::Daemon(DaemonPlan plan, drivers::Bus& bus, PortFactory make_port, Reload
   }
   for (std::size_t r = 0; r < plan_.reaches.size(); ++r) {
     auto reach = std::make_unique<Reach>(plan_.reaches[r]);
-    if (reach->wiring.nominal_setpoint) SetNominal(*reach, *reach->wiring.nominal_setpoint);
+    if (!reach->runner.initial_plan_error().empty())
+      LogError("reach " + reach->name() + ": no experiment: " + reach->runner.initial_plan_error());
     plcs_.at(static_cast<std::size_t>(reach->wiring.plc))->reaches.push_back(static_cast<int>(r));
     reaches_.push_back(std::move(reach));
   }
@@ -133,18 +134,6 @@ DaemonExit Daemon::Run() {
   for (auto& plc : plcs_) plc->poller->Stop();
   LogInfo(exit_ == DaemonExit::kReload ? "reloading the configuration" : "stopped");
   return exit_;
-}
-
-void Daemon::SetNominal(Reach& reach, double nominal) {
-  reach.nominal = nominal;
-  reach.nominal_known = true;
-  if (!reach.wiring.experiment_for_nominal) return;
-  try {
-    reach.pipeline.SetExperimentPlan(reach.wiring.experiment_for_nominal(nominal));
-  } catch (const std::invalid_argument& e) {
-    // No safe experiment around this nominal: the reach is watched and estimated, never excited.
-    LogError("reach " + reach.wiring.name + ": no experiment: " + e.what());
-  }
 }
 
 void Daemon::StartPollers() {
@@ -229,7 +218,7 @@ void Daemon::Drain(int index) {
   if (!plc.poller->counters().connected) {
     for (const int r : plc.reaches) {
       Reach& reach = *reaches_[static_cast<std::size_t>(r)];
-      Handle(reach, reach.pipeline.OnLinkLost(), reach.last_time_s);
+      Handle(reach, reach.pipeline().OnLinkLost(), reach.last_time_s);
     }
   }
 }
@@ -251,38 +240,27 @@ void Daemon::OnPoll(int index, const drivers::PollSample& s) {
   }
   for (const int r : plc.reaches) {
     Reach& reach = *reaches_[static_cast<std::size_t>(r)];
-    const ReachWiring& w = reach.wiring;
-    auto value = [&](int channel) { return s.values[static_cast<std::size_t>(channel)]; };
-    auto valid = [&](int channel) {
-      return channel >= 0 && s.valid(static_cast<std::size_t>(channel));
-    };
-    if (!reach.nominal_known && w.actuator >= 0 && valid(w.actuator)) {
-      LogInfo("reach " + w.name + ": nominal setpoint " + std::to_string(value(w.actuator)) +
-              " (read from the PLC)");
-      SetNominal(reach, value(w.actuator));
-    }
-    core::ReachSample sample;
-    sample.q_in_valid = valid(w.q_in);
-    sample.q_out_valid = valid(w.q_out);
-    sample.level_valid = valid(w.level);
-    sample.q_in_m3s = sample.q_in_valid ? value(w.q_in) : 0.0;
-    sample.q_out_m3s = sample.q_out_valid ? value(w.q_out) : 0.0;
-    sample.level_m = sample.level_valid ? value(w.level) : 0.0;
-    sample.link_ok = link_ok;
+    const core::ReachReadings readings = core::ReadReach(
+        reach.wiring.runner.channels, s.values,
+        [&](std::size_t channel) { return s.valid(channel); }, link_ok, s.status.ok());
     reach.last_time_s = s.time_s;
-    const core::ReachActions actions = reach.pipeline.OnSample(sample);
-    Handle(reach, actions, s.time_s);
-    if (actions.online_updated && reach.pipeline.online_id() != nullptr) {
-      publisher_.PublishOnlineId(w.name, reach.pipeline.online_id()->Snapshot(), s.time_s,
+    const core::ReachPollOutcome outcome = reach.runner.OnPoll(readings);
+    if (outcome.nominal_read) {
+      LogInfo("reach " + reach.name() + ": nominal setpoint " +
+              std::to_string(*outcome.nominal_read) + " (read from the PLC)");
+    }
+    if (!outcome.plan_error.empty())
+      LogError("reach " + reach.name() + ": no experiment: " + outcome.plan_error);
+    Handle(reach, outcome.actions, s.time_s);
+    if (outcome.actions.online_updated && reach.pipeline().online_id() != nullptr) {
+      publisher_.PublishOnlineId(reach.name(), reach.pipeline().online_id()->Snapshot(), s.time_s,
                                  "rls-bank");
     }
-    if (reach.restore_pending && link_ok && !actions.write_setpoint)
-      RequestSetpoint(reach, reach.nominal);
-    if (w.start_experiment_on_start && !reach.started && reach.nominal_known && s.status.ok() &&
-        !stopping_) {
-      reach.started = true;
-      LogInfo("reach " + w.name + ": starting the experiment");
-      Handle(reach, reach.pipeline.StartExperiment(), s.time_s);
+    if (reach.restore_pending && link_ok && !outcome.actions.write_setpoint)
+      RequestSetpoint(reach, reach.runner.nominal());
+    if (const auto start = reach.runner.StartIfDue(s.status.ok(), !stopping_)) {
+      LogInfo("reach " + reach.name() + ": starting the experiment");
+      Handle(reach, *start, s.time_s);
     }
   }
 }
@@ -295,18 +273,19 @@ void Daemon::OnWriteResult(int index, const drivers::WriteResult& result) {
   }
   for (const int r : plc.reaches) {
     Reach& reach = *reaches_[static_cast<std::size_t>(r)];
-    if (reach.wiring.actuator != result.channel) continue;
+    if (reach.wiring.runner.channels.actuator != result.channel) continue;
     const bool written = result.outcome == drivers::WriteOutcome::kWritten;
     if (written && reach.restore_pending &&
-        std::abs(result.written - reach.nominal) <= 1e-9 * (1.0 + std::abs(reach.nominal))) {
+        std::abs(result.written - reach.runner.nominal()) <=
+            1e-9 * (1.0 + std::abs(reach.runner.nominal()))) {
       reach.restore_pending = false;
-      LogInfo("reach " + reach.wiring.name + ": nominal setpoint " + std::to_string(reach.nominal) +
-              " restored");
+      LogInfo("reach " + reach.name() + ": nominal setpoint " +
+              std::to_string(reach.runner.nominal()) + " restored");
     }
     if (!written) {
-      LogWarning("reach " + reach.wiring.name + ": setpoint write failed (" +
+      LogWarning("reach " + reach.name() + ": setpoint write failed (" +
                  drivers::PlcErrorKindName(result.plc.kind) + ")");
-      Handle(reach, reach.pipeline.OnWriteFailed(), reach.last_time_s);
+      Handle(reach, reach.pipeline().OnWriteFailed(), reach.last_time_s);
     }
   }
   if (stopping_) FinishStopWhenSafe();
@@ -314,28 +293,29 @@ void Daemon::OnWriteResult(int index, const drivers::WriteResult& result) {
 
 void Daemon::RequestSetpoint(Reach& reach, double value) {
   const drivers::WriteTicket ticket =
-      plcs_[static_cast<std::size_t>(reach.wiring.plc)]->poller->RequestWrite(reach.wiring.actuator,
-                                                                              value);
+      plcs_[static_cast<std::size_t>(reach.wiring.plc)]->poller->RequestWrite(
+          reach.wiring.runner.channels.actuator, value);
   if (ticket.status != drivers::WriteQueueStatus::kQueued) {
-    LogWarning("reach " + reach.wiring.name + ": setpoint write not queued");
+    LogWarning("reach " + reach.name() + ": setpoint write not queued");
   }
 }
 
 void Daemon::Handle(Reach& reach, const core::ReachActions& actions, double time_s) {
-  const ReachWiring& w = reach.wiring;
-  if (actions.write_setpoint && w.actuator >= 0) {
+  const std::string& name = reach.name();
+  const int actuator = reach.wiring.runner.channels.actuator;
+  if (actions.write_setpoint && actuator >= 0) {
     if (actions.restore_nominal) reach.restore_pending = true;
     RequestSetpoint(reach, *actions.write_setpoint);
   }
-  const auto& plan = reach.pipeline.experiment_plan();
+  const auto& plan = reach.pipeline().experiment_plan();
   if (actions.experiment_phase_changed && plan) {
-    const core::ExperimentState& state = reach.pipeline.experiment_state();
-    publisher_.PublishExperiment(
-        w.name, state, *plan,
-        plcs_[static_cast<std::size_t>(w.plc)]->channel_names[static_cast<std::size_t>(w.actuator)],
-        time_s);
+    const core::ExperimentState& state = reach.pipeline().experiment_state();
+    publisher_.PublishExperiment(name, state, *plan,
+                                 plcs_[static_cast<std::size_t>(reach.wiring.plc)]
+                                     ->channel_names[static_cast<std::size_t>(actuator)],
+                                 time_s);
     std::string message =
-        "reach " + w.name + ": experiment " + core::ExperimentPhaseName(state.phase);
+        "reach " + name + ": experiment " + core::ExperimentPhaseName(state.phase);
     if (state.phase == core::ExperimentPhase::kAborted)
       message += std::string(" (") + core::AbortReasonName(state.abort_reason) + ")";
     (state.phase == core::ExperimentPhase::kAborted ? LogWarning(message) : LogInfo(message));
@@ -343,15 +323,15 @@ void Daemon::Handle(Reach& reach, const core::ReachActions& actions, double time
   }
   if (actions.experiment_record_complete) {
     core::ReachActions after;
-    const std::optional<core::IdPipelineResult> result = reach.pipeline.IdentifyRecord(&after);
+    const std::optional<core::IdPipelineResult> result = reach.pipeline().IdentifyRecord(&after);
     if (result) {
-      publisher_.PublishBatchId(w.name, *result, time_s, reach.pipeline.recorded_samples());
+      publisher_.PublishBatchId(name, *result, time_s, reach.pipeline().recorded_samples());
       nlohmann::json json = drivers::ToJson(*result);
-      json["reach"] = w.name;
-      LogInfo("reach " + w.name + ": identified " + json.dump());
+      json["reach"] = name;
+      LogInfo("reach " + name + ": identified " + json.dump());
       SaveModel(reach, *result);
     } else {
-      LogWarning("reach " + w.name + ": the experiment record could not be identified");
+      LogWarning("reach " + name + ": the experiment record could not be identified");
     }
     Handle(reach, after, time_s);
   }
@@ -367,7 +347,7 @@ void Daemon::LoadState() {
   }
   for (const PersistedModel& model : report.models) {
     const bool known = std::any_of(reaches_.begin(), reaches_.end(),
-                                   [&](const auto& r) { return r->wiring.name == model.reach; });
+                                   [&](const auto& r) { return r->name() == model.reach; });
     if (!known) continue;
     publisher_.PublishModelJson(model.reach, model.model, WallNowS());
     LogInfo("reach " + model.reach + ": resumed the persisted " + model.model_kind + " model " +
@@ -378,11 +358,11 @@ void Daemon::LoadState() {
 void Daemon::SaveModel(const Reach& reach, const core::IdPipelineResult& result) {
   if (!store_) return;
   PersistedModel model;
-  model.reach = reach.wiring.name;
+  model.reach = reach.name();
   model.model_kind = "id";
   model.saved_utime_us = ToUtime(WallNowS());
   model.model = drivers::ToJson(result);
-  if (const core::OnlineIdBank* bank = reach.pipeline.online_id()) {
+  if (const core::OnlineIdBank* bank = reach.pipeline().online_id()) {
     const core::IdSnapshot s = bank->Snapshot();
     model.online = {{"delay_s", s.delay_s},
                     {"area_m2", s.area_m2},
@@ -436,21 +416,21 @@ void Daemon::OnCommand(const drivers::AcceptedCommand& command) {
     return;
   }
   for (auto& reach : reaches_) {
-    if (reach->wiring.name != command.reach) continue;
+    if (reach->name() != command.reach) continue;
     LogInfo("command from " + command.sender + " for reach " + command.reach);
     switch (command.kind) {
       case core::CommandKind::kStartExperiment:
-        if (!reach->pipeline.experiment_plan()) {
+        if (!reach->pipeline().experiment_plan()) {
           LogWarning("reach " + command.reach + ": no experiment to start");
         } else if (!stopping_) {
-          Handle(*reach, reach->pipeline.StartExperiment(), reach->last_time_s);
+          Handle(*reach, reach->pipeline().StartExperiment(), reach->last_time_s);
         }
         break;
       case core::CommandKind::kAbortExperiment:
-        Handle(*reach, reach->pipeline.StopExperiment(), reach->last_time_s);
+        Handle(*reach, reach->pipeline().StopExperiment(), reach->last_time_s);
         break;
       case core::CommandKind::kResetEstimator:
-        reach->pipeline.ResetOnlineEstimator();
+        reach->pipeline().ResetOnlineEstimator();
         break;
       case core::CommandKind::kPublishConfig:
         break;
@@ -514,20 +494,20 @@ void Daemon::PublishHealth() {
   }
   for (const auto& reach : reaches_) {
     HealthReport report;
-    report.component = "reach." + reach->wiring.name;
-    report.counters = {{"samples", reach->pipeline.samples()}};
-    if (const core::OnlineIdBank* bank = reach->pipeline.online_id()) {
+    report.component = "reach." + reach->name();
+    report.counters = {{"samples", reach->pipeline().samples()}};
+    if (const core::OnlineIdBank* bank = reach->pipeline().online_id()) {
       const core::IdBankHealth& h = bank->health();
       report.counters.insert(report.counters.end(), {{"bad_flow_samples", h.bad_flow_samples},
                                                      {"bad_level_samples", h.bad_level_samples},
                                                      {"delay_switches", h.switches}});
     }
     publisher_.PublishHealth(report, uptime, wall);
-    if (const auto& plan = reach->pipeline.experiment_plan()) {
+    if (const auto& plan = reach->pipeline().experiment_plan()) {
       publisher_.PublishExperiment(
-          reach->wiring.name, reach->pipeline.experiment_state(), *plan,
+          reach->name(), reach->pipeline().experiment_state(), *plan,
           plcs_[static_cast<std::size_t>(reach->wiring.plc)]
-              ->channel_names[static_cast<std::size_t>(reach->wiring.actuator)],
+              ->channel_names[static_cast<std::size_t>(reach->wiring.runner.channels.actuator)],
           wall);
     }
   }
@@ -537,7 +517,8 @@ void Daemon::BeginStop(DaemonExit exit) {
   if (stopping_) return;
   exit_ = exit;
   NotifyStopping();
-  for (auto& reach : reaches_) Handle(*reach, reach->pipeline.StopExperiment(), reach->last_time_s);
+  for (auto& reach : reaches_)
+    Handle(*reach, reach->pipeline().StopExperiment(), reach->last_time_s);
   stopping_ = true;
   health_timer_.cancel();
   for (auto& plc : plcs_) plc->heartbeat_timer.cancel();
@@ -567,10 +548,10 @@ void Daemon::FinishStopWhenSafe() {
 std::string Daemon::Status() const {
   std::ostringstream s;
   for (const auto& reach : reaches_) {
-    const core::ExperimentState& e = reach->pipeline.experiment_state();
-    s << reach->wiring.name << ": " << core::ExperimentPhaseName(e.phase);
+    const core::ExperimentState& e = reach->pipeline().experiment_state();
+    s << reach->name() << ": " << core::ExperimentPhaseName(e.phase);
     if (e.phase == core::ExperimentPhase::kExciting) {
-      s << " " << e.samples_in_phase << "/" << reach->pipeline.experiment_plan()->excite_samples;
+      s << " " << e.samples_in_phase << "/" << reach->pipeline().experiment_plan()->excite_samples;
     }
     s << "; ";
   }

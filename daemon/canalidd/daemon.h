@@ -59,7 +59,6 @@ class Daemon final {
   struct Reach;
   struct Plc;
 
-  void SetNominal(Reach& reach, double nominal);
   void StartPollers();
   void Drain(int plc);
   void OnPoll(int plc, const drivers::PollSample& sample);

@@ -1,12 +1,11 @@
 #pragma once
-#include <functional>
 #include <optional>
 #include <string>
 #include <variant>
 #include <vector>
 
 #include "core/command_auth.h"
-#include "core/reach_pipeline.h"
+#include "core/reach_runner.h"
 #include "drivers/modbus/modbus_port.h"
 #include "drivers/modbus/plc_poller.h"
 
@@ -21,18 +20,10 @@ struct PlcWiring {
   double heartbeat_period_s = 1.0;
 };
 
-/// One reach: which channels of which PLC feed its pipeline and which one it excites.
+/// One reach: the PLC it reads and what it runs (its channels are indices into that PLC's poll).
 struct ReachWiring {
-  std::string name;
   int plc = 0;  ///< index into DaemonPlan::plcs; all of a reach's channels are on one PLC
-  int q_in = -1, q_out = -1, level = -1, actuator = -1;  ///< channel indices in that PLC
-  core::ReachPipelineOptions pipeline;  ///< sample_time_s = poll period x time scale; no experiment
-  /// The actuator's nominal setpoint; none: its first valid reading.
-  std::optional<double> nominal_setpoint;
-  /// The reach's experiment for a nominal setpoint (empty: the reach is never excited).
-  /// @throws std::invalid_argument when the nominal leaves no room for the PRBS inside the limits.
-  std::function<core::ExperimentPlan(double nominal_setpoint)> experiment_for_nominal;
-  bool start_experiment_on_start = false;
+  core::ReachRunnerOptions runner;
 };
 
 /// Everything the daemon runs, derived from the validated configuration.

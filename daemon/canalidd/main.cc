@@ -4,10 +4,10 @@
 #include <iostream>
 #include <sstream>
 
-#include "daemon/canalidd/config_loader.h"
 #include "daemon/canalidd/daemon.h"
 #include "daemon/canalidd/log.h"
 #include "daemon/canalidd/plan_builder.h"
+#include "daemon/config/config_loader.h"
 #include "drivers/lcm/lcm_bus.h"
 
 namespace {

@@ -55,30 +55,10 @@ DaemonPlan BuildDaemonPlan(const core::DaemonConfig& config, const std::string& 
                                   [&](const core::PlcConfig& p) { return p.name == level->plc; });
     if (plc == config.plcs.end()) throw std::invalid_argument("reach '" + reach.name + "': no PLC");
     ReachWiring wiring;
-    wiring.name = reach.name;
     wiring.plc = static_cast<int>(plc - config.plcs.begin());
     const drivers::PollerConfig& poller = plan.plcs[static_cast<std::size_t>(wiring.plc)].poller;
-    wiring.q_in = ChannelIndex(poller, reach.inflow);
-    wiring.q_out = ChannelIndex(poller, reach.outflow);
-    wiring.level = ChannelIndex(poller, reach.level);
-    wiring.actuator = ChannelIndex(poller, reach.actuator);
-    wiring.pipeline.sample_time_s = core::ReachSampleTimeS(config, reach);
-    wiring.pipeline.online_id_enabled =
-        std::find(reach.online_models.begin(), reach.online_models.end(), core::OnlineModel::kId) !=
-        reach.online_models.end();
-    wiring.pipeline.online_id = core::BuildOnlineIdOptions(config, reach);
-    wiring.pipeline.batch.fit.min_nk = wiring.pipeline.online_id.min_delay_samples;
-    wiring.pipeline.batch.fit.max_nk = wiring.pipeline.online_id.max_delay_samples;
-    wiring.pipeline.batch.fit.closed_loop = reach.closed_loop;
-    wiring.nominal_setpoint = reach.nominal_setpoint;
-    for (const core::ExperimentConfig& experiment : config.experiments) {
-      if (experiment.reach != reach.name) continue;
-      wiring.start_experiment_on_start = experiment.start == core::ExperimentStart::kOnStart;
-      wiring.experiment_for_nominal = [shared, name = experiment.name](double nominal) {
-        return core::BuildExperimentPlan(*shared, *shared->FindExperiment(name), nominal);
-      };
-      break;
-    }
+    wiring.runner = core::BuildReachRunnerOptions(
+        shared, reach, [&](const std::string& name) { return ChannelIndex(poller, name); });
     plan.reaches.push_back(std::move(wiring));
   }
   return plan;

@@ -200,4 +200,21 @@ nlohmann::json ToJson(const core::LpvIdentification& lpv, double sample_time_s) 
           {"metrics_per_band", bands}};
 }
 
+nlohmann::json OnlineIdJson(const core::IdSnapshot& s, double sample_time_s) {
+  return {{"model", "id"},
+          {"estimator", "online"},
+          {"delay_s", s.delay_s},
+          {"nk", s.delay_samples},
+          {"b", s.b},
+          {"area_m2", s.area_m2},
+          {"sample_time_s", sample_time_s},
+          {"p21_s_per_m2", s.wave_front_gain_s_per_m2},
+          {"offset_m", s.c_m},
+          {"drift_m_per_s", s.d_m / sample_time_s},
+          {"b_std", s.b_std},
+          {"area_std_m2", s.area_std_m2},
+          {"prediction_error_m", s.prediction_error_m},
+          {"innovation_std_m", s.innovation_std_m}};
+}
+
 }  // namespace canalid::drivers

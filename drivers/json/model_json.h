@@ -10,6 +10,7 @@
 #include "core/id_pipeline.h"
 #include "core/lpv_model.h"
 #include "core/metrics.h"
+#include "core/online_id.h"
 #include "core/process_model_fit.h"
 
 namespace canalid::drivers {
@@ -39,5 +40,9 @@ nlohmann::json ToJson(const core::CommensurateFitResult& fit, double sample_time
 /// highest degree first) and metrics_per_band (band, theta_mean, run start and length, local
 /// parameters, local and LPV MAE).
 nlohmann::json ToJson(const core::LpvIdentification& lpv, double sample_time_s);
+/// A snapshot of the online ID bank in the ID model's keys ("model": "id", delay_s, nk, b,
+/// area_m2, sample_time_s, p21_s_per_m2, offset_m, drift_m_per_s) with its standard deviations,
+/// errors and "estimator": "online".
+nlohmann::json OnlineIdJson(const core::IdSnapshot& snapshot, double sample_time_s);
 
 }  // namespace canalid::drivers

@@ -9,8 +9,8 @@
 #include <mutex>
 
 #include "core/daemon_plan.h"
-#include "daemon/canalidd/config_loader.h"
 #include "daemon/canalidd/driver_config.h"
+#include "daemon/config/config_loader.h"
 #include "sim/serve_process.h"
 
 namespace canalid::daemon {

@@ -4,7 +4,7 @@
 #include <cstdio>
 #include <string>
 
-#include "daemon/canalidd/config_loader.h"
+#include "daemon/config/config_loader.h"
 
 namespace canalid::daemon {
 namespace {

@@ -1,4 +1,4 @@
-#include "daemon/canalidd/config_loader.h"
+#include "daemon/config/config_loader.h"
 
 #include <toml++/toml.h>
 

@@ -1,0 +1,53 @@
+#include "core/reach_runner.h"
+
+#include <stdexcept>
+#include <utility>
+
+namespace canalid::core {
+
+ReachRunner::ReachRunner(ReachRunnerOptions options)
+    : options_(std::move(options)), pipeline_(options_.pipeline) {
+  if (options_.nominal_setpoint) initial_plan_error_ = SetNominal(*options_.nominal_setpoint);
+}
+
+std::string ReachRunner::SetNominal(double nominal) {
+  nominal_ = nominal;
+  nominal_known_ = true;
+  if (!options_.experiment_for_nominal) return {};
+  try {
+    pipeline_.SetExperimentPlan(options_.experiment_for_nominal(nominal));
+  } catch (const std::invalid_argument& e) {
+    // No safe experiment around this nominal: the reach is watched and estimated, never excited.
+    return e.what();
+  }
+  return {};
+}
+
+ReachPollOutcome ReachRunner::OnPoll(const ReachReadings& r) {
+  ReachPollOutcome outcome;
+  if (!nominal_known_ && r.actuator_valid) {
+    outcome.nominal_read = r.actuator;
+    outcome.plan_error = SetNominal(r.actuator);
+  }
+  ReachSample sample;
+  sample.q_in_valid = r.q_in_valid;
+  sample.q_out_valid = r.q_out_valid;
+  sample.level_valid = r.level_valid;
+  sample.q_in_m3s = r.q_in_m3s;
+  sample.q_out_m3s = r.q_out_m3s;
+  sample.level_m = r.level_m;
+  sample.link_ok = r.link_ok;
+  outcome.actions = pipeline_.OnSample(sample);
+  return outcome;
+}
+
+std::optional<ReachActions> ReachRunner::StartIfDue(bool status_ok, bool allowed) {
+  if (!options_.start_experiment_on_start || started_ || !nominal_known_ || !status_ok ||
+      !allowed) {
+    return std::nullopt;
+  }
+  started_ = true;
+  return pipeline_.StartExperiment();
+}
+
+}  // namespace canalid::core

@@ -1,0 +1,217 @@
+#include "daemon/canalid/replay_session.h"
+
+#include <algorithm>
+#include <utility>
+
+#include "daemon/canalid/input_error.h"
+#include "drivers/json/model_json.h"
+
+namespace canalid::cli {
+namespace {
+
+bool Running(core::ExperimentPhase phase) {
+  return phase == core::ExperimentPhase::kSettling || phase == core::ExperimentPhase::kExciting;
+}
+
+bool LiveRunning(std::int8_t state) {
+  return state == canalid::experiment_state_t::STATE_SETTLING ||
+         state == canalid::experiment_state_t::STATE_EXCITING;
+}
+
+std::string At(const std::string& log, const drivers::LogEvent& event) {
+  return log + ": byte " + std::to_string(event.offset);
+}
+
+}  // namespace
+
+struct ReplaySession::Plc {
+  std::string name;
+  std::optional<std::int64_t> last_sequence;
+  std::vector<int> reaches;
+};
+
+struct ReplaySession::Reach {
+  core::ReachConfig config;
+  std::optional<core::ReachRunner> runner;  // built at the first sample of its PLC in a run
+  std::optional<ReplayModel> last_batch;
+  double last_time_s = 0.0;
+};
+
+ReplaySession::ReplaySession(ReplaySessionOptions options, ModelSink on_model,
+                             WarningSink on_warning)
+    : options_(std::move(options)),
+      on_model_(std::move(on_model)),
+      on_warning_(std::move(on_warning)),
+      config_(options_.config) {}
+
+ReplaySession::~ReplaySession() = default;
+
+void ReplaySession::OnConfig(const canalid::config_t& config, const drivers::LogEvent& event) {
+  // Takes effect when the daemon that published it polls (see Restart); a configuration published
+  // again on command, without a restart, changes nothing.
+  config_.OnConfig(config, event, options_.log_path);
+}
+
+void ReplaySession::Restart() {
+  plcs_.clear();
+  reaches_.clear();
+  const core::DaemonConfig& config = *config_.config();
+  if (!options_.reach.empty() && config.FindReach(options_.reach) == nullptr) {
+    std::string known;
+    for (const auto& r : config.reaches) known += (known.empty() ? "" : ", ") + r.name;
+    throw InputError("--reach " + options_.reach + ": not a reach of the configuration (" + known +
+                     ")");
+  }
+  for (const core::PlcConfig& plc : config.plcs) {
+    auto p = std::make_unique<Plc>();
+    p->name = plc.name;
+    plcs_.push_back(std::move(p));
+  }
+  for (const core::ReachConfig& reach : config.reaches) {
+    if (!options_.reach.empty() && reach.name != options_.reach) continue;
+    const std::string plc = config_.ReachPlc(reach);
+    for (auto& p : plcs_) {
+      if (p->name == plc) p->reaches.push_back(static_cast<int>(reaches_.size()));
+    }
+    auto r = std::make_unique<Reach>();
+    r->config = reach;
+    reaches_.push_back(std::move(r));
+  }
+}
+
+ReplaySession::Plc* ReplaySession::FindPlc(const std::string& name) {
+  for (auto& p : plcs_) {
+    if (p->name == name) return p.get();
+  }
+  return nullptr;
+}
+
+void ReplaySession::OnSample(const std::string& plc_name, const canalid::sample_t& sample,
+                             const drivers::LogEvent& event) {
+  if (!config_.config()) return;  // FinalModels() says why nothing was replayed
+  if (!first_utime_) first_utime_ = sample.utime;
+  const double t = static_cast<double>(sample.utime - *first_utime_) * 1e-6;
+  if (plcs_.empty() && reaches_.empty()) Restart();
+  Plc* plc = FindPlc(plc_name);
+  if (plc == nullptr) return;  // a PLC of another configuration
+  if (plc->last_sequence && sample.sequence <= *plc->last_sequence) {
+    on_warning_(At(options_.log_path, event) + ": PLC " + plc_name + " polls from sequence " +
+                std::to_string(sample.sequence) +
+                " again: the daemon restarted; the reaches start again");
+    Restart();
+    plc = FindPlc(plc_name);
+  }
+  plc->last_sequence = sample.sequence;
+  if ((options_.from_s && t < *options_.from_s) || (options_.to_s && t > *options_.to_s)) return;
+  ++samples_used_;
+  const bool status_ok = sample.status == canalid::sample_t::STATUS_OK;
+  const bool link_ok = sample.status != canalid::sample_t::STATUS_DISCONNECTED;
+  for (const int index : plc->reaches) {
+    Reach& reach = *reaches_[static_cast<std::size_t>(index)];
+    reach.last_time_s = t;
+    if (!reach.runner) {
+      reach.runner.emplace(
+          config_.RunnerOptions(reach.config, sample, At(options_.log_path, event)));
+      if (!reach.runner->initial_plan_error().empty()) {
+        on_warning_("reach " + reach.config.name +
+                    ": no experiment: " + reach.runner->initial_plan_error());
+      }
+    }
+    const core::ReachReadings readings = core::ReadReach(
+        reach.runner->options().channels, sample.values,
+        [&](std::size_t i) { return sample.quality[i] == canalid::sample_t::QUALITY_VALID; },
+        link_ok, status_ok);
+    const core::ReachPollOutcome outcome = reach.runner->OnPoll(readings);
+    if (!outcome.plan_error.empty())
+      on_warning_("reach " + reach.config.name + ": no experiment: " + outcome.plan_error);
+    Step(reach, outcome.actions, t);
+    if (const auto start = reach.runner->StartIfDue(status_ok, true)) Step(reach, *start, t);
+  }
+  if (options_.snapshot_every > 0 && samples_used_ % options_.snapshot_every == 0) {
+    for (const auto& reach : reaches_) {
+      if (reach->runner && reach->runner->pipeline().online_id() != nullptr &&
+          reach->runner->pipeline().online_id()->Snapshot().valid) {
+        on_model_(OnlineModel(*reach, t));
+      }
+    }
+  }
+}
+
+void ReplaySession::Step(Reach& reach, const core::ReachActions& actions, double log_time_s) {
+  if (!actions.experiment_record_complete) return;
+  core::ReachActions after;
+  const std::optional<core::IdPipelineResult> result =
+      reach.runner->pipeline().IdentifyRecord(&after);
+  if (!result) {
+    on_warning_("reach " + reach.config.name + ": the experiment record could not be identified");
+    return;
+  }
+  ReplayModel model;
+  model.reach = reach.config.name;
+  model.log_time_s = log_time_s;
+  model.batch = true;
+  model.json = drivers::ToJson(*result);
+  model.json["reach"] = reach.config.name;
+  reach.last_batch = model;
+  on_model_(model);
+}
+
+void ReplaySession::OnExperiment(const canalid::experiment_state_t& live,
+                                 const drivers::LogEvent& event) {
+  for (auto& reach : reaches_) {
+    if (reach->config.name != live.reach || !reach->runner) continue;
+    core::ReachPipeline& pipeline = reach->runner->pipeline();
+    const core::ExperimentPhase ours = pipeline.experiment_state().phase;
+    const double t = first_utime_ ? static_cast<double>(live.utime - *first_utime_) * 1e-6 : 0.0;
+    if (LiveRunning(live.state) && !Running(ours)) {
+      // Started by an operator command between two polls.
+      Step(*reach, pipeline.StartExperiment(), t);
+    } else if (live.state == canalid::experiment_state_t::STATE_ABORTED && Running(ours)) {
+      // Ended by something the samples do not carry.
+      if (live.reason == core::AbortReasonName(core::AbortReason::kLinkLost)) {
+        Step(*reach, pipeline.OnLinkLost(), t);
+      } else if (live.reason == core::AbortReasonName(core::AbortReason::kWriteFailed)) {
+        Step(*reach, pipeline.OnWriteFailed(), t);
+      } else {
+        if (live.reason != core::AbortReasonName(core::AbortReason::kOperatorStop)) {
+          on_warning_(At(options_.log_path, event) + ": reach " + live.reach +
+                      ": the live experiment aborted (" + live.reason +
+                      ") where the replay's did not: the replay diverges from the live run");
+        }
+        Step(*reach, pipeline.StopExperiment(), t);
+      }
+    }
+  }
+}
+
+void ReplaySession::OnModel(const canalid::model_snapshot_t& model,
+                            const drivers::LogEvent& /*event*/) {
+  live_models_[model.reach][model.estimator] = model;
+}
+
+ReplayModel ReplaySession::OnlineModel(const Reach& reach, double log_time_s) const {
+  const core::OnlineIdBank& bank = *reach.runner->pipeline().online_id();
+  const core::IdSnapshot s = bank.Snapshot();
+  ReplayModel model;
+  model.reach = reach.config.name;
+  model.log_time_s = log_time_s;
+  model.json = drivers::OnlineIdJson(s, reach.runner->options().pipeline.sample_time_s);
+  model.json["samples"] = bank.health().samples;
+  model.json["reach"] = reach.config.name;
+  return model;
+}
+
+std::vector<ReplayModel> ReplaySession::FinalModels() const {
+  std::vector<ReplayModel> models;
+  for (const auto& reach : reaches_) {
+    if (reach->last_batch) {
+      models.push_back(*reach->last_batch);
+    } else if (reach->runner && reach->runner->pipeline().online_id() != nullptr &&
+               reach->runner->pipeline().online_id()->Snapshot().valid) {
+      models.push_back(OnlineModel(*reach, reach->last_time_s));
+    }
+  }
+  return models;
+}
+
+}  // namespace canalid::cli

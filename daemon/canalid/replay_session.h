@@ -1,0 +1,87 @@
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/reach_runner.h"
+#include "daemon/canalid/log_config.h"
+#include "drivers/lcm/log_messages.h"
+
+namespace canalid::cli {
+
+/// A model the replay produced: a batch identification at the end of an experiment, or a
+/// snapshot of the online estimator bank.
+struct ReplayModel {
+  std::string reach;
+  double log_time_s = 0.0;  ///< seconds since the first sample of the log (wall clock)
+  bool batch = false;
+  nlohmann::json json;  ///< the model JSON (docs/model-json.md) with "reach"
+};
+
+struct ReplaySessionOptions {
+  std::optional<core::DaemonConfig> config;  ///< --config: instead of the one in the log
+  std::string reach;                         ///< only this reach; empty: all
+  std::optional<double> from_s, to_s;        ///< window, seconds since the first sample
+  std::int64_t snapshot_every = 0;           ///< online snapshots every so many samples; 0: none
+  std::string log_path;                      ///< for messages
+};
+
+/// Runs the daemon's per-reach code (core::ReachRunner, the same the daemon runs on every poll)
+/// over the messages of a log: samples feed the reaches of their PLC, and experiment transitions
+/// the samples cannot show (operator commands, write failures, link losses detected between
+/// polls, stops) are taken from the recorded experiment messages, so a log of a live run gives
+/// the live models.  A daemon restart or reload in the log (a PLC's sample sequence starting
+/// again) restarts the reaches with the configuration in force, as the daemon did.
+class ReplaySession final : public drivers::LogMessageVisitor {
+ public:
+  using ModelSink = std::function<void(const ReplayModel&)>;
+  using WarningSink = std::function<void(const std::string&)>;
+
+  ReplaySession(ReplaySessionOptions options, ModelSink on_model, WarningSink on_warning);
+  ~ReplaySession() override;
+
+  void OnConfig(const canalid::config_t& config, const drivers::LogEvent& event) override;
+  void OnSample(const std::string& plc, const canalid::sample_t& sample,
+                const drivers::LogEvent& event) override;
+  void OnExperiment(const canalid::experiment_state_t& state,
+                    const drivers::LogEvent& event) override;
+  void OnModel(const canalid::model_snapshot_t& model, const drivers::LogEvent& event) override;
+
+  /// The final model of every replayed reach (the last batch model, else the online snapshot),
+  /// in configuration order.
+  std::vector<ReplayModel> FinalModels() const;
+  /// The last model each reach published live (from the log's MODEL_ messages), by reach and
+  /// estimator ("batch", "rls-bank").
+  const std::map<std::string, std::map<std::string, canalid::model_snapshot_t>>& live_models()
+      const {
+    return live_models_;
+  }
+  std::int64_t samples_used() const { return samples_used_; }
+  bool has_config() const { return config_.config() != nullptr; }
+
+ private:
+  struct Reach;
+  struct Plc;
+
+  void Restart();
+  Plc* FindPlc(const std::string& name);
+  void Step(Reach& reach, const core::ReachActions& actions, double log_time_s);
+  ReplayModel OnlineModel(const Reach& reach, double log_time_s) const;
+
+  ReplaySessionOptions options_;
+  ModelSink on_model_;
+  WarningSink on_warning_;
+  LogConfig config_;
+  std::vector<std::unique_ptr<Plc>> plcs_;
+  std::vector<std::unique_ptr<Reach>> reaches_;
+  std::map<std::string, std::map<std::string, canalid::model_snapshot_t>> live_models_;
+  std::optional<std::int64_t> first_utime_;
+  std::int64_t samples_used_ = 0;
+};
+
+}  // namespace canalid::cli

@@ -1,0 +1,124 @@
+#include "drivers/lcm/log_reader.h"
+
+#include <array>
+#include <cerrno>
+#include <cstring>
+#include <sstream>
+#include <stdexcept>
+#include <utility>
+
+namespace canalid::drivers {
+namespace {
+
+constexpr std::size_t kHeaderBytes = 4 + 8 + 8 + 4 + 4;
+
+std::uint64_t BigEndian(const std::uint8_t* bytes, int count) {
+  std::uint64_t value = 0;
+  for (int i = 0; i < count; ++i) value = (value << 8) | bytes[i];
+  return value;
+}
+
+std::string Hex(std::uint32_t value) {
+  std::ostringstream s;
+  s << "0x" << std::hex << std::uppercase << value;
+  return s.str();
+}
+
+}  // namespace
+
+const char* LogEndName(LogEnd end) {
+  switch (end) {
+    case LogEnd::kReading:
+      return "reading";
+    case LogEnd::kClean:
+      return "clean";
+    case LogEnd::kTruncated:
+      return "truncated";
+    case LogEnd::kCorrupt:
+      return "corrupt";
+  }
+  return "unknown";
+}
+
+LogReader::LogReader(const std::string& path) : path_(path) {
+  file_ = std::fopen(path.c_str(), "rb");
+  if (file_ == nullptr) throw std::runtime_error(path + ": cannot open: " + std::strerror(errno));
+  // A large stdio buffer: events are small and read in a few fread calls each.
+  std::setvbuf(file_, nullptr, _IOFBF, 1 << 20);
+  if (std::fseek(file_, 0, SEEK_END) == 0) {
+    const long size = std::ftell(file_);
+    size_ = size > 0 ? static_cast<std::uint64_t>(size) : 0;
+  }
+  std::rewind(file_);
+}
+
+LogReader::~LogReader() {
+  if (file_ != nullptr) std::fclose(file_);
+}
+
+bool LogReader::Fail(LogEnd end, std::string problem) {
+  end_ = end;
+  problem_ = std::move(problem);
+  return false;
+}
+
+bool LogReader::Next(LogEvent* event) {
+  if (end_ != LogEnd::kReading) return false;
+  const std::uint64_t start = position_;
+  const std::string at = "byte " + std::to_string(start) + ": ";
+  std::array<std::uint8_t, kHeaderBytes> header{};
+  const std::size_t got = std::fread(header.data(), 1, header.size(), file_);
+  if (got == 0 && std::feof(file_)) {
+    end_ = LogEnd::kClean;
+    return false;
+  }
+  if (got >= 4) {
+    const auto sync = static_cast<std::uint32_t>(BigEndian(header.data(), 4));
+    if (sync != kSyncWord) {
+      return Fail(LogEnd::kCorrupt, at + "not an LCM event (sync word " + Hex(sync) +
+                                        ", expected " + Hex(kSyncWord) + ")");
+    }
+  }
+  if (got < header.size()) {
+    return Fail(LogEnd::kTruncated, at + "the log ends inside an event header (" +
+                                        std::to_string(got) + " of " +
+                                        std::to_string(header.size()) + " bytes)");
+  }
+  const auto event_number = static_cast<std::int64_t>(BigEndian(header.data() + 4, 8));
+  const auto utime = static_cast<std::int64_t>(BigEndian(header.data() + 12, 8));
+  const auto channel_length = static_cast<std::int32_t>(BigEndian(header.data() + 20, 4));
+  const auto data_length = static_cast<std::int32_t>(BigEndian(header.data() + 24, 4));
+  if (channel_length <= 0 || channel_length > kMaxChannelLength) {
+    return Fail(LogEnd::kCorrupt, at + "event " + std::to_string(event_number) +
+                                      ": impossible channel length " +
+                                      std::to_string(channel_length) + " (allowed 1.." +
+                                      std::to_string(kMaxChannelLength) + ")");
+  }
+  if (data_length < 0) {
+    return Fail(LogEnd::kCorrupt, at + "event " + std::to_string(event_number) +
+                                      ": negative data length " + std::to_string(data_length));
+  }
+  const std::uint64_t body =
+      static_cast<std::uint64_t>(channel_length) + static_cast<std::uint64_t>(data_length);
+  if (start + header.size() + body > size_) {
+    return Fail(LogEnd::kTruncated, at + "event " + std::to_string(event_number) + " needs " +
+                                        std::to_string(header.size() + body) +
+                                        " bytes, the log ends at byte " + std::to_string(size_));
+  }
+  channel_.resize(static_cast<std::size_t>(channel_length));
+  data_.resize(static_cast<std::size_t>(data_length));
+  if (std::fread(channel_.data(), 1, channel_.size(), file_) != channel_.size() ||
+      std::fread(data_.data(), 1, data_.size(), file_) != data_.size()) {
+    return Fail(LogEnd::kTruncated, at + "event " + std::to_string(event_number) +
+                                        ": read failed: " + std::strerror(errno));
+  }
+  position_ = start + header.size() + body;
+  event->event_number = event_number;
+  event->utime = utime;
+  event->offset = start;
+  event->channel = channel_;
+  event->data = std::span<const std::uint8_t>(data_.data(), data_.size());
+  return true;
+}
+
+}  // namespace canalid::drivers
