@@ -554,10 +554,12 @@ TEST(DaemonCanalsim, CommandsStartOnlyWhenGenuine) {
   EXPECT_FALSE(daemon.WaitForLine("experiment aborted (stopped by operator)", 10000).empty())
       << daemon.output();
   EXPECT_EQ(daemon.Stop(SIGTERM), 0) << daemon.output();
-  // The daemon's last health message crosses the bus to the logger after the daemon has exited:
-  // wait (bounded: 50 x 100 ms) until the logger has written it before stopping the logger.
+  // The daemon's last health message crosses the bus to the logger after the daemon has exited,
+  // and lcm-logger writes an event out when the next one comes: send commands nobody answers now
+  // (bounded: 50 x 100 ms) until the health message is in the file, then stop the logger.
   for (int tries = 0; tries < 50 && ReadLcmLog(bus_log).last_health.count("commands") == 0;
        ++tries) {
+    EXPECT_EQ(SendCommand(dir, canal.pid(), key, {"publish-config"}), 0);
     logger.WaitForLine("never printed", 100);
   }
   EXPECT_EQ(logger.Stop(SIGINT), 0) << logger.output();
