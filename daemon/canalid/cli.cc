@@ -5,6 +5,7 @@
 #include <iostream>
 
 #include "daemon/canalid/design_command.h"
+#include "daemon/canalid/export_command.h"
 #include "daemon/canalid/identify_command.h"
 #include "daemon/canalid/input_error.h"
 #include "daemon/canalid/replay_command.h"
@@ -27,6 +28,8 @@ int Run(int argc, char** argv) {
   AddSimulateCommand(app, simulate, exit_code);
   ReplayOptions replay;
   AddReplayCommand(app, replay, exit_code);
+  ExportOptions export_options;
+  AddExportCommand(app, export_options, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

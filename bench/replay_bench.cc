@@ -1,0 +1,122 @@
+// Replay throughput: an LCM log of canalidd (config/canalidd-asce2.toml: one reach, online ID bank
+// over 24 delays, the designed on_start experiment and its batch identification) read in process
+// and run through the daemon's per-reach code (ReplaySession), as `canalid replay` does.  The log
+// holds `samples` polls of 6 channels whose flows and level follow canalsim's PRBS record of pool 2
+// (tests/data/sim), repeated.  Reported: samples per second through the whole path (read, decode,
+// pipeline), and the read-and-decode part alone.
+#include <benchmark/benchmark.h>
+#include <lcm/lcm-cpp.hpp>
+
+#include <canalid/config_t.hpp>
+#include <canalid/sample_t.hpp>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "daemon/canalid/replay_session.h"
+#include "drivers/lcm/log_messages.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string ReadText(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+template <class Message>
+void Write(lcm::LogFile& log, std::int64_t number, const std::string& channel, const Message& m,
+           std::vector<std::uint8_t>& buffer) {
+  buffer.resize(static_cast<std::size_t>(m.getEncodedSize()));
+  m.encode(buffer.data(), 0, static_cast<int>(buffer.size()));
+  lcm::LogEvent e;
+  e.eventnum = number;
+  e.timestamp = m.utime;
+  e.channel = channel;
+  e.datalen = static_cast<std::int32_t>(buffer.size());
+  e.data = buffer.data();
+  log.writeEvent(&e);
+}
+
+// The log of `samples` polls, written once per size into the build tree.
+std::string MakeLog(std::int64_t samples) {
+  const fs::path path =
+      fs::path(CANALID_BENCH_BINARY_DIR) / ("replay-bench-" + std::to_string(samples) + ".lcmlog");
+  if (fs::exists(path)) return path.string();
+  std::vector<std::array<double, 3>> rows;
+  std::istringstream csv(
+      ReadText(std::string(CANALID_BENCH_SOURCE_DIR) + "/tests/data/sim/asce2-pool2-prbs.csv"));
+  std::string line;
+  std::getline(csv, line);
+  while (std::getline(csv, line)) {
+    std::array<double, 4> v{};
+    std::istringstream s(line);
+    for (double& x : v) {
+      std::getline(s, line, ',');
+      x = std::stod(line);
+    }
+    rows.push_back({v[1], v[2], v[3]});
+  }
+  {
+    lcm::LogFile log(path.string() + ".part", "w");
+    std::vector<std::uint8_t> buffer;
+    canalid::config_t config;
+    config.utime = 1;
+    config.path = "config/canalidd-asce2.toml";
+    config.text = ReadText(std::string(CANALID_BENCH_SOURCE_DIR) + "/config/canalidd-asce2.toml");
+    Write(log, 0, "CANALID_ASCE2_CONFIG", config, buffer);
+    canalid::sample_t s;
+    s.source = "asce2";
+    s.channel_names = {"heartbeat",   "pool2_inflow",   "pool2_outflow",
+                       "pool2_level", "gate1_position", "gate1_setpoint"};
+    s.num_channels = 6;
+    s.quality.assign(6, 0);
+    for (std::int64_t k = 0; k < samples; ++k) {
+      const auto& r = rows[static_cast<std::size_t>(k) % rows.size()];
+      s.utime = 2 + k * 100000;
+      s.sequence = k;
+      s.values = {0.0, r[0], r[1], r[2], 1.5, 1.5};
+      Write(log, k + 1, "CANALID_ASCE2_SAMPLE_asce2", s, buffer);
+    }
+  }  // closes the log
+  fs::rename(path.string() + ".part", path);
+  return path.string();
+}
+
+void BM_ReplayThroughput(benchmark::State& state) {
+  const std::string log = MakeLog(state.range(0));
+  std::int64_t samples = 0;
+  for (auto _ : state) {
+    canalid::cli::ReplaySessionOptions options;
+    options.log_path = log;
+    canalid::cli::ReplaySession session(
+        options, [](const canalid::cli::ReplayModel&) {}, [](const std::string&) {});
+    const canalid::drivers::LogScanResult result =
+        canalid::drivers::ScanCanalidLog(log, {}, session);
+    samples += result.samples;
+    benchmark::DoNotOptimize(session.FinalModels());
+  }
+  state.counters["samples_per_s"] =
+      benchmark::Counter(static_cast<double>(samples), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_ReplayThroughput)->Arg(200000)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// Reading and decoding alone (a visitor that does nothing).
+void BM_ReadAndDecode(benchmark::State& state) {
+  const std::string log = MakeLog(state.range(0));
+  std::int64_t samples = 0;
+  for (auto _ : state) {
+    canalid::drivers::LogMessageVisitor nothing;
+    samples += canalid::drivers::ScanCanalidLog(log, {}, nothing).samples;
+  }
+  state.counters["samples_per_s"] =
+      benchmark::Counter(static_cast<double>(samples), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_ReadAndDecode)->Arg(200000)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace
