@@ -194,6 +194,11 @@ TEST(ReplayCli, ReplaysARunToItsBatchModelThenPrintsItLast) {
   EXPECT_EQ(online, 8);  // samples 100, 200 ... 800
   EXPECT_EQ(batch, 1);
   EXPECT_EQ(LastLine(json.out), LastLine(run.out));
+
+  // A window of the log: polls 0.1 s apart, so [20 s, 30 s] after the first holds 101 of them.
+  const ProgramRun window = Replay(dir, dir / "run.lcmlog", "--from 20 --to 30");
+  ASSERT_EQ(window.exit_code, 0) << window.err;
+  EXPECT_NE(window.err.find("101 samples of 842 events"), std::string::npos) << window.err;
 }
 
 TEST(ReplayCli, TruncatedLogGivesWhatItsWholeEventsGive) {
