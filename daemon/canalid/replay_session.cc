@@ -186,6 +186,14 @@ void ReplaySession::OnExperiment(const canalid::experiment_state_t& live,
 
 void ReplaySession::OnModel(const canalid::model_snapshot_t& model,
                             const drivers::LogEvent& /*event*/) {
+  if (model.estimator == "rls-bank-reset") {
+    // An operator reset the online estimator between two polls.
+    for (auto& reach : reaches_) {
+      if (reach->config.name == model.reach && reach->runner)
+        reach->runner->pipeline().ResetOnlineEstimator();
+    }
+    return;
+  }
   live_models_[model.reach][model.estimator] = model;
 }
 

@@ -34,9 +34,10 @@ struct ReplaySessionOptions {
 /// Runs the daemon's per-reach code (core::ReachRunner, the same the daemon runs on every poll)
 /// over the messages of a log: samples feed the reaches of their PLC, and experiment transitions
 /// the samples cannot show (operator commands, write failures, link losses detected between
-/// polls, stops) are taken from the recorded experiment messages, so a log of a live run gives
-/// the live models.  A daemon restart or reload in the log (a PLC's sample sequence starting
-/// again) restarts the reaches with the configuration in force, as the daemon did.
+/// polls, stops) are taken from the recorded experiment messages, and estimator resets from the
+/// daemon's "rls-bank-reset" model message, so a log of a live run gives the live models.  A daemon
+/// restart or reload in the log (a PLC's sample sequence starting again) restarts the reaches with
+/// the configuration in force, as the daemon did.
 class ReplaySession final : public drivers::LogMessageVisitor {
  public:
   using ModelSink = std::function<void(const ReplayModel&)>;

@@ -431,6 +431,11 @@ void Daemon::OnCommand(const drivers::AcceptedCommand& command) {
         break;
       case core::CommandKind::kResetEstimator:
         reach->pipeline().ResetOnlineEstimator();
+        // Marks the reset in the record (`canalid replay` resets its bank here too).
+        if (const core::OnlineIdBank* bank = reach->pipeline().online_id()) {
+          publisher_.PublishOnlineId(reach->name(), bank->Snapshot(), reach->last_time_s,
+                                     "rls-bank-reset");
+        }
         break;
       case core::CommandKind::kPublishConfig:
         break;

@@ -301,6 +301,30 @@ TEST(ReplayCli, ALogWithoutItsConfigurationNeedsConfig) {
       << unknown.err;
 }
 
+// An operator's estimator reset, marked in the log by the daemon's "rls-bank-reset" model
+// message, restarts the replay's online bank there: it has seen only the samples after it.
+TEST(ReplayCli, AnEstimatorResetInTheLogRestartsTheOnlineBank) {
+  const fs::path dir = TestDirectory("replay-reset");
+  const std::vector<Row> rows = PrbsRecord();
+  // 350 polls: the experiment (10 settling + 378 exciting) does not end, so the final line is
+  // the online estimate.
+  std::vector<Event> events =
+      DaemonRun(std::vector<Row>(rows.begin(), rows.begin() + 350), kStartUtime);
+  Event reset = ModelEvent(events[200].utime + 1, NAN);
+  canalid::model_snapshot_t m;
+  m.decode(reset.data.data(), 0, static_cast<int>(reset.data.size()));
+  m.estimator = "rls-bank-reset";
+  reset.data = Encode(m);
+  events.insert(events.begin() + 201, reset);  // after the config and 200 samples
+  WriteLog(dir / "reset.lcmlog", events, events.size());
+  const ProgramRun run = Replay(dir, dir / "reset.lcmlog");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const nlohmann::json online = nlohmann::json::parse(LastLine(run.out), nullptr, false);
+  ASSERT_TRUE(online.is_object()) << run.out;
+  EXPECT_EQ(online.value("estimator", ""), "online");
+  EXPECT_EQ(online.value("samples", 0), 150);
+}
+
 // The export gives back the record's values exactly (17 significant digits) on the plant-time
 // grid of the configuration, and the published models with their parameters.
 TEST(ExportCli, WritesEachReachsSamplesAndTheModels) {
