@@ -7,6 +7,7 @@
 #include "daemon/canalid/design_command.h"
 #include "daemon/canalid/identify_command.h"
 #include "daemon/canalid/input_error.h"
+#include "daemon/canalid/report_command.h"
 #include "daemon/canalid/simulate_command.h"
 
 namespace canalid::cli {
@@ -24,6 +25,8 @@ int Run(int argc, char** argv) {
   AddDesignCommand(app, design, exit_code);
   SimulateOptions simulate;
   AddSimulateCommand(app, simulate, exit_code);
+  ReportOptions report;
+  AddReportCommand(app, report, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
