@@ -124,6 +124,11 @@ ModelAnalysis AnalyseModel(const std::string& kind, const nlohmann::json& model,
   ModelAnalysis a;
   a.kind = kind;
   a.model = model;
+  if (model.contains("warnings") && model.at("warnings").is_array()) {
+    for (const auto& w : model.at("warnings")) {
+      if (w.is_string()) a.notes.push_back("identify: " + w.get<std::string>());
+    }
+  }
   const bool lpv_without_simulation = kind == "lpv" && model.value("kind", "") != "first_order_arx";
   if (lpv_without_simulation) {
     a.notes.push_back("lpv with " + model.value("local_model", std::string("?")) +
@@ -138,10 +143,10 @@ ModelAnalysis AnalyseModel(const std::string& kind, const nlohmann::json& model,
       a.lpv = LpvParameterCurves(model, kind + " model");
       if (!lpv_without_simulation) {
         for (Eigen::Index i = 0; i < a.lpv.theta_points.size(); ++i) {
-          char label[64];
-          std::snprintf(label, sizeof label, "lpv at %s = %.4g", a.lpv.schedule.c_str(),
-                        a.lpv.theta_points(i));
-          a.steps.push_back(StepResponse(label, model, table, a.lpv.theta_points(i)));
+          char theta[32];
+          std::snprintf(theta, sizeof theta, "%.4g", a.lpv.theta_points(i));
+          a.steps.push_back(StepResponse("lpv at " + a.lpv.schedule + " = " + theta, model, table,
+                                         a.lpv.theta_points(i)));
         }
       }
     } else {

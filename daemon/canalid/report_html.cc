@@ -162,7 +162,13 @@ void WriteReportHtml(const std::filesystem::path& path, const drivers::CsvTable&
       opened = true;
       h << "<figure><img src=\"" << Escape(p.image) << "\" alt=\"" << Escape(p.title)
         << "\"><figcaption>" << Escape(p.title) << " (<a href=\"" << Escape(p.script)
-        << "\">gnuplot script</a>)</figcaption></figure>\n";
+        << "\">gnuplot script</a>)";
+      // The caveats of a model belong next to its picture, where they are read.
+      for (const auto& m : models) {
+        if (p.section != "fit" || m.kind != p.model) continue;
+        for (const auto& n : m.notes) h << "<br>Note: " << Escape(n);
+      }
+      h << "</figcaption></figure>\n";
     }
   }
 
