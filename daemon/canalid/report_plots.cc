@@ -1,5 +1,6 @@
 #include "daemon/canalid/report_plots.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -119,55 +120,65 @@ std::vector<std::string> Collect(const std::vector<ModelAnalysis>& models, const
   return names;
 }
 
+// Several columns of one data file as one plot command: the first series names the file, the
+// others refer to it as ''.
+std::string PlotCommand(const std::string& data, const std::vector<std::string>& series) {
+  std::string command = "plot ";
+  for (std::size_t i = 0; i < series.size(); ++i) {
+    command += (i ? ", ''" : data) + " " + series[i];
+  }
+  return command + "\n";
+}
+
 void RecordPlots(PlotWriter& w, const drivers::CsvTable& table,
                  const std::vector<ModelAnalysis>& models, const TimeAxis& axis) {
   const std::vector<std::string> inputs = Collect(models, "inputs");
   const std::vector<std::string> schedules = Collect(models, "schedule");
   std::vector<std::string> names = {"time_s"};
   std::vector<Eigen::VectorXd> columns = {table.time_s()};
-  std::ostringstream plot;
-  plot << "set xlabel " << Quote("time (" + axis.unit + ")")
-       << "\nset ylabel 'input'\nset key below\nset autoscale xfix\n";
-  if (!schedules.empty()) {
-    plot << "set y2label " << Quote("schedule " + schedules.front()) << "\nset y2tics\n";
-  }
-  std::string series;
-  int column = 2;
+  std::vector<std::string> series;
   for (const auto& name : inputs) {
     names.push_back(name);
     columns.push_back(RequireColumn(table, name));
-    series += std::string(series.empty() ? "" : ", ") + "'' using " + axis.Using(column++) +
-              " with steps lw 1.5 lc rgb '" + Colour(names.size() - 2) + "' title " + Quote(name);
+    series.push_back("using " + axis.Using(static_cast<int>(names.size())) +
+                     " with steps lw 1.5 lc rgb '" + Colour(series.size()) + "' title " +
+                     Quote(name));
   }
   for (const auto& name : schedules) {
     names.push_back(name);
     columns.push_back(RequireColumn(table, name));
-    series += std::string(series.empty() ? "" : ", ") + "'' using " + axis.Using(column++) +
-              " axes x1y2 with lines dt 2 lw 1.5 lc rgb '#555555' title " +
-              Quote(name + " (schedule, right axis)");
+    series.push_back("using " + axis.Using(static_cast<int>(names.size())) +
+                     " axes x1y2 with lines dt 2 lw 1.5 lc rgb '#555555' title " +
+                     Quote(name + " (schedule, right axis)"));
   }
-  const std::string data = w.Data("inputs", names, columns);
-  // `''` refers to the previous file; the first series names it.
-  plot << "plot " << data << series.substr(2) << "\n";
-  w.Add("inputs", "record", "", "Inputs (excitation) of " + table.source(), plot.str());
+  if (!series.empty()) {
+    std::ostringstream plot;
+    plot << "set xlabel " << Quote("time (" + axis.unit + ")")
+         << "\nset ylabel 'input'\nset key below\nset autoscale xfix\n";
+    if (!schedules.empty()) {
+      plot << "set y2label " << Quote("schedule " + schedules.front()) << "\nset y2tics\n";
+    }
+    plot << PlotCommand(w.Data("inputs", names, columns), series);
+    w.Add("inputs", "record", "", "Inputs (excitation) of " + table.source(), plot.str());
+  }
 
-  const std::vector<std::string> outputs = Collect(models, "output");
   names = {"time_s"};
   columns = {table.time_s()};
-  std::string out_series;
-  column = 2;
-  for (const auto& name : outputs) {
+  series.clear();
+  for (const auto& name : Collect(models, "output")) {
     names.push_back(name);
     columns.push_back(RequireColumn(table, name));
-    out_series += std::string(out_series.empty() ? "" : ", ") + "'' using " + axis.Using(column++) +
-                  " with lines lw 1.5 lc rgb '" + Colour(names.size() - 2) + "' title " +
-                  Quote(name);
+    series.push_back("using " + axis.Using(static_cast<int>(names.size())) +
+                     " with lines lw 1.5 lc rgb '" + Colour(series.size()) + "' title " +
+                     Quote(name));
   }
-  std::ostringstream out;
-  out << "set xlabel " << Quote("time (" + axis.unit + ")")
-      << "\nset ylabel 'output'\nset key below\nset autoscale xfix\n"
-      << "plot " << w.Data("outputs", names, columns) << out_series.substr(2) << "\n";
-  w.Add("outputs", "record", "", "Measured output of " + table.source(), out.str());
+  if (!series.empty()) {
+    std::ostringstream out;
+    out << "set xlabel " << Quote("time (" + axis.unit + ")")
+        << "\nset ylabel 'output'\nset key below\nset autoscale xfix\n"
+        << PlotCommand(w.Data("outputs", names, columns), series);
+    w.Add("outputs", "record", "", "Measured output of " + table.source(), out.str());
+  }
 }
 
 void ModelPlots(PlotWriter& w, const ModelAnalysis& m, std::size_t index, const TimeAxis& axis,
