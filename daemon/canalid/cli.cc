@@ -9,6 +9,7 @@
 #include "daemon/canalid/identify_command.h"
 #include "daemon/canalid/input_error.h"
 #include "daemon/canalid/replay_command.h"
+#include "daemon/canalid/report_command.h"
 #include "daemon/canalid/simulate_command.h"
 
 namespace canalid::cli {
@@ -30,6 +31,8 @@ int Run(int argc, char** argv) {
   AddReplayCommand(app, replay, exit_code);
   ExportOptions export_options;
   AddExportCommand(app, export_options, exit_code);
+  ReportOptions report;
+  AddReportCommand(app, report, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

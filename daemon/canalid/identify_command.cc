@@ -21,6 +21,25 @@ int RunIdentify(const IdentifyOptions& options) {
   } catch (const drivers::CsvError& e) {
     throw InputError(e.what());
   }
+  const nlohmann::json model = IdentifyModel(options, table);
+  const std::string text = options.pretty ? model.dump(2) : model.dump();
+  if (!options.out.empty()) {
+    std::ofstream out(options.out, std::ios::trunc);
+    if (!(out << text << "\n")) throw InputError(options.out + ": cannot write the model file");
+  }
+  std::cout << text << std::endl;
+  return 0;
+}
+
+}  // namespace
+
+const std::vector<std::string>& ModelKinds() {
+  static const std::vector<std::string> kinds = {"id",         "arx",     "foptd", "soptd",
+                                                 "frac-foptd", "frac-ss", "lpv"};
+  return kinds;
+}
+
+nlohmann::json IdentifyModel(const IdentifyOptions& options, const drivers::CsvTable& table) {
   nlohmann::json model;
   if (options.online) {
     model = IdentifyOnline(options, table);
@@ -32,8 +51,11 @@ int RunIdentify(const IdentifyOptions& options) {
     model = IdentifyFractional(options, table);
   } else if (options.model == "lpv") {
     model = IdentifyLpv(options, table);
-  } else {
+  } else if (options.model == "foptd" || options.model == "soptd") {
     model = IdentifyProcessModel(options, table);
+  } else {
+    throw InputError("--model: unknown kind '" + options.model +
+                     "' (id, arx, foptd, soptd, frac-foptd, frac-ss, lpv)");
   }
   // The columns the model was fitted on, so `canalid simulate` finds them again.
   if (!model.contains("inputs")) {
@@ -43,16 +65,62 @@ int RunIdentify(const IdentifyOptions& options) {
   }
   model["input"] = {
       {"file", options.input}, {"rows", table.rows()}, {"sample_time_s", table.sample_time_s()}};
-  const std::string text = options.pretty ? model.dump(2) : model.dump();
-  if (!options.out.empty()) {
-    std::ofstream out(options.out, std::ios::trunc);
-    if (!(out << text << "\n")) throw InputError(options.out + ": cannot write the model file");
-  }
-  std::cout << text << std::endl;
-  return 0;
+  return model;
 }
 
-}  // namespace
+void AddIdentifyModelOptions(CLI::App& cmd, IdentifyOptions& options) {
+  auto* id = cmd.add_option_group("ID model (--model id)");
+  id->add_option("--qin", options.qin, "Inflow column, m3/s")->capture_default_str();
+  id->add_option("--qout", options.qout, "Outflow column, m3/s")->capture_default_str();
+  id->add_option("--level", options.level, "Downstream level column, m")->capture_default_str();
+  id->add_option("--max-delay-s", options.max_delay_s,
+                 "Longest delay tried, s (id: a third of the record; frac-foptd: half; frac-ss: "
+                 "min(record/10, "
+                 "100 samples); lpv arx/frac-ss locals: 20 samples)")
+      ->check(CLI::PositiveNumber);
+  id->add_option("--closed-loop", options.closed_loop,
+                 "auto: decide from the data; on: three-step method; off: plain fit")
+      ->check(CLI::IsMember({"auto", "on", "off"}))
+      ->capture_default_str();
+  id->add_flag("--keep-outliers", options.keep_outliers,
+               "Do not replace level spikes before fitting");
+  auto* io = cmd.add_option_group(
+      "Input/output models (arx, foptd, soptd, frac-foptd, frac-ss, lpv, --compare)");
+  io->add_option("--u", options.u, "Input column(s); arx takes a comma-separated list")
+      ->capture_default_str();
+  io->add_option("--y", options.y, "Output column")->capture_default_str();
+  auto* arx = cmd.add_option_group("ARX (--model arx), MATLAB conventions");
+  arx->add_option("--na", options.na, "Number of a coefficients")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  arx->add_option("--nb", options.nb, "b coefficients: one value, or one per input (N[,N...])")
+      ->capture_default_str();
+  arx->add_option("--nk", options.nk, "Delays in samples: one value, or one per input")
+      ->capture_default_str();
+  arx->add_flag("--detrend", options.detrend, "Remove linear trends from y and every u first");
+  auto* frac = cmd.add_option_group("Fractional models (--model frac-foptd|frac-ss)");
+  auto* alpha = frac->add_option("--alpha", options.alpha,
+                                 "frac-foptd: hold alpha at this value (0 < A < 2), fit the rest")
+                    ->check(CLI::Range(1e-6, 2.0 - 1e-6));
+  auto* q = frac->add_option("--q", options.q, "frac-ss: commensurate order alpha = 1/q (1, 2, 4)")
+                ->check(CLI::IsMember({1, 2, 4}));
+  alpha->excludes(q);
+  auto* lpv = cmd.add_option_group("LPV (--model lpv)");
+  lpv->add_option("--local", options.local,
+                  "Local model per band: arx (first order with delay), frac-foptd, frac-ss "
+                  "(with --q), integer (seed 1's k e^-tau s/(s(S s^2+M s+1)))");
+  lpv->add_option("--schedule", options.schedule, "Scheduling column (theta)");
+  lpv->add_option("--bands", options.bands, "Band edges b0,b1,...,bn, strictly increasing");
+  lpv->add_option("--bands-file", options.bands_file,
+                  "File with the band edges (numbers separated by commas, spaces or lines)");
+  lpv->add_option("--degree", options.degree, "Polynomial degree of every parameter in theta")
+      ->check(CLI::Range(0, 6))
+      ->capture_default_str();
+  lpv->add_option("--min-band-samples", options.min_band_samples,
+                  "Fewest consecutive samples a band must have")
+      ->check(CLI::Range(10, 100000000))
+      ->capture_default_str();
+}
 
 void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code) {
   CLI::App* cmd = app.add_subcommand("identify", "Identify a model from a CSV experiment record");
@@ -72,8 +140,7 @@ void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code)
       "Output: one JSON object on stdout (keys in docs/model-json.md); --compare prints a table.\n"
       "Exit 2 on bad input.");
   auto* model =
-      cmd->add_option("--model", options.model, "Model kind")
-          ->check(CLI::IsMember({"id", "arx", "foptd", "soptd", "frac-foptd", "frac-ss", "lpv"}));
+      cmd->add_option("--model", options.model, "Model kind")->check(CLI::IsMember(ModelKinds()));
   auto* compare = cmd->add_option("--compare", options.compare,
                                   "Comma-separated kinds (foptd, soptd, frac-foptd, frac-ss) to "
                                   "fit to every file of --input (a glob), then print the table");
@@ -84,57 +151,7 @@ void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code)
       ->required();
   cmd->add_option("--out", options.out, "Also write the model JSON to this file");
   cmd->add_flag("--pretty", options.pretty, "Indent the JSON");
-  auto* id = cmd->add_option_group("ID model (--model id)");
-  id->add_option("--qin", options.qin, "Inflow column, m3/s")->capture_default_str();
-  id->add_option("--qout", options.qout, "Outflow column, m3/s")->capture_default_str();
-  id->add_option("--level", options.level, "Downstream level column, m")->capture_default_str();
-  id->add_option("--max-delay-s", options.max_delay_s,
-                 "Longest delay tried, s (id: a third of the record; frac-foptd: half; frac-ss: "
-                 "min(record/10, "
-                 "100 samples); lpv arx/frac-ss locals: 20 samples)")
-      ->check(CLI::PositiveNumber);
-  id->add_option("--closed-loop", options.closed_loop,
-                 "auto: decide from the data; on: three-step method; off: plain fit")
-      ->check(CLI::IsMember({"auto", "on", "off"}))
-      ->capture_default_str();
-  id->add_flag("--keep-outliers", options.keep_outliers,
-               "Do not replace level spikes before fitting");
-  auto* io = cmd->add_option_group(
-      "Input/output models (arx, foptd, soptd, frac-foptd, frac-ss, lpv, --compare)");
-  io->add_option("--u", options.u, "Input column(s); arx takes a comma-separated list")
-      ->capture_default_str();
-  io->add_option("--y", options.y, "Output column")->capture_default_str();
-  auto* arx = cmd->add_option_group("ARX (--model arx), MATLAB conventions");
-  arx->add_option("--na", options.na, "Number of a coefficients")
-      ->check(CLI::NonNegativeNumber)
-      ->capture_default_str();
-  arx->add_option("--nb", options.nb, "b coefficients: one value, or one per input (N[,N...])")
-      ->capture_default_str();
-  arx->add_option("--nk", options.nk, "Delays in samples: one value, or one per input")
-      ->capture_default_str();
-  arx->add_flag("--detrend", options.detrend, "Remove linear trends from y and every u first");
-  auto* frac = cmd->add_option_group("Fractional models (--model frac-foptd|frac-ss)");
-  auto* alpha = frac->add_option("--alpha", options.alpha,
-                                 "frac-foptd: hold alpha at this value (0 < A < 2), fit the rest")
-                    ->check(CLI::Range(1e-6, 2.0 - 1e-6));
-  auto* q = frac->add_option("--q", options.q, "frac-ss: commensurate order alpha = 1/q (1, 2, 4)")
-                ->check(CLI::IsMember({1, 2, 4}));
-  alpha->excludes(q);
-  auto* lpv = cmd->add_option_group("LPV (--model lpv)");
-  lpv->add_option("--local", options.local,
-                  "Local model per band: arx (first order with delay), frac-foptd, frac-ss "
-                  "(with --q), integer (seed 1's k e^-tau s/(s(S s^2+M s+1)))");
-  lpv->add_option("--schedule", options.schedule, "Scheduling column (theta)");
-  lpv->add_option("--bands", options.bands, "Band edges b0,b1,...,bn, strictly increasing");
-  lpv->add_option("--bands-file", options.bands_file,
-                  "File with the band edges (numbers separated by commas, spaces or lines)");
-  lpv->add_option("--degree", options.degree, "Polynomial degree of every parameter in theta")
-      ->check(CLI::Range(0, 6))
-      ->capture_default_str();
-  lpv->add_option("--min-band-samples", options.min_band_samples,
-                  "Fewest consecutive samples a band must have")
-      ->check(CLI::Range(10, 100000000))
-      ->capture_default_str();
+  AddIdentifyModelOptions(*cmd, options);
   auto* online = cmd->add_option_group("Online estimation (--model id|arx --online)");
   online->add_flag("--online", options.online,
                    "Run the recursive estimator sample by sample; print its final snapshot");

@@ -59,6 +59,19 @@ struct IdentifyOptions {
 /// Registers `identify` on the app; `exit_code` receives the result when it runs.
 void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code);
 
+/// The kinds `--model` accepts: id, arx, foptd, soptd, frac-foptd, frac-ss, lpv.
+const std::vector<std::string>& ModelKinds();
+
+/// Registers the options that shape one identification (columns, orders, delays, fractional and
+/// LPV settings: everything but --model, --input, --online, --compare and the output options) on
+/// a command, so that `identify` and `report` take them alike.
+void AddIdentifyModelOptions(CLI::App& cmd, IdentifyOptions& options);
+
+/// Identifies options.model (or the online estimator with options.online) on the table: the model
+/// JSON of `canalid identify`, with "inputs", "output" and "input" (options.input, rows, sample
+/// time) filled in.  @throws InputError on bad columns, options or data.
+nlohmann::json IdentifyModel(const IdentifyOptions& options, const drivers::CsvTable& table);
+
 /// One model kind each; they return the model JSON (DESIGN.md keys).  @throws InputError.
 nlohmann::json IdentifyId(const IdentifyOptions& options, const drivers::CsvTable& table);
 nlohmann::json IdentifyArx(const IdentifyOptions& options, const drivers::CsvTable& table);

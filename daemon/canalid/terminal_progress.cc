@@ -25,6 +25,13 @@ void TerminalProgress::Update(double fraction, const std::string& detail) {
   std::fflush(stderr);
 }
 
+void TerminalProgress::Show(const std::string& text) {
+  if (!enabled_) return;
+  shown_ = true;
+  std::fprintf(stderr, "\r\033[K%s: %s", label_.c_str(), text.c_str());
+  std::fflush(stderr);
+}
+
 void TerminalProgress::Done() {
   if (!shown_) return;
   std::fprintf(stderr, "\r\033[K");

@@ -38,6 +38,39 @@ std::string CellText(double v) {
   return std::string(buffer, end);
 }
 
+// What is wrong with a header (empty when nothing): time_s first, every name present and unique.
+std::string HeaderProblem(const std::vector<std::string>& columns) {
+  if (columns.empty() || columns.front() != "time_s") {
+    return "the first column must be 'time_s' (found '" +
+           (columns.empty() ? std::string() : columns.front()) + "')";
+  }
+  std::unordered_set<std::string> seen;
+  for (std::size_t c = 0; c < columns.size(); ++c) {
+    if (columns[c].empty()) return "column " + std::to_string(c + 1) + " has no name";
+    if (!seen.insert(columns[c]).second) return "column '" + columns[c] + "' appears twice";
+  }
+  return {};
+}
+
+// What is wrong with time t of row `rows` (1-based, >= 2) after t_prev, the first time being t0
+// (empty when nothing).  Row 2 sets the sample time.
+std::string TimeProblem(double t0, double t_prev, double t, std::size_t rows,
+                        double& sample_time_s) {
+  if (!(t > t_prev)) {
+    return "time_s " + CellText(t) + " does not increase (previous " + CellText(t_prev) + ")";
+  }
+  if (rows == 2) {
+    sample_time_s = t - t_prev;
+    return {};
+  }
+  const double expected = t0 + static_cast<double>(rows - 1) * sample_time_s;
+  if (std::abs(t - expected) > 1e-6 * sample_time_s * static_cast<double>(rows) + 1e-9) {
+    return "time_s " + CellText(t) + " breaks uniform sampling (expected " + CellText(expected) +
+           ", sample time " + CellText(sample_time_s) + " s)";
+  }
+  return {};
+}
+
 }  // namespace
 
 bool CsvTable::HasColumn(const std::string& name) const {
@@ -77,17 +110,8 @@ CsvTable CsvTable::Parse(const std::string& text, const std::string& name) {
   }
   if (Trim(line).empty()) throw CsvError(name + ": empty file (no header row)");
   table.columns_ = SplitCells(line);
-  if (table.columns_.front() != "time_s") {
-    Fail(name, line_number,
-         "the first column must be 'time_s' (found '" + table.columns_.front() + "')");
-  }
-  std::unordered_set<std::string> seen;
-  for (std::size_t c = 0; c < table.columns_.size(); ++c) {
-    if (table.columns_[c].empty())
-      Fail(name, line_number, "column " + std::to_string(c + 1) + " has no name");
-    if (!seen.insert(table.columns_[c]).second) {
-      Fail(name, line_number, "column '" + table.columns_[c] + "' appears twice");
-    }
+  if (const std::string problem = HeaderProblem(table.columns_); !problem.empty()) {
+    Fail(name, line_number, problem);
   }
   const std::size_t width = table.columns_.size();
   std::vector<double> values;
@@ -117,23 +141,9 @@ CsvTable CsvTable::Parse(const std::string& text, const std::string& name) {
     // Time checks as rows arrive, so the message names the offending line.
     const std::size_t base = (rows - 1) * width;
     if (rows >= 2) {
-      const double t = values[base];
-      const double t_prev = values[base - width];
-      if (!(t > t_prev)) {
-        Fail(name, line_number,
-             "time_s " + CellText(t) + " does not increase (previous " + CellText(t_prev) + ")");
-      }
-      if (rows == 2) {
-        table.sample_time_s_ = t - t_prev;
-      } else {
-        const double expected = values[0] + static_cast<double>(rows - 1) * table.sample_time_s_;
-        if (std::abs(t - expected) >
-            1e-6 * table.sample_time_s_ * static_cast<double>(rows) + 1e-9) {
-          Fail(name, line_number,
-               "time_s " + CellText(t) + " breaks uniform sampling (expected " +
-                   CellText(expected) + ", sample time " + CellText(table.sample_time_s_) + " s)");
-        }
-      }
+      const std::string problem =
+          TimeProblem(values[0], values[base - width], values[base], rows, table.sample_time_s_);
+      if (!problem.empty()) Fail(name, line_number, problem);
     }
   }
   if (rows < 2)
@@ -141,6 +151,45 @@ CsvTable CsvTable::Parse(const std::string& text, const std::string& name) {
   table.data_ =
       Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
           values.data(), static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(width));
+  return table;
+}
+
+CsvTable CsvTable::FromColumns(const std::string& source, const std::vector<std::string>& names,
+                               const std::vector<Eigen::VectorXd>& columns) {
+  if (const std::string problem = HeaderProblem(names); !problem.empty()) {
+    throw CsvError(source + ": " + problem);
+  }
+  if (columns.size() != names.size()) {
+    throw CsvError(source + ": " + std::to_string(names.size()) + " names but " +
+                   std::to_string(columns.size()) + " columns");
+  }
+  const Eigen::Index rows = columns.front().size();
+  if (rows < 2) throw CsvError(source + ": needs at least 2 rows, found " + std::to_string(rows));
+  CsvTable table;
+  table.source_ = source;
+  table.columns_ = names;
+  table.data_.resize(rows, static_cast<Eigen::Index>(names.size()));
+  for (std::size_t c = 0; c < names.size(); ++c) {
+    if (columns[c].size() != rows) {
+      throw CsvError(source + ": column '" + names[c] + "' has " +
+                     std::to_string(columns[c].size()) + " rows, time_s has " +
+                     std::to_string(rows));
+    }
+    for (Eigen::Index r = 0; r < rows; ++r) {
+      if (!std::isfinite(columns[c](r))) {
+        throw CsvError(source + ": row " + std::to_string(r + 1) + ": column '" + names[c] +
+                       "' is not finite");
+      }
+    }
+    table.data_.col(static_cast<Eigen::Index>(c)) = columns[c];
+  }
+  const Eigen::VectorXd& t = columns.front();
+  for (Eigen::Index r = 1; r < rows; ++r) {
+    const std::string problem =
+        TimeProblem(t(0), t(r - 1), t(r), static_cast<std::size_t>(r + 1), table.sample_time_s_);
+    if (!problem.empty())
+      throw CsvError(source + ": row " + std::to_string(r + 1) + ": " + problem);
+  }
   return table;
 }
 

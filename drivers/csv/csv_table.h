@@ -26,6 +26,11 @@ class CsvTable {
   /// Parses text as if it were the contents of a file called `name` (for tests and pipes).
   /// @throws CsvError
   static CsvTable Parse(const std::string& text, const std::string& name);
+  /// A table from columns in memory (e.g. decoded from a log), checked as Read checks a file;
+  /// messages name `source` and the row (1-based, data rows only).  columns[0] is time_s.
+  /// @throws CsvError
+  static CsvTable FromColumns(const std::string& source, const std::vector<std::string>& names,
+                              const std::vector<Eigen::VectorXd>& columns);
 
   const std::string& source() const { return source_; }
   const std::vector<std::string>& columns() const { return columns_; }

@@ -301,6 +301,21 @@ TEST(ReplayCli, ALogWithoutItsConfigurationNeedsConfig) {
       << unknown.err;
 }
 
+TEST(ReplayCli, ProgressOnATerminalOnly) {
+  if (!fs::exists("/usr/bin/script")) GTEST_SKIP() << "no script(1) for a pty";
+  const fs::path dir = TestDirectory("replay-progress");
+  const std::vector<Event> events = DaemonRun(PrbsRecord(), kStartUtime);
+  WriteLog(dir / "run.lcmlog", events, events.size());
+  // script(1) runs the replay on a pseudo-terminal and copies what it wrote.
+  const ProgramRun tty = RunProgram("/usr/bin/script -qec '" + CanalidProgram() + " replay " +
+                                        (dir / "run.lcmlog").string() + "' /dev/null",
+                                    dir);
+  EXPECT_EQ(tty.exit_code, 0) << tty.err;
+  EXPECT_NE(tty.out.find("run.lcmlog: 100 %  841 samples"), std::string::npos) << tty.out;
+  const ProgramRun plain = Replay(dir, dir / "run.lcmlog");
+  EXPECT_EQ(plain.err.find(" %  "), std::string::npos) << plain.err;
+}
+
 // An operator's estimator reset, marked in the log by the daemon's "rls-bank-reset" model
 // message, restarts the replay's online bank there: it has seen only the samples after it.
 TEST(ReplayCli, AnEstimatorResetInTheLogRestartsTheOnlineBank) {

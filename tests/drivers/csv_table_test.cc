@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <string>
+#include <vector>
 
 namespace canalid::drivers {
 namespace {
@@ -55,6 +57,50 @@ TEST(CsvTable, MissingColumnListsTheOnesThereAre) {
   } catch (const CsvError& e) {
     EXPECT_STREQ(e.what(), "f.csv: no column 'level' (columns: time_s, a, b)");
   }
+}
+
+std::string FromColumnsErrorOf(const std::vector<std::string>& names,
+                               const std::vector<Eigen::VectorXd>& columns) {
+  try {
+    CsvTable::FromColumns("log.lcm reach 2", names, columns);
+  } catch (const CsvError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(CsvTable, FromColumnsHoldsTheColumnsAsAParsedFileWould) {
+  const Eigen::VectorXd t = Eigen::Vector3d(10.0, 10.5, 11.0);
+  const Eigen::VectorXd a = Eigen::Vector3d(1.0, 2.0, 3.0);
+  const CsvTable table = CsvTable::FromColumns("log.lcm reach 2", {"time_s", "a"}, {t, a});
+  const CsvTable parsed = CsvTable::Parse("time_s,a\n10,1\n10.5,2\n11,3\n", "f.csv");
+  EXPECT_EQ(table.source(), "log.lcm reach 2");
+  EXPECT_EQ(table.columns(), parsed.columns());
+  EXPECT_EQ(table.rows(), parsed.rows());
+  EXPECT_EQ(table.sample_time_s(), parsed.sample_time_s());
+  EXPECT_EQ(table.Column("a"), parsed.Column("a"));
+  EXPECT_EQ(table.time_s(), parsed.time_s());
+}
+
+TEST(CsvTable, FromColumnsRejectsWhatReadRejects) {
+  const Eigen::VectorXd t = Eigen::Vector3d(0.0, 1.0, 2.0);
+  const Eigen::VectorXd a = Eigen::Vector3d(1.0, 2.0, 3.0);
+  EXPECT_EQ(FromColumnsErrorOf({"t", "a"}, {t, a}),
+            "log.lcm reach 2: the first column must be 'time_s' (found 't')");
+  EXPECT_EQ(FromColumnsErrorOf({"time_s", "a", "a"}, {t, a, a}),
+            "log.lcm reach 2: column 'a' appears twice");
+  EXPECT_EQ(FromColumnsErrorOf({"time_s", "a"}, {t}), "log.lcm reach 2: 2 names but 1 columns");
+  EXPECT_EQ(FromColumnsErrorOf({"time_s", "a"}, {t, Eigen::Vector2d(1.0, 2.0)}),
+            "log.lcm reach 2: column 'a' has 2 rows, time_s has 3");
+  EXPECT_EQ(FromColumnsErrorOf({"time_s", "a"}, {t, Eigen::Vector3d(1.0, NAN, 3.0)}),
+            "log.lcm reach 2: row 2: column 'a' is not finite");
+  EXPECT_EQ(FromColumnsErrorOf({"time_s", "a"}, {Eigen::Vector3d(0.0, 1.0, 0.5), a}),
+            "log.lcm reach 2: row 3: time_s 0.5 does not increase (previous 1)");
+  EXPECT_EQ(
+      FromColumnsErrorOf({"time_s", "a"}, {Eigen::Vector3d(0.0, 1.0, 3.0), a}),
+      "log.lcm reach 2: row 3: time_s 3 breaks uniform sampling (expected 2, sample time 1 s)");
+  EXPECT_EQ(FromColumnsErrorOf({"time_s"}, {Eigen::VectorXd::Zero(1)}),
+            "log.lcm reach 2: needs at least 2 rows, found 1");
 }
 
 TEST(CsvTable, MissingFileIsAnError) {
