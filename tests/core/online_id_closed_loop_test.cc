@@ -308,6 +308,33 @@ TEST(OnlineIdClosedLoop, AutoTakesTheBatchClosedLoopDecision) {
   EXPECT_EQ(open.OutflowLevelCorrelation(), 0.0);
 }
 
+// Replay depends on it: the same samples give bit-identical snapshots (auto through its
+// decision, forgetting < 1 with re-centring, p22, bad samples included).
+TEST(OnlineIdClosedLoop, SameSamplesGiveBitIdenticalSnapshots) {
+  const LoopData d = MakeLoop(1500);
+  OnlineIdOptions o = LoopOptions(0.99);
+  o.closed_loop = ClosedLoopMode::kAuto;
+  o.closed_loop_window_samples = 300;
+  o.outflow_direct_gain_s_per_m2 = 0.02;
+  OnlineIdBank a(o);
+  OnlineIdBank b(o);
+  for (std::size_t k = 0; k < d.level.size(); ++k) {
+    const double y = k % 113 == 5 ? std::numeric_limits<double>::quiet_NaN() : d.level[k];
+    a.Update(d.q_in[k], d.q_out[k], y);
+    b.Update(d.q_in[k], d.q_out[k], y);
+    const IdSnapshot sa = a.Snapshot();
+    const IdSnapshot sb = b.Snapshot();
+    ASSERT_EQ(sa.delay_samples, sb.delay_samples);
+    ASSERT_EQ(sa.b, sb.b);
+    ASSERT_EQ(sa.c_m, sb.c_m);
+    ASSERT_EQ(sa.d_m, sb.d_m);
+    ASSERT_EQ(sa.b_std, sb.b_std);
+    ASSERT_EQ(sa.loss, sb.loss);
+    ASSERT_EQ(sa.health.trace_p, sb.health.trace_p);
+  }
+  EXPECT_TRUE(a.health().closed_loop);
+}
+
 TEST(OnlineIdClosedLoop, BadOptionsThrow) {
   OnlineIdOptions o = LoopOptions(1.0);
   o.closed_loop_window_samples = 2;
