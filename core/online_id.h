@@ -40,7 +40,9 @@ struct OnlineIdOptions {
   /// then ClosedLoopDetector (FitIdModel's test: outflow std above 2 % of the inflow's and
   /// |corr(detrended q_out, detrended level)| > 0.3, over those samples) picks one for good; the
   /// snapshots report the least-squares bank until then.  The per-sample cost doubles during the
-  /// window.  See outflow_direct_gain_s_per_m2 for what closed-loop data cannot give.
+  /// window.  The IV estimators take forgetting, P0, trace_max, the box and the sample guards from
+  /// `rls`; its method and innovation guards do not apply (IvRls: exponential forgetting only).
+  /// See outflow_direct_gain_s_per_m2 for what closed-loop data cannot give.
   ClosedLoopMode closed_loop = ClosedLoopMode::kOff;
   int closed_loop_window_samples = 200;  ///< kAuto's decision window, 3..1e9 samples
   /// IDZ's direct outflow gain p22 (s/m^2, >= 0; Litrico & Fromion 2004, from the geometry): the

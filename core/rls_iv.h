@@ -29,6 +29,8 @@ namespace canalid::core {
 /// non-finite or absurd phi, z or y is rejected: nothing changes), trace_max (P scaled down when
 /// |trace P| exceeds it), lower/upper (theta projected onto the box).  The method, the innovation
 /// guards and the other bounds are ignored (the Validate() rules still apply).
+/// Forgetting is exponential: when excitation stops P grows like lambda^-k (windup), bounded only
+/// by trace_max; with lambda < 1 on a record with long quiet spells, set trace_max.
 /// N is the parameter count (fixed size).  Everything is allocated in the constructor; Update never
 /// allocates.  Deterministic.  Pure, not thread-safe.
 template <int N>

@@ -98,7 +98,7 @@ void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code)
                  "auto: decide from the data; on: three-step method (--online: instrumental-"
                  "variable RLS, instrument the integrated delayed inflow); off: plain fit "
                  "(--online: RLS).  --online auto runs both over the first 200 samples after the "
-                 "longest delay, then keeps the one the batch test picks")
+                 "longest delay (all of them if fewer), then keeps the one the batch test picks")
       ->check(CLI::IsMember({"auto", "on", "off"}))
       ->capture_default_str();
   id->add_option("--p22", options.p22,

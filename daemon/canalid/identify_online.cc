@@ -1,6 +1,7 @@
 // `canalid identify --model id|arx --online`: the recursive estimators of core/ run sample by
 // sample over a CSV record, as the daemon runs them, and their final snapshot printed in the batch
 // model's JSON keys (docs/model-json.md) plus `estimator` and `health`.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -148,6 +149,10 @@ nlohmann::json OnlineId(const IdentifyOptions& options, const drivers::CsvTable&
                      " samples are too few for delays up to " +
                      std::to_string(id.max_delay_samples) + " samples (--max-delay-s)");
   }
+  // auto decides over the first 200 regression samples, or all of them on a shorter record, so
+  // that a record always ends decided.
+  id.closed_loop_window_samples =
+      static_cast<int>(std::min<Eigen::Index>(200, n - id.max_delay_samples - 1));
   std::unique_ptr<core::OnlineIdBank> bank;
   try {
     bank = std::make_unique<core::OnlineIdBank>(id);
