@@ -308,6 +308,28 @@ TEST(OnlineIdClosedLoop, AutoTakesTheBatchClosedLoopDecision) {
   EXPECT_EQ(open.OutflowLevelCorrelation(), 0.0);
 }
 
+// Against the batch code itself: without the wave-front term the closed-loop candidate is
+// FitIdModel's IV cross-check (instrument: the integrated delayed inflow, both detrended), so
+// Ts / b equals iv_area_m2 at the batch's delay (1e-6 relative; equal by Frisch-Waugh-Lovell,
+// since z and phi both carry 1 and k - k0).
+TEST(OnlineIdClosedLoop, ThreeParameterFormEqualsFitIdModelIvCrossCheck) {
+  const LoopData d = MakeLoop(3000);
+  const auto n = static_cast<Eigen::Index>(d.level.size());
+  IdFitOptions fit_options;
+  fit_options.min_nk = 5;
+  fit_options.max_nk = 9;
+  const IdFitResult batch =
+      FitIdModel(Eigen::Map<const Eigen::VectorXd>(d.q_in.data(), n),
+                 Eigen::Map<const Eigen::VectorXd>(d.q_out.data(), n),
+                 Eigen::Map<const Eigen::VectorXd>(d.level.data(), n), 60.0, fit_options);
+  OnlineIdOptions o = LoopOptions(1.0);
+  o.wave_front_term = false;
+  OnlineIdBank bank(o);
+  for (std::size_t k = 0; k < d.level.size(); ++k) bank.Update(d.q_in[k], d.q_out[k], d.level[k]);
+  const IdSnapshot s = bank.CandidateSnapshot(batch.model.nk);
+  EXPECT_LT(Rel(s.area_m2, batch.iv_area_m2), 1e-6) << s.area_m2 << " " << batch.iv_area_m2;
+}
+
 // Replay depends on it: the same samples give bit-identical snapshots (auto through its
 // decision, forgetting < 1 with re-centring, p22, bad samples included).
 TEST(OnlineIdClosedLoop, SameSamplesGiveBitIdenticalSnapshots) {
