@@ -330,6 +330,47 @@ TEST(OnlineIdClosedLoop, ThreeParameterFormEqualsFitIdModelIvCrossCheck) {
   EXPECT_LT(Rel(s.area_m2, batch.iv_area_m2), 1e-6) << s.area_m2 << " " << batch.iv_area_m2;
 }
 
+// Why --p22: a discrete IDZ pool (Litrico & Fromion) behind a gate q_out = q0 + g (y - y0) that
+// follows the true level (no noise in the loop at all):
+//   w(k) = w(k-1) + b (q_in(k - nk) - q_out(k - 1)) + p21 (q_in(k - nk) - q_in(k - nk - 1)),
+//   w = y + p22 q_out,  so  y (1 + p22 g) = w - p22 (q0 - g y0).
+// The level equation then holds with b / (1 + p22 g) as well as with (b, p22): without p22 the IV
+// (and least squares) estimate A (1 + p22 g), with it A.  A = 6000 m^2, p22 g = 0.05 x 3 = 0.15;
+// 2 % tolerances (observed: 0.06 % or less; the level noise is 1 mm).
+TEST(OnlineIdClosedLoop, OutflowDirectGainIsWhatALevelDrivenGateHides) {
+  const double b = 0.01;
+  const double p21 = 0.005;
+  const double p22 = 0.05;
+  const double g = 3.0;
+  const int samples = 4000;
+  const std::vector<double> u = testdata::Prbs(samples, 8, 61);
+  testdata::TestRandom noise(67);
+  const auto n = static_cast<std::size_t>(samples);
+  LoopData d{std::vector<double>(n), std::vector<double>(n), std::vector<double>(n)};
+  double w = 2.0 + p22 * 2.0;  // y = 2 m, q_out = 2 m^3/s
+  for (std::size_t k = 0; k < n; ++k) {
+    d.q_in[k] = 2.0 + 0.2 * u[k];
+    if (k >= 8) {
+      w += b * (d.q_in[k - 7] - d.q_out[k - 1]) + p21 * (d.q_in[k - 7] - d.q_in[k - 8]);
+    }
+    const double y = (w - p22 * (2.0 - g * 2.0)) / (1.0 + p22 * g);
+    d.q_out[k] = 2.0 + g * (y - 2.0);
+    d.level[k] = y + 0.001 * noise.Normal();
+  }
+  auto area = [&](double p22_given, ClosedLoopMode mode) {
+    OnlineIdOptions o = LoopOptions(1.0);
+    o.closed_loop = mode;
+    o.outflow_direct_gain_s_per_m2 = p22_given;
+    OnlineIdBank bank(o);
+    for (std::size_t k = 0; k < n; ++k) bank.Update(d.q_in[k], d.q_out[k], d.level[k]);
+    return bank.CandidateSnapshot(7).area_m2;
+  };
+  EXPECT_LT(Rel(area(0.0, ClosedLoopMode::kOn), 6000.0 * (1.0 + p22 * g)), 0.02);
+  EXPECT_LT(Rel(area(0.0, ClosedLoopMode::kOff), 6000.0 * (1.0 + p22 * g)), 0.02);
+  EXPECT_LT(Rel(area(p22, ClosedLoopMode::kOn), 6000.0), 0.02);
+  EXPECT_LT(Rel(area(p22, ClosedLoopMode::kOff), 6000.0), 0.02);
+}
+
 // Replay depends on it: the same samples give bit-identical snapshots (auto through its
 // decision, forgetting < 1 with re-centring, p22, bad samples included).
 TEST(OnlineIdClosedLoop, SameSamplesGiveBitIdenticalSnapshots) {
