@@ -9,6 +9,7 @@
 #include "core/online_fractional.h"
 #include "core/online_id.h"
 #include "core/rls.h"
+#include "core/rls_iv.h"
 
 namespace canalid::core {
 namespace {
@@ -75,12 +76,46 @@ BENCHMARK_TEMPLATE(BM_RlsUpdate, 4)->Apply(Methods);
 BENCHMARK_TEMPLATE(BM_RlsUpdate, 8)->Apply(Methods);
 BENCHMARK_TEMPLATE(BM_RlsUpdate, 16)->Apply(Methods);
 
+// One IvRls<N> update (closed-loop variant; P not symmetric, plus the instruments' moment R).
+template <int N>
+void BM_IvRlsUpdate(benchmark::State& state) {
+  RlsOptions options;
+  options.forgetting = 0.99;
+  IvRls<N> rls(options);
+  std::vector<Eigen::Matrix<double, N, 1>> phis(kPool);
+  std::vector<Eigen::Matrix<double, N, 1>> zs(kPool);
+  std::vector<double> ys(kPool);
+  std::uint64_t seed = 1;
+  for (int k = 0; k < kPool; ++k) {
+    for (int i = 0; i < N; ++i) zs[k](i) = Lcg(seed);
+    phis[k] = zs[k];
+    phis[k](0) += 0.3 * Lcg(seed);
+    ys[k] = phis[k].sum() + 0.01 * Lcg(seed);
+  }
+  int k = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(rls.Update(phis[k], zs[k], ys[k]));
+    k = (k + 1) & (kPool - 1);
+  }
+}
+BENCHMARK_TEMPLATE(BM_IvRlsUpdate, 3);
+BENCHMARK_TEMPLATE(BM_IvRlsUpdate, 4);
+
 // One sample through a bank of 64 ID candidates (nk = 0..63), lambda 0.99 with re-centring.
+// Arg 0: the daemon's default (3 parameters, least squares); 1: with the wave-front term, as
+// `canalid identify --online --closed-loop off`; 2: closed loop, IvRls<4> (`--closed-loop on`);
+// 3: auto during its decision window (both banks).
 void BM_IdBank64(benchmark::State& state) {
   OnlineIdOptions options;
   options.sample_time_s = 60.0;
   options.max_delay_samples = 63;
   options.rls.forgetting = 0.99;
+  const auto variant = state.range(0);
+  options.wave_front_term = variant >= 1;
+  options.closed_loop = variant == 2   ? ClosedLoopMode::kOn
+                        : variant == 3 ? ClosedLoopMode::kAuto
+                                       : ClosedLoopMode::kOff;
+  options.closed_loop_window_samples = 1000000000;
   OnlineIdBank bank(options);
   std::uint64_t seed = 3;
   std::vector<double> q_in(kPool);
@@ -98,8 +133,11 @@ void BM_IdBank64(benchmark::State& state) {
     benchmark::DoNotOptimize(bank.Update(q_in[k], q_out[k], level[k]));
     k = (k + 1) & (kPool - 1);
   }
+  static const char* const kLabels[] = {"ls-3", "ls-4(wave front)", "iv-4(closed loop)",
+                                        "auto window(ls-4 + iv-4)"};
+  state.SetLabel(kLabels[variant]);
 }
-BENCHMARK(BM_IdBank64);
+BENCHMARK(BM_IdBank64)->Arg(0)->Arg(1)->Arg(2)->Arg(3);
 
 // One sample through 8 fractional estimators (alpha grid 0.5..1.4, GL memory L = 200).
 void BM_FractionalBank8(benchmark::State& state) {

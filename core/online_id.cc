@@ -28,6 +28,12 @@ void OnlineIdOptions::Validate() const {
   }
   if (!(flow_abs_max_m3s > 0.0)) Fail("flow_abs_max_m3s", flow_abs_max_m3s, "> 0");
   if (!(level_abs_max_m > 0.0)) Fail("level_abs_max_m", level_abs_max_m, "> 0");
+  if (closed_loop_window_samples < 3 || closed_loop_window_samples > 1000000000) {
+    Fail("closed_loop_window_samples", closed_loop_window_samples, "3..1e9");
+  }
+  if (!(outflow_direct_gain_s_per_m2 >= 0.0 && outflow_direct_gain_s_per_m2 <= 10.0)) {
+    Fail("outflow_direct_gain_s_per_m2", outflow_direct_gain_s_per_m2, "0..10");
+  }
   rls.Validate(wave_front_term ? 4 : 3);
   selector.Validate();
 }
@@ -36,17 +42,24 @@ OnlineIdBank::OnlineIdBank(const OnlineIdOptions& options)
     : options_(options),
       selector_((options.Validate(), options.max_delay_samples - options.min_delay_samples + 1),
                 options.selector),
+      iv_selector_(options.max_delay_samples - options.min_delay_samples + 1, options.selector),
       q_in_history_(options.max_delay_samples + 1) {
   const int n = options_.max_delay_samples - options_.min_delay_samples + 1;
-  if (options_.wave_front_term) {
-    wave_estimators_.reserve(static_cast<std::size_t>(n));
-    for (int i = 0; i < n; ++i) wave_estimators_.emplace_back(options_.rls);
-  } else {
-    estimators_.reserve(static_cast<std::size_t>(n));
-    for (int i = 0; i < n; ++i) estimators_.emplace_back(options_.rls);
+  const auto un = static_cast<std::size_t>(n);
+  ls_active_ = options_.closed_loop != ClosedLoopMode::kOn;
+  iv_active_ = options_.closed_loop != ClosedLoopMode::kOff;
+  health_.closed_loop = options_.closed_loop == ClosedLoopMode::kOn;
+  health_.closed_loop_decided = options_.closed_loop != ClosedLoopMode::kAuto;
+  if (ls_active_ && options_.wave_front_term) wave_estimators_.assign(un, Rls<4>(options_.rls));
+  if (ls_active_ && !options_.wave_front_term) estimators_.assign(un, Rls<3>(options_.rls));
+  if (iv_active_ && options_.wave_front_term) {
+    iv_wave_estimators_.assign(un, IvRls<4>(options_.rls));
   }
-  q_integrated_.assign(static_cast<std::size_t>(n), 0.0);
-  q_centre_.assign(static_cast<std::size_t>(n), 0.0);
+  if (iv_active_ && !options_.wave_front_term) iv_estimators_.assign(un, IvRls<3>(options_.rls));
+  q_integrated_.assign(un, 0.0);
+  q_centre_.assign(un, 0.0);
+  qin_integrated_.assign(un, 0.0);
+  qin_centre_.assign(un, 0.0);
   k0_ = options_.max_delay_samples + 1;
   const double lambda = options_.rls.forgetting;
   if (options_.recentre_samples > 0) {
@@ -65,41 +78,83 @@ bool OnlineIdBank::Update(double q_in_m3s, double q_out_m3s, double level_m) {
     return false;
   }
   if (!in_ok || !out_ok) ++health_.bad_flow_samples;
+  if (!have_good_) q_ref_ = q_in_m3s;
   if (in_ok) q_in_good_ = q_in_m3s;
   if (out_ok) q_out_good_ = q_out_m3s;
   have_good_ = true;
   ++k_;
   ++health_.samples;
   q_in_history_.Push(q_in_good_);
+  const bool deciding = !health_.closed_loop_decided;
+  if (deciding) detector_.AddInflow(q_in_good_);
   bool updated = false;
   if (k_ >= k0_) {
     const double t = static_cast<double>(k_ - k0_);
     if (recentre_period_ > 0 && t - t_centre_ >= recentre_period_) Recentre();
+    for (int i = 0; i < num_candidates(); ++i) {
+      const auto ui = static_cast<std::size_t>(i);
+      const double delayed_inflow = q_in_history_[options_.min_delay_samples + i];
+      q_integrated_[ui] += delayed_inflow - q_out_previous_;
+      qin_integrated_[ui] += delayed_inflow - q_ref_;
+    }
     const bool level_ok = Good(level_m, options_.level_abs_max_m);
     if (!level_ok) ++health_.bad_level_samples;
-    if (options_.wave_front_term) {
-      UpdateCandidates(wave_estimators_, t, level_ok, level_m);
-    } else {
-      UpdateCandidates(estimators_, t, level_ok, level_m);
-    }
     if (level_ok) {
-      selector_.Commit();
+      const double y = level_m + options_.outflow_direct_gain_s_per_m2 * q_out_good_;
+      if (ls_active_ && options_.wave_front_term) UpdateCandidates(wave_estimators_, t, y);
+      if (ls_active_ && !options_.wave_front_term) UpdateCandidates(estimators_, t, y);
+      if (iv_active_ && options_.wave_front_term) UpdateIvCandidates(iv_wave_estimators_, t, y);
+      if (iv_active_ && !options_.wave_front_term) UpdateIvCandidates(iv_estimators_, t, y);
+      if (ls_active_) selector_.Commit();
+      if (iv_active_) iv_selector_.Commit();
       updated = true;
+      if (deciding) {
+        detector_.AddOutflowLevel(q_out_good_, level_m);
+        if (detector_.samples() >= options_.closed_loop_window_samples) Decide();
+      }
     }
   }
-  health_.switches = selector_.switches();
+  health_.switches = reported_selector().switches();
   q_out_previous_ = q_out_good_;
   return updated;
 }
 
+void OnlineIdBank::Decide() {
+  health_.closed_loop_decided = true;
+  health_.outflow_level_correlation = detector_.OutflowLevelCorrelation();
+  health_.outflow_moves = detector_.OutflowMoves();
+  health_.closed_loop = detector_.ClosedLoop();
+  // The losing bank stops; its estimators keep their memory but are never read again.
+  ls_active_ = !health_.closed_loop;
+  iv_active_ = health_.closed_loop;
+}
+
 template <int N>
-void OnlineIdBank::UpdateCandidates(std::vector<Rls<N>>& estimators, double t, bool level_ok,
-                                    double level_m) {
+void OnlineIdBank::UpdateIvCandidates(std::vector<IvRls<N>>& estimators, double t, double level_m) {
   for (int i = 0; i < num_candidates(); ++i) {
     const auto ui = static_cast<std::size_t>(i);
     const int nk = options_.min_delay_samples + i;
-    q_integrated_[ui] += q_in_history_[nk] - q_out_previous_;
-    if (!level_ok) continue;
+    Eigen::Matrix<double, N, 1> phi;
+    Eigen::Matrix<double, N, 1> z;
+    const double tc = t - t_centre_;
+    const double qin = qin_integrated_[ui] - qin_centre_[ui];
+    if constexpr (N == 4) {
+      phi << q_integrated_[ui] - q_centre_[ui], q_in_history_[nk], 1.0, tc;
+      z << qin, q_in_history_[nk], 1.0, tc;
+    } else {
+      phi << q_integrated_[ui] - q_centre_[ui], 1.0, tc;
+      z << qin, 1.0, tc;
+    }
+    const auto result = estimators[ui].Update(phi, z, level_m);
+    iv_selector_.Record(i, result.prediction_error);
+  }
+}
+
+template <int N>
+void OnlineIdBank::UpdateCandidates(std::vector<Rls<N>>& estimators, double t, double level_m) {
+  for (int i = 0; i < num_candidates(); ++i) {
+    const auto ui = static_cast<std::size_t>(i);
+    const int nk = options_.min_delay_samples + i;
     Eigen::Matrix<double, N, 1> phi;
     if constexpr (N == 4) {
       phi << q_integrated_[ui] - q_centre_[ui], q_in_history_[nk], 1.0, t - t_centre_;
@@ -112,36 +167,43 @@ void OnlineIdBank::UpdateCandidates(std::vector<Rls<N>>& estimators, double t, b
 }
 
 template <int N>
-void OnlineIdBank::RecentreCandidates(std::vector<Rls<N>>& estimators, double dt) {
+Eigen::Matrix<double, N, N> OnlineIdBank::CentreShift(double dq, double dt) {
   // The offset is the second-last parameter and the drift the last, with or without p21; the
   // wave-front regressor q_in(k - nk) is bounded and needs no centre.
   constexpr int kOffset = N - 2;
-  for (int i = 0; i < num_candidates(); ++i) {
-    const auto ui = static_cast<std::size_t>(i);
-    const double dq = q_integrated_[ui] - q_centre_[ui];
-    Eigen::Matrix<double, N, N> transform = Eigen::Matrix<double, N, N>::Identity();
-    transform(kOffset, 0) = dq;
-    transform(kOffset, N - 1) = dt;
-    estimators[ui].Transform(transform);
-    q_centre_[ui] = q_integrated_[ui];
-  }
+  Eigen::Matrix<double, N, N> transform = Eigen::Matrix<double, N, N>::Identity();
+  transform(kOffset, 0) = dq;
+  transform(kOffset, N - 1) = dt;
+  return transform;
 }
 
 void OnlineIdBank::Recentre() {
   // New centre at the current sample.  c' = c + b Q_c + d t_c, so moving the centre by
-  // (dQ, dt) maps theta by an exact linear T; the fit itself is unchanged.
+  // (dQ, dt) maps theta by an exact linear T; the fit itself is unchanged.  The instrument is
+  // re-centred the same way (S, with dQin), which leaves the IV estimate unchanged too.
   const double t_new = static_cast<double>(k_ - k0_);
   const double dt = t_new - t_centre_;
-  if (options_.wave_front_term) {
-    RecentreCandidates(wave_estimators_, dt);
-  } else {
-    RecentreCandidates(estimators_, dt);
+  for (int i = 0; i < num_candidates(); ++i) {
+    const auto ui = static_cast<std::size_t>(i);
+    const double dq = q_integrated_[ui] - q_centre_[ui];
+    const double dqin = qin_integrated_[ui] - qin_centre_[ui];
+    if (ls_active_ && options_.wave_front_term)
+      wave_estimators_[ui].Transform(CentreShift<4>(dq, dt));
+    if (ls_active_ && !options_.wave_front_term) estimators_[ui].Transform(CentreShift<3>(dq, dt));
+    if (iv_active_ && options_.wave_front_term) {
+      iv_wave_estimators_[ui].Transform(CentreShift<4>(dq, dt), CentreShift<4>(dqin, dt));
+    }
+    if (iv_active_ && !options_.wave_front_term) {
+      iv_estimators_[ui].Transform(CentreShift<3>(dq, dt), CentreShift<3>(dqin, dt));
+    }
+    q_centre_[ui] = q_integrated_[ui];
+    qin_centre_[ui] = qin_integrated_[ui];
   }
   t_centre_ = t_new;
 }
 
 int OnlineIdBank::selected_delay_samples() const {
-  const int s = selector_.selected();
+  const int s = reported_selector().selected();
   return s < 0 ? -1 : options_.min_delay_samples + s;
 }
 
@@ -159,17 +221,23 @@ IdSnapshot OnlineIdBank::CandidateSnapshot(int delay_samples) const {
   s.sample = k_;
   s.delay_samples = delay_samples;
   s.delay_s = delay_samples * options_.sample_time_s;
-  if (options_.wave_front_term) {
-    FillSnapshot(wave_estimators_[ui], ui, s);
+  if (health_.closed_loop) {
+    if (options_.wave_front_term) {
+      FillSnapshot<4>(iv_wave_estimators_[ui], ui, s);
+    } else {
+      FillSnapshot<3>(iv_estimators_[ui], ui, s);
+    }
+  } else if (options_.wave_front_term) {
+    FillSnapshot<4>(wave_estimators_[ui], ui, s);
   } else {
-    FillSnapshot(estimators_[ui], ui, s);
+    FillSnapshot<3>(estimators_[ui], ui, s);
   }
-  s.loss = selector_.loss(i);
+  s.loss = reported_selector().loss(i);
   return s;
 }
 
-template <int N>
-void OnlineIdBank::FillSnapshot(const Rls<N>& rls, std::size_t ui, IdSnapshot& s) const {
+template <int N, typename Estimator>
+void OnlineIdBank::FillSnapshot(const Estimator& rls, std::size_t ui, IdSnapshot& s) const {
   constexpr int kOffset = N - 2;
   constexpr int kDrift = N - 1;
   s.valid = rls.health().updates > 0;

@@ -2,9 +2,12 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/closed_loop_detector.h"
 #include "core/estimator_bank.h"
+#include "core/id_model.h"
 #include "core/ring_buffer.h"
 #include "core/rls.h"
+#include "core/rls_iv.h"
 
 namespace canalid::core {
 
@@ -25,6 +28,31 @@ struct OnlineIdOptions {
   int recentre_samples = 0;
   double flow_abs_max_m3s = 1e5;  ///< |q| above it (or non-finite) is an absurd flow
   double level_abs_max_m = 1e4;   ///< |y| above it (or non-finite) is an absurd level
+  /// Closed loop (a downstream gate whose outflow follows the level, so the measured total flow
+  /// in Q_nk is correlated with the level's errors).  kOn: every candidate is fitted by
+  /// instrumental-variable RLS (IvRls, same regressor phi) with the instrument
+  ///   z = [Qin_nk(k), q_in(k - nk), 1, k - k0]  (without q_in(k - nk) when !wave_front_term),
+  ///   Qin_nk(k) = sum_{j=k0..k} (q_in(j - nk) - q_ref),  q_ref the first good inflow,
+  /// i.e. the integrated delayed inflow, the excitation, which does not see the level's errors
+  /// (FitIdModel's IV cross-check; with lambda = 1 and a large P0 each candidate equals the batch
+  /// IV estimate (Z' Phi)^-1 Z' y).  kOff (default, the daemon's behaviour): least squares (Rls).
+  /// kAuto: both run until closed_loop_window_samples regression samples from k0 have been seen,
+  /// then ClosedLoopDetector (FitIdModel's test: outflow std above 2 % of the inflow's and
+  /// |corr(detrended q_out, detrended level)| > 0.3, over those samples) picks one for good; the
+  /// snapshots report the least-squares bank until then.  The per-sample cost doubles during the
+  /// window.  The IV estimators take forgetting, P0, trace_max, the box and the sample guards from
+  /// `rls`; its method and innovation guards do not apply (IvRls: exponential forgetting only).
+  /// See outflow_direct_gain_s_per_m2 for what closed-loop data cannot give.
+  ClosedLoopMode closed_loop = ClosedLoopMode::kOff;
+  int closed_loop_window_samples = 200;  ///< kAuto's decision window, 3..1e9 samples
+  /// IDZ's direct outflow gain p22 (s/m^2, >= 0; Litrico & Fromion 2004, from the geometry): the
+  /// fitted output is y(k) + p22 q_out(k) instead of y(k).  In open loop q_out is (nearly)
+  /// constant and p22 q_out goes into c.  In closed loop with a gate q_out ~ q0 + g y, the term
+  /// becomes p22 g y and cannot be told apart from b: with p22 = 0 the estimate is that of
+  /// A (1 + p22 g) (measured: 44889 m^2 = 34113 x 1.32 on ASCE canal 2 pool 2, g = 14.6 m^2/s),
+  /// and no estimator of this regression can do better from the data alone.  Snapshots' c is
+  /// then the offset of y + p22 q_out.  0 = plain ID.
+  double outflow_direct_gain_s_per_m2 = 0.0;
 
   /// @throws std::invalid_argument naming the option out of range.
   void Validate() const;
@@ -53,11 +81,15 @@ struct IdSnapshot {
 
 /// Bank health beyond the per-estimator RlsHealth.
 struct IdBankHealth {
-  std::int64_t samples = 0;            ///< samples accepted into the time base
-  std::int64_t bad_flow_samples = 0;   ///< flows replaced by the last good ones
-  std::int64_t bad_level_samples = 0;  ///< no regression update on these samples
-  std::int64_t dropped_samples = 0;    ///< bad flows before any good one: not used at all
-  int switches = 0;                    ///< delay changes made by the selector
+  bool closed_loop = false;                ///< the reported bank is the IV (closed-loop) one
+  bool closed_loop_decided = false;        ///< kAuto has decided (always true for kOn and kOff)
+  double outflow_level_correlation = 0.0;  ///< kAuto: ClosedLoopDetector's r (at the decision)
+  bool outflow_moves = false;              ///< kAuto: ClosedLoopDetector::OutflowMoves()
+  std::int64_t samples = 0;                ///< samples accepted into the time base
+  std::int64_t bad_flow_samples = 0;       ///< flows replaced by the last good ones
+  std::int64_t bad_level_samples = 0;      ///< no regression update on these samples
+  std::int64_t dropped_samples = 0;        ///< bad flows before any good one: not used at all
+  int switches = 0;                        ///< delay changes made by the selector
 };
 
 /// Online integrator-delay (ID) identification of a canal pool with a bank over the delay nk.
@@ -68,7 +100,8 @@ struct IdBankHealth {
 /// batch FitIdModel's open-loop regression),
 /// i.e. the level against the integrated total flow with an offset and a drift (the low-frequency
 /// form of y(k) - y(k-1) = b (q_in(k - nk) - q_out(k - 1))), fitted by one Rls<3> per candidate
-/// from k = k0 on.  With lambda = 1 and a large P0 each candidate equals batch least squares on the
+/// from k = k0 on (one IvRls per candidate in closed loop, see OnlineIdOptions::closed_loop).
+/// With lambda = 1 and a large P0 each candidate equals batch least squares on the
 /// rows phi = [Q_nk(k), 1, k - k0], k = k0..K.  area_m2 = Ts / b, delay_s = nk Ts.
 ///
 /// Forgetting < 1: Q_nk and k - k0 grow without bound while the memory does not, so the
@@ -99,19 +132,34 @@ class OnlineIdBank final {
 
  private:
   template <int N>
-  void UpdateCandidates(std::vector<Rls<N>>& estimators, double t, bool level_ok, double level_m);
+  void UpdateCandidates(std::vector<Rls<N>>& estimators, double t, double level_m);
   template <int N>
-  void RecentreCandidates(std::vector<Rls<N>>& estimators, double dt);
+  void UpdateIvCandidates(std::vector<IvRls<N>>& estimators, double t, double level_m);
   template <int N>
-  void FillSnapshot(const Rls<N>& rls, std::size_t ui, IdSnapshot& s) const;
+  static Eigen::Matrix<double, N, N> CentreShift(double dq, double dt);
   void Recentre();
+  void Decide();
+  template <int N, typename Estimator>
+  void FillSnapshot(const Estimator& rls, std::size_t ui, IdSnapshot& s) const;
+  const BankSelector& reported_selector() const {
+    return health_.closed_loop ? iv_selector_ : selector_;
+  }
 
   OnlineIdOptions options_;
-  std::vector<Rls<3>> estimators_;       // without the wave-front term
-  std::vector<Rls<4>> wave_estimators_;  // with it
-  std::vector<double> q_integrated_;     // Q_nk(k)
-  std::vector<double> q_centre_;         // Q_c per candidate
-  BankSelector selector_;
+  std::vector<Rls<3>> estimators_;            // without the wave-front term
+  std::vector<Rls<4>> wave_estimators_;       // with it
+  std::vector<IvRls<3>> iv_estimators_;       // closed loop, without the wave-front term
+  std::vector<IvRls<4>> iv_wave_estimators_;  // closed loop, with it
+  std::vector<double> q_integrated_;          // Q_nk(k)
+  std::vector<double> q_centre_;              // Q_c per candidate
+  std::vector<double> qin_integrated_;        // instrument Qin_nk(k)
+  std::vector<double> qin_centre_;            // its centre
+  BankSelector selector_;                     // least-squares bank
+  BankSelector iv_selector_;                  // IV bank
+  ClosedLoopDetector detector_;
+  bool ls_active_ = true;
+  bool iv_active_ = false;
+  double q_ref_ = 0.0;
   RingBuffer<double> q_in_history_;
   double q_in_good_ = 0.0;
   double q_out_good_ = 0.0;

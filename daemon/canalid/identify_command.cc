@@ -79,8 +79,17 @@ void AddIdentifyModelOptions(CLI::App& cmd, IdentifyOptions& options) {
                  "100 samples); lpv arx/frac-ss locals: 20 samples)")
       ->check(CLI::PositiveNumber);
   id->add_option("--closed-loop", options.closed_loop,
-                 "auto: decide from the data; on: three-step method; off: plain fit")
+                 "auto: decide from the data; on: three-step method (--online: instrumental-"
+                 "variable RLS, instrument the integrated delayed inflow); off: plain fit "
+                 "(--online: RLS).  --online auto runs both over the first 200 samples after the "
+                 "longest delay (all of them if fewer), then keeps the one the batch test picks")
       ->check(CLI::IsMember({"auto", "on", "off"}))
+      ->capture_default_str();
+  id->add_option("--p22", options.p22,
+                 "--online: IDZ direct outflow gain p22, s/m2 (from the geometry, e.g. Litrico & "
+                 "Fromion's tables): fits level + p22 q_out.  With a level-driven gate b cannot be "
+                 "told from p22, so without it the area comes out as A (1 + p22 g)")
+      ->check(CLI::Range(0.0, 10.0))
       ->capture_default_str();
   id->add_flag("--keep-outliers", options.keep_outliers,
                "Do not replace level spikes before fitting");
@@ -136,6 +145,7 @@ void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code)
       "                   --input F.csv --u q_in --y level\n"
       "  canalid identify --model arx --input F.csv --u u --y y --online --forgetting 0.999\n"
       "  canalid identify --model id --input pool2.csv --online --trace trace.csv\n"
+      "  canalid identify --model id --input gate.csv --online --closed-loop on --p22 0.0216\n"
       "  canalid identify --compare foptd,soptd,frac-foptd --input 'steps/*.csv' [--json]\n"
       "Output: one JSON object on stdout (keys in docs/model-json.md); --compare prints a table.\n"
       "Exit 2 on bad input.");

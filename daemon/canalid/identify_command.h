@@ -28,6 +28,7 @@ struct IdentifyOptions {
   std::string level = "level";
   double max_delay_s = -1.0;
   std::string closed_loop = "auto";
+  double p22 = 0.0;  ///< --p22 (online): IDZ direct outflow gain, s/m2
   bool keep_outliers = false;
   // arx, foptd, soptd
   std::string u = "u";

@@ -1,6 +1,7 @@
 // `canalid identify --model id|arx --online`: the recursive estimators of core/ run sample by
 // sample over a CSV record, as the daemon runs them, and their final snapshot printed in the batch
 // model's JSON keys (docs/model-json.md) plus `estimator` and `health`.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -132,6 +133,12 @@ nlohmann::json OnlineId(const IdentifyOptions& options, const drivers::CsvTable&
                                                    : static_cast<int>(n / 3);
   id.wave_front_term = true;
   id.rls = ParseRlsOptions(options, 4);
+  // The batch flag: on = instrumental-variable RLS, off = least squares, auto = both over the
+  // first samples, then FitIdModel's closed-loop test picks one (core::OnlineIdOptions).
+  id.closed_loop = options.closed_loop == "on"    ? core::ClosedLoopMode::kOn
+                   : options.closed_loop == "off" ? core::ClosedLoopMode::kOff
+                                                  : core::ClosedLoopMode::kAuto;
+  id.outflow_direct_gain_s_per_m2 = options.p22;
   // p21 >= 0 as in the batch fit: a negative wave-front gain lets Q_(nk-1) - b q_in(k-nk+1) mimic
   // Q_nk, so the delay would be ambiguous by one sample.
   constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -142,6 +149,10 @@ nlohmann::json OnlineId(const IdentifyOptions& options, const drivers::CsvTable&
                      " samples are too few for delays up to " +
                      std::to_string(id.max_delay_samples) + " samples (--max-delay-s)");
   }
+  // auto decides over the first 200 regression samples, or all of them on a shorter record, so
+  // that a record always ends decided.
+  id.closed_loop_window_samples =
+      static_cast<int>(std::min<Eigen::Index>(200, n - id.max_delay_samples - 1));
   std::unique_ptr<core::OnlineIdBank> bank;
   try {
     bank = std::make_unique<core::OnlineIdBank>(id);
@@ -187,6 +198,16 @@ nlohmann::json OnlineId(const IdentifyOptions& options, const drivers::CsvTable&
   health["dropped_samples"] = bank_health.dropped_samples;
   health["switches"] = bank_health.switches;
   health["candidates"] = bank->num_candidates();
+  std::string reason = options.closed_loop == "on" ? "requested" : "disabled";
+  if (id.closed_loop == core::ClosedLoopMode::kAuto) {
+    reason = !bank_health.closed_loop_decided
+                 ? "undecided: fewer than " + std::to_string(id.closed_loop_window_samples) +
+                       " samples after the longest delay"
+                 : std::string(bank_health.outflow_moves ? "outflow moves" : "outflow held") +
+                       ", outflow-level correlation " +
+                       std::to_string(bank_health.outflow_level_correlation) + " over " +
+                       std::to_string(id.closed_loop_window_samples) + " samples";
+  }
   return {{"model", "id"},
           {"delay_s", s.delay_s},
           {"nk", s.delay_samples},
@@ -196,13 +217,15 @@ nlohmann::json OnlineId(const IdentifyOptions& options, const drivers::CsvTable&
           {"p21_s_per_m2", s.wave_front_gain_s_per_m2},
           {"offset_m", s.c_m},
           {"drift_m_per_s", s.d_m / ts},
-          {"closed_loop", false},
+          {"p22_s_per_m2", id.outflow_direct_gain_s_per_m2},
+          {"closed_loop", bank_health.closed_loop},
+          {"closed_loop_reason", reason},
           {"fit_from_sample", id.max_delay_samples + 1},
           {"b_std", s.b_std},
           {"area_std_m2", s.area_std_m2},
           {"prediction_error_m", s.prediction_error_m},
           {"innovation_std_m", s.innovation_std_m},
-          {"estimator", "online-" + options.method},
+          {"estimator", bank_health.closed_loop ? "online-iv" : "online-" + options.method},
           {"forgetting", options.forgetting},
           {"health", health},
           {"preprocessing", {{"level_outliers_replaced", outliers.count}}},

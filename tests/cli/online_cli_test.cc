@@ -50,21 +50,66 @@ TEST(OnlineCli, IdOnCleanAndNoisyRecordsMeetsTheHeldOutTolerances) {
   }
 }
 
-// The online bank is an open-loop estimator.  On the fixed-gate record the outflow follows the
-// level (closed loop), which biases the open-loop fit: the batch command switches to the
-// three-step method there (33.3k m2), its open-loop cross-check gives 43.1k m2 (+26 %).  What the
-// online run must do is equal that open-loop fit exactly (forgetting 1, P0 = 1e10: 1e-6 relative,
-// the issue's tolerance); the held-out 20 % check on this record needs an online closed-loop
-// variant, which is not there yet.
+// --closed-loop off: the least-squares bank equals the batch open-loop fit exactly (forgetting 1,
+// P0 = 1e10: 1e-6 relative, the issue's tolerance).  On the fixed-gate record the outflow follows
+// the level, which biases it (43.2k m2, +27 %).
 TEST(OnlineCli, IdOnFixedGateRecordEqualsTheBatchOpenLoopFit) {
   const std::string csv = Record("asce2-pool2-prbs-fixed-gate");
-  const auto online = Identify("fixed-gate", "--model id --online --input " + csv);
+  const auto online =
+      Identify("fixed-gate", "--model id --online --closed-loop off --input " + csv);
   const auto batch = Identify("fixed-gate-batch", "--model id --closed-loop off --input " + csv);
   EXPECT_EQ(online["nk"], batch["nk"]);
+  EXPECT_FALSE(online["closed_loop"].get<bool>());
   EXPECT_LT(Rel(online["b"].get<double>(), batch["b"].get<double>()), 1e-6);
   EXPECT_LT(Rel(online["p21_s_per_m2"].get<double>(), batch["p21_s_per_m2"].get<double>()), 1e-6);
   EXPECT_GE(online["delay_s"].get<double>(), 0.5 * kIdzDelay);
   EXPECT_LE(online["delay_s"].get<double>(), 1.2 * kIdzDelay);
+}
+
+// IDZ's outflow gain of this pool (Litrico & Fromion 2004, the same table as 34113 m2 and 682 s).
+constexpr double kIdzP22 = 0.0216;
+
+// Issue 4's held-out check on the fixed-gate record: --closed-loop auto (the default) detects the
+// loop over the first 200 samples after the longest delay and reports the instrumental-variable
+// bank; with IDZ's p22 the area is within 20 % of IDZ's (measured 33000 m2, -3.3 %) and the delay
+// within 0.5-1.2 x (720 s).
+TEST(OnlineCli, IdOnFixedGateRecordClosedLoopMeetsTheHeldOutTolerances) {
+  const std::string csv = Record("asce2-pool2-prbs-fixed-gate");
+  const auto model = Identify("fixed-gate-iv", "--model id --online --max-delay-s 3600 --p22 " +
+                                                   std::to_string(kIdzP22) + " --input " + csv);
+  ExpectHeldOutTolerances(model);
+  EXPECT_TRUE(model["closed_loop"].get<bool>()) << model.dump();
+  EXPECT_EQ(model["estimator"], "online-iv");
+  EXPECT_NE(model["closed_loop_reason"].get<std::string>().find("outflow moves"),
+            std::string::npos);
+  EXPECT_FALSE(model["health"]["wound_up"].get<bool>());
+}
+
+// What the data cannot give: with a gate q_out ~ q0 + g y (g = 14.6 m2/s here) IDZ's -p22 q_out
+// term acts as -p22 g y, so without p22 any fit of this regression estimates A (1 + p22 g) =
+// 34113 x 1.32 = 44.9k m2.  The online IV gives exactly that (44889 m2): the bias is the model's,
+// not the loop noise's, and --p22 (from the geometry) is the remedy.  Documented, not hidden.
+TEST(OnlineCli, IdOnFixedGateRecordWithoutP22EstimatesAOnePlusP22G) {
+  const std::string csv = Record("asce2-pool2-prbs-fixed-gate");
+  const auto model =
+      Identify("fixed-gate-iv-no-p22",
+               "--model id --online --closed-loop on --max-delay-s 3600 --input " + csv);
+  const double g = 14.58;  // least squares of q_out on the cleaned level over the record
+  EXPECT_LT(Rel(model["area_m2"].get<double>(), kIdzArea * (1.0 + kIdzP22 * g)), 0.05)
+      << model.dump();
+}
+
+// The open-loop records keep their result under auto (detected as open loop) and with p22 (the
+// held outflow puts p22 q_out into the offset).
+TEST(OnlineCli, IdOnOpenLoopRecordsIgnoresP22AndStaysOpenLoop) {
+  for (const char* name : {"asce2-pool2-prbs", "asce2-pool2-prbs-noisy"}) {
+    const std::string args = "--model id --online --max-delay-s 3600 --input " + Record(name);
+    const auto plain = Identify(name, args);
+    const auto with_p22 = Identify(std::string(name) + "-p22", args + " --p22 0.0216");
+    ExpectHeldOutTolerances(with_p22);
+    EXPECT_FALSE(with_p22["closed_loop"].get<bool>());
+    EXPECT_LT(Rel(with_p22["b"].get<double>(), plain["b"].get<double>()), 1e-6);
+  }
 }
 
 TEST(OnlineCli, ArxWithForgettingOneEqualsBatchArx) {

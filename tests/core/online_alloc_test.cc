@@ -127,6 +127,33 @@ TEST(OnlineAllocation, IdBankUpdateAndSnapshotNeverAllocate) {
   EXPECT_TRUE(std::isfinite(sum));
 }
 
+// The closed-loop variant: auto runs both banks through the decision, IV re-centring included.
+TEST(OnlineAllocation, ClosedLoopIdBankUpdateAndSnapshotNeverAllocate) {
+  testdata::PoolSpec spec;
+  spec.samples = 600;
+  const testdata::PoolData d = testdata::MakePool(spec);
+  OnlineIdOptions o;
+  o.sample_time_s = 60.0;
+  o.max_delay_samples = 20;
+  o.wave_front_term = true;
+  o.rls.forgetting = 0.99;
+  o.closed_loop = ClosedLoopMode::kAuto;
+  o.closed_loop_window_samples = 250;
+  o.outflow_direct_gain_s_per_m2 = 0.02;
+  OnlineIdBank bank(o);
+  const long before = g_allocations;
+  double sum = 0.0;
+  for (std::size_t k = 0; k < d.level.size(); ++k) {
+    bank.Update(d.q_in[k], k == 300 ? std::numeric_limits<double>::quiet_NaN() : d.q_out[k],
+                d.level[k]);
+    sum += bank.Snapshot().b;
+  }
+  const long allocations = g_allocations - before;
+  EXPECT_EQ(allocations, 0);
+  EXPECT_TRUE(std::isfinite(sum));
+  EXPECT_TRUE(bank.health().closed_loop_decided);
+}
+
 TEST(OnlineAllocation, ArxBankUpdateAndSnapshotNeverAllocate) {
   OnlineArxOptions o;
   o.na = 3;

@@ -4,6 +4,7 @@
 
 #include <Eigen/QR>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "tests/core/online_test_data.h"
@@ -64,6 +65,56 @@ TEST(OnlineLpvArx, EqualsBatchAndRecoversTheQuadraticScheduling) {
     EXPECT_NEAR(pa(0), TrueA(s), 0.01) << s;
     EXPECT_NEAR(pb(0), TrueB(s), 0.01) << s;
   }
+}
+
+// NaN, Inf and absurd u, y or s: every regression that would contain one is left out, and the
+// estimate equals batch QR on exactly the remaining rows (1e-6 relative, as above); a bad sample
+// never reaches the state (it stays finite).
+TEST(OnlineLpvArx, BadSamplesNeverEnterARegression) {
+  const LpvData d = MakeLpv(4000);
+  OnlineLpvArxOptions o;
+  o.rls.initial_covariance = 1e8;
+  o.input_abs_max = 100.0;
+  o.output_abs_max = 100.0;
+  o.scheduling_abs_max = 100.0;
+  OnlineLpvArx lpv(o);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  std::vector<double> u = d.u;
+  std::vector<double> y = d.y;
+  std::vector<double> s = d.s;
+  for (std::size_t k = 10; k < d.y.size(); ++k) {
+    if (k % 41 == 0) u[k] = nan;
+    if (k % 59 == 0) y[k] = -inf;
+    if (k % 67 == 0) y[k] = 1e6;  // absurd
+    if (k % 73 == 0) s[k] = nan;
+    if (k % 79 == 0) s[k] = 1e6;
+  }
+  auto good = [](double v) { return std::isfinite(v) && std::abs(v) <= 100.0; };
+  int updates = 0;
+  for (std::size_t k = 0; k < d.y.size(); ++k) updates += lpv.Update(u[k], y[k], s[k]) ? 1 : 0;
+  // Row k (na = nb = nk = 1) uses y(k), y(k-1), u(k-1), s(k).
+  std::vector<int> rows_used;
+  for (std::size_t k = 1; k < d.y.size(); ++k) {
+    if (good(y[k]) && good(y[k - 1]) && good(u[k - 1]) && good(s[k])) {
+      rows_used.push_back(static_cast<int>(k));
+    }
+  }
+  ASSERT_GT(rows_used.size(), 3000u);
+  EXPECT_EQ(updates, static_cast<int>(rows_used.size()));
+  Eigen::MatrixXd a(static_cast<Eigen::Index>(rows_used.size()), 6);
+  Eigen::VectorXd target(a.rows());
+  for (Eigen::Index r = 0; r < a.rows(); ++r) {
+    const auto k = static_cast<std::size_t>(rows_used[static_cast<std::size_t>(r)]);
+    const double sk = s[k];
+    a.row(r) << -y[k - 1], -y[k - 1] * sk, -y[k - 1] * sk * sk, u[k - 1], u[k - 1] * sk,
+        u[k - 1] * sk * sk;
+    target(r) = y[k];
+  }
+  const Eigen::VectorXd batch = a.householderQr().solve(target);
+  const Eigen::VectorXd& th = lpv.estimator().theta();
+  ASSERT_TRUE(th.allFinite());
+  for (int i = 0; i < 6; ++i) EXPECT_LT(std::abs(th(i) - batch(i)), 1e-6 * batch.norm()) << i;
 }
 
 TEST(LpvExpand, IsTheKroneckerProduct) {
