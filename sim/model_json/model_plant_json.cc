@@ -35,7 +35,11 @@ int LpvDelayBound(const nlohmann::json& json, const std::string& source, const L
   if (bands == json.end() || !bands->is_array() || bands->size() < 2) {
     throw std::invalid_argument(source + ": key 'bands': needs the band edges (at least 2)");
   }
-  const std::vector<double> edges = bands->get<std::vector<double>>();
+  std::vector<double> edges;
+  for (const auto& edge : *bands) {
+    if (!edge.is_number()) throw std::invalid_argument(source + ": key 'bands': not a number list");
+    edges.push_back(edge.get<double>());
+  }
   const auto [low, high] = std::minmax_element(edges.begin(), edges.end());
   const double span = *high - *low;
   constexpr int kPoints = 4001;
@@ -43,6 +47,13 @@ int LpvDelayBound(const nlohmann::json& json, const std::string& source, const L
   for (int i = 0; i < kPoints; ++i) {
     const double theta = *low - span + 3.0 * span * i / (kPoints - 1);
     longest = std::max(longest, plant.DelaySamples(theta));
+  }
+  // A delay law this long is a broken record, not a canal (and the ring would not fit).
+  constexpr long kMaxDelaySamples = 1000000;
+  if (longest > kMaxDelaySamples) {
+    throw std::invalid_argument(source + ": key 'coefficients.nk': delays up to " +
+                                std::to_string(longest) + " samples over the bands, at most " +
+                                std::to_string(kMaxDelaySamples));
   }
   return static_cast<int>(longest);
 }

@@ -413,6 +413,22 @@ TEST(LpvArxPlant, RefusesDelaysBeyondItsRingAndOtherLocals) {
   // A discrete model: another sampling is refused.
   EXPECT_THROW(PlantFromModelJson(LpvJson(0.0, 0.0), "m.json", 5.0, Eigen::VectorXd::Zero(1)),
                std::invalid_argument);
+  // Bands missing or not numbers, and a delay law no ring could hold.
+  for (const nlohmann::json& bands : {nlohmann::json(), nlohmann::json({1.0, "x"})}) {
+    nlohmann::json broken = LpvJson(0.0, 0.0);
+    if (bands.is_null()) {
+      broken.erase("bands");
+    } else {
+      broken["bands"] = bands;
+    }
+    EXPECT_THROW(PlantFromModelJson(broken, "m.json", 10.0, Eigen::VectorXd::Zero(1)),
+                 std::invalid_argument)
+        << bands;
+  }
+  nlohmann::json long_delay = LpvJson(0.0, 0.0);
+  long_delay["coefficients"]["nk"] = {0.0, 0.0, 1e9};
+  EXPECT_THROW(PlantFromModelJson(long_delay, "m.json", 10.0, Eigen::VectorXd::Zero(1)),
+               std::invalid_argument);
 }
 
 // lpv_cli_test's record: theta a staircase through five bands, u a random +-1 held 5 samples,
