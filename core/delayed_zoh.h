@@ -48,6 +48,13 @@ class DelayedZoh final {
 
   int whole_delay() const { return whole_delay_; }
 
+  /// One step for streaming use (what Simulate does per sample): x_{k+1} from x_k and the held
+  /// inputs u_{k-d-1} (early) and u_{k-d} (late); y_k = Output(x_k).
+  Vector Next(const Vector& x, double u_early, double u_late) const {
+    return phi_ * x + gamma_early_ * u_early + gamma_late_ * u_late;
+  }
+  double Output(const Vector& x) const { return c_ * x; }
+
   /// Simulates from rest: y_k for k = 0..n-1 given u_k (deviation values).
   void Simulate(const Eigen::Ref<const Eigen::VectorXd>& u, Eigen::Ref<Eigen::VectorXd> y) const {
     const Eigen::Index n = u.size();

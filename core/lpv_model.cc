@@ -277,8 +277,10 @@ Eigen::VectorXd SimulateLpvArx(const LpvModel& model, const Eigen::Ref<const Eig
   for (Eigen::Index k = 1; k < du.size(); ++k) {
     const double a1 = EvaluatePolynomial(model.coefficients.row(0).transpose(), theta(k));
     const double b1 = EvaluatePolynomial(model.coefficients.row(1).transpose(), theta(k));
-    const long nk =
-        std::lround(EvaluatePolynomial(model.coefficients.row(2).transpose(), theta(k)));
+    // At least one sample, as documented: a polynomial extrapolated below 0.5 would otherwise
+    // read du(k) or beyond the end of the record.
+    const long nk = std::max(
+        1L, std::lround(EvaluatePolynomial(model.coefficients.row(2).transpose(), theta(k))));
     y(k) = -a1 * y(k - 1) + b1 * (k - nk >= 0 ? du(k - nk) : 0.0);
   }
   return y;

@@ -13,7 +13,8 @@ namespace canalid::sim {
 /// A sampled SISO/MISO plant (the shape of every `canalid` model): inputs u[k] are held over
 /// [k Ts, (k+1) Ts) (zero-order hold), the output y[k] is at t = k Ts.  Use: y = Output(u[k]),
 /// then Advance(u[k]).  Output may depend on u[k] (direct feedthrough, e.g. an ID model with
-/// zero delay samples).  No allocation after construction.
+/// zero delay samples).  No allocation after construction (except CommensuratePlant with full
+/// memory, whose history grows with the run).
 class SampledPlant {
  public:
   virtual ~SampledPlant() = default;

@@ -1,4 +1,5 @@
-// canalsim: the simulated canal.  `canalsim run` is the headless scenario runner that writes CSV.
+// canalsim: the simulated canal.  `canalsim run` is the headless scenario runner that writes CSV,
+// `canalsim serve` the canal behind a Modbus PLC, `canalsim plant` a model JSON's plant on a CSV.
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
@@ -9,6 +10,7 @@
 #include <string>
 
 #include "sim/canal_config.h"
+#include "sim/canalsim/plant_command.h"
 #include "sim/canalsim/serve_command.h"
 #include "sim/config_reader.h"
 #include "sim/scenario.h"
@@ -104,6 +106,7 @@ int main(int argc, char** argv) {
   run->add_flag("--check-config", check_only, "Validate both files and exit (0 or 78)");
   run->add_flag("-q,--quiet", quiet, "No progress or summary on stderr");
   const canalid::sim::ServeCommand serve(app);
+  const canalid::sim::PlantCommand plant(app);
   try {
     app.parse(argc, argv);
     if (run->parsed() && !check_only && out_path.empty()) throw CLI::RequiredError("--out");
@@ -111,5 +114,6 @@ int main(int argc, char** argv) {
     return app.exit(e);
   }
   if (serve.selected()) return serve.Run();
+  if (plant.selected()) return plant.Run();
   return Run(canal_path, scenario_path, out_path, seed, check_only, quiet);
 }

@@ -1,9 +1,14 @@
 #include "sim/model_json/model_plant_json.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <vector>
 
 #include "drivers/json/model_json_read.h"
+#include "sim/commensurate_plant.h"
+#include "sim/lpv_arx_plant.h"
+#include "sim/soptd_plant.h"
 
 namespace canalid::sim {
 namespace {
@@ -21,6 +26,51 @@ void RequireSampleTime(double model_s, double sample_time_s, const std::string& 
     throw std::invalid_argument(source + ": sample_time_s = " + std::to_string(sample_time_s) +
                                 " but the model is discrete at " + std::to_string(model_s) + " s");
   }
+}
+
+// The longest delay of an LPV ARX model over its bands widened by their span on each side (the
+// schedule may leave the identified range a little; further out the polynomials mean little).
+int LpvDelayBound(const nlohmann::json& json, const std::string& source, const LpvArxPlant& plant) {
+  const auto bands = json.find("bands");
+  if (bands == json.end() || !bands->is_array() || bands->size() < 2) {
+    throw std::invalid_argument(source + ": key 'bands': needs the band edges (at least 2)");
+  }
+  std::vector<double> edges;
+  for (const auto& edge : *bands) {
+    if (!edge.is_number()) throw std::invalid_argument(source + ": key 'bands': not a number list");
+    edges.push_back(edge.get<double>());
+  }
+  const auto [low, high] = std::minmax_element(edges.begin(), edges.end());
+  const double span = *high - *low;
+  constexpr int kPoints = 4001;
+  long longest = 1;
+  for (int i = 0; i < kPoints; ++i) {
+    const double theta = *low - span + 3.0 * span * i / (kPoints - 1);
+    longest = std::max(longest, plant.DelaySamples(theta));
+  }
+  // A delay law this long is a broken record, not a canal (and the ring would not fit).
+  constexpr long kMaxDelaySamples = 1000000;
+  if (longest > kMaxDelaySamples) {
+    throw std::invalid_argument(source + ": key 'coefficients.nk': delays up to " +
+                                std::to_string(longest) + " samples over the bands, at most " +
+                                std::to_string(kMaxDelaySamples));
+  }
+  return static_cast<int>(longest);
+}
+
+std::unique_ptr<SampledPlant> LpvPlant(const nlohmann::json& json, const std::string& source,
+                                       double sample_time_s) {
+  const drivers::LpvRecord r = drivers::LpvFromJson(json, source);
+  if (r.model.kind != "first_order_arx") {
+    throw std::invalid_argument(source + ": key 'local_model': '" + r.local_model +
+                                "': an lpv plant exists for arx locals only");
+  }
+  if (json.contains("sample_time_s") && json.at("sample_time_s").is_number()) {
+    RequireSampleTime(json.at("sample_time_s").get<double>(), sample_time_s, source);
+  }
+  const LpvArxPlant probe(r.model, sample_time_s, r.input_offset, r.output_offset, 1);
+  return std::make_unique<LpvArxPlant>(r.model, sample_time_s, r.input_offset, r.output_offset,
+                                       LpvDelayBound(json, source, probe));
 }
 
 }  // namespace
@@ -60,8 +110,21 @@ std::unique_ptr<SampledPlant> PlantFromModelJson(
                                                   r.params.input_offset, r.params.output_offset,
                                                   initial_inputs(0));
   }
-  throw std::invalid_argument(source + ": key 'model': '" + kind +
-                              "' has no plant (id, arx, foptd, frac-foptd)");
+  if (kind == "soptd") {
+    const auto r = drivers::SoptdFromJson(json, source);
+    return std::make_unique<SoptdPlant>(r.model, sample_time_s, r.input_offset, r.output_offset,
+                                        initial_inputs(0));
+  }
+  if (kind == "frac-ss") {
+    const drivers::CommensurateRecord r = drivers::CommensurateFromJson(json, source);
+    RequireSampleTime(r.sample_time_s, sample_time_s, source);
+    return std::make_unique<CommensuratePlant>(r.model.model, r.memory_length, sample_time_s,
+                                               r.model.input_offset, r.model.output_offset,
+                                               initial_inputs(0));
+  }
+  if (kind == "lpv") return LpvPlant(json, source, sample_time_s);
+  throw std::invalid_argument(source + ": key 'model': '" + kind + "' has no plant (" +
+                              kModelPlantKinds + ")");
 }
 
 }  // namespace canalid::sim

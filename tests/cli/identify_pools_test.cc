@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -21,6 +22,7 @@ struct PoolCase {
   int pool;
   double idz_delay_s;  // high regime, asce_idz_litrico_fromion_2004.csv
   double idz_area_m2;
+  double max_delay_ratio = 1.2;  // ID delay / IDZ delay
 };
 
 std::string CaseName(const ::testing::TestParamInfo<PoolCase>& info) {
@@ -55,7 +57,13 @@ TEST_P(IdentifyPools, PrbsAreaWithinFifteenPercentOfIdz) {
   // p21 is folded into it).
   EXPECT_NEAR(model["area_m2"].get<double>(), c.idz_area_m2, 0.15 * c.idz_area_m2) << model.dump();
   EXPECT_GE(model["delay_s"].get<double>(), 0.5 * c.idz_delay_s) << model.dump();
-  EXPECT_LE(model["delay_s"].get<double>(), 1.2 * c.idz_delay_s) << model.dump();
+  EXPECT_LE(model["delay_s"].get<double>(), c.max_delay_ratio * c.idz_delay_s) << model.dump();
+  std::printf(
+      "canal %d pool %d: area %.0f m2 (IDZ %.0f, %+.1f %%), delay %.0f s (IDZ %.1f, %.2f)\n",
+      c.canal, c.pool, model["area_m2"].get<double>(), c.idz_area_m2,
+      100.0 * (model["area_m2"].get<double>() / c.idz_area_m2 - 1.0),
+      model["delay_s"].get<double>(), c.idz_delay_s,
+      model["delay_s"].get<double>() / c.idz_delay_s);
   // Held outflow: nothing feeds the level back into the flows.
   EXPECT_FALSE(model["closed_loop"].get<bool>()) << model.dump();
 }
@@ -67,6 +75,21 @@ INSTANTIATE_TEST_SUITE_P(AsceHighRegime, IdentifyPools,
                                            PoolCase{2, 6, 754.3, 23634.0},
                                            PoolCase{2, 7, 513.8, 17809.0}),
                          CaseName);
+
+// Canal 1: steep (S0 = 0.002), mostly uniform-flow pools with backwater areas of 330-620 m2.  The
+// experiments use 1 % of the flow (the level then moves by about 9 % of the depth, as 8 % does
+// on canal 2) and the same clock rule, half the IDZ delay; see the scenario files and
+// docs/canalsim.md.  The area is issue 5's check.  The delay bound is wider: on pools 5-8 (p21
+// of 0.0007-0.002 s/m2) a flow change travels as a diffusive wave, and the integrator-delay fit
+// puts its delay where the late level ramp starts, 1.35-1.41 x the front's arrival (which the
+// wave-arrival test in tests/sim/saint_venant_test.cc finds within 2 % of the IDZ delay).
+INSTANTIATE_TEST_SUITE_P(
+    AsceCanal1HighRegime, IdentifyPools,
+    ::testing::Values(PoolCase{1, 1, 29.6, 331.2, 1.5}, PoolCase{1, 2, 337.4, 575.9, 1.5},
+                      PoolCase{1, 3, 117.0, 436.3, 1.5}, PoolCase{1, 4, 238.2, 575.8, 1.5},
+                      PoolCase{1, 5, 610.8, 620.8, 1.5}, PoolCase{1, 6, 541.3, 496.2, 1.5},
+                      PoolCase{1, 7, 531.0, 467.6, 1.5}, PoolCase{1, 8, 603.5, 518.8, 1.5}),
+    CaseName);
 
 }  // namespace
 }  // namespace canalid::testing

@@ -183,5 +183,22 @@ TEST(LpvModelTest, RejectsBadArguments) {
   EXPECT_THROW(SimulateLpvArx(other, r.u, r.theta), std::invalid_argument);
 }
 
+TEST(LpvModelTest, ArxDelayPolynomialBelowOneSampleMeansOneSample) {
+  // nk(theta) = -2 theta + 1 extrapolates to 0 and below: the simulation uses one sample (as
+  // documented), y[k] = 0.5 y[k-1] + du[k-1], never du[k] or a sample past the end.
+  LpvModel model;
+  model.kind = "first_order_arx";
+  model.degree = 1;
+  model.coefficients.resize(3, 2);
+  model.coefficients << 0.0, -0.5, 0.0, 1.0, -2.0, 1.0;
+  const Eigen::VectorXd du = Eigen::VectorXd::Ones(20);
+  const Eigen::VectorXd theta = Eigen::VectorXd::LinSpaced(20, 0.4, 3.0);
+  const Eigen::VectorXd y = SimulateLpvArx(model, du, theta);
+  // Unit step through 1/(1 - 0.5 z^-1) z^-1 from k = 1: y[k] = 2 (1 - 0.5^k).
+  for (Eigen::Index k = 0; k < 20; ++k) {
+    EXPECT_NEAR(y(k), 2.0 * (1.0 - std::pow(0.5, static_cast<double>(k))), 1e-15) << k;
+  }
+}
+
 }  // namespace
 }  // namespace canalid::core
