@@ -80,6 +80,7 @@ void LogExporter::OnSample(const std::string& plc, const canalid::sample_t& samp
       for (const std::string& c : r->channels) std::fprintf(r->file, ",%s", c.c_str());
       std::fprintf(r->file, ",wall_time_s\n");
       file = r.get();
+      reach_channels_[reach.name] = {reach.inflow, reach.outflow, reach.level, reach.actuator};
       reaches_.push_back(std::move(r));
     }
     if (file->indices.empty()) {

@@ -1,4 +1,5 @@
 #pragma once
+#include <array>
 #include <cstdint>
 #include <cstdio>
 #include <map>
@@ -40,6 +41,10 @@ class LogExporter final : public drivers::LogMessageVisitor {
   bool has_config() const { return config_.config() != nullptr; }
   /// Rows written per file name.
   const std::map<std::string, std::int64_t>& rows() const { return rows_; }
+  /// The channels (inflow, outflow, level, actuator) of every reach written, by reach.
+  const std::map<std::string, std::array<std::string, 4>>& reach_channels() const {
+    return reach_channels_;
+  }
 
  private:
   struct ReachFile;
@@ -54,6 +59,7 @@ class LogExporter final : public drivers::LogMessageVisitor {
   std::FILE* models_ = nullptr;
   std::vector<std::FILE*> files_;
   std::map<std::string, std::int64_t> rows_;
+  std::map<std::string, std::array<std::string, 4>> reach_channels_;
 };
 
 /// The parameter names of the MODEL_ messages of a log, in order of first appearance (the first

@@ -47,7 +47,15 @@ int RunReport(const ReportOptions& options, const std::string& command_line) {
       throw InputError("--model: '" + options.models[i] + "' is given more than once");
     }
   }
-  const drivers::CsvTable table = LoadReportInput(options.input);
+  ReportLogOptions log;
+  log.reach = options.reach;
+  log.config = options.config;
+  log.data_dir = (std::filesystem::path(options.out) / "data").string();
+  const ReportInput input = LoadReportInput(options.input, log);
+  const drivers::CsvTable& table = input.table;
+  const IdentifyOptions identify_options =
+      input.reach_channels ? WithReachColumns(options.identify, *input.reach_channels)
+                           : options.identify;
   TerminalProgress progress("canalid report");
   std::vector<ModelAnalysis> models;
   const std::size_t n = options.models.size();
@@ -55,7 +63,7 @@ int RunReport(const ReportOptions& options, const std::string& command_line) {
     const std::string& kind = options.models[i];
     const std::string count = " (" + std::to_string(i + 1) + "/" + std::to_string(n) + ")...";
     progress.Show("identifying " + kind + count);
-    IdentifyOptions identify = options.identify;
+    IdentifyOptions identify = identify_options;
     identify.model = kind;
     identify.input = options.input;
     try {
@@ -98,14 +106,22 @@ void AddReportCommand(CLI::App& app, ReportOptions& options, int& exit_code) {
   cmd->footer(
       "Examples:\n"
       "  canalid report --input pool2.csv --model id foptd frac-ss --u q_in --y level --out rep\n"
+      "  canalid report --input run.lcmlog --reach pool2 --model id arx --out pool2-report\n"
       "  canalid report --input F.csv --model lpv --local arx --schedule upstream \\\n"
       "                 --bands 1.0,1.2,1.4,1.6 --u gate --y level --out lpv-report\n"
       "Writes OUT/index.html (self-contained: relative links, no scripts), OUT/*.png,\n"
+      "OUT/data/REACH.csv (a log's reach, exported as 'canalid export' does),\n"
       "OUT/models/KIND.json and OUT/gnuplot/ (data and scripts: cd OUT && gnuplot gnuplot/X.gp).\n"
       "Every kind is identified with the same column and model options, as identify takes them.\n"
       "Exit 2 on bad input, 1 when gnuplot is missing or fails.");
-  cmd->add_option("--input", options.input, "CSV file: header row, time_s first, uniform sampling")
+  cmd->add_option("--input", options.input,
+                  "CSV file (header row, time_s first, uniform sampling) or an LCM log of canalidd")
       ->required();
+  cmd->add_option("--reach", options.reach,
+                  "LCM log input: the reach (default: the log's only one); its inflow, outflow, "
+                  "level and actuator channels become the default columns");
+  cmd->add_option("--config", options.config,
+                  "LCM log input: daemon configuration instead of the one recorded in the log");
   cmd->add_option("--model", options.models,
                   "Model kinds to identify and show (several: --model id foptd, or id,foptd)")
       ->delimiter(',')

@@ -12,7 +12,9 @@ namespace canalid::cli {
 
 /// Everything `canalid report` takes from the command line.
 struct ReportOptions {
-  std::string input;                ///< CSV record (LoadReportInput)
+  std::string input;                ///< CSV record or LCM log (LoadReportInput)
+  std::string reach;                ///< log input: the reach
+  std::string config;               ///< log input: configuration instead of the log's
   std::vector<std::string> models;  ///< kinds, identified in this order
   std::string out;                  ///< directory for index.html, the images and gnuplot/
   std::string gnuplot = "gnuplot";  ///< program that draws the plots

@@ -384,5 +384,38 @@ TEST(ExportCli, WritesEachReachsSamplesAndTheModels) {
   EXPECT_NE(models.find(",pool2,id,rls-bank,7,660,nan,35000.25,0.5,"), std::string::npos) << models;
 }
 
+// `canalid report --input LOG`: the reach's samples exported to OUT/data and identified with the
+// reach's channels as the default columns, giving what identify gives on that export.
+TEST(ReportFromLogCli, ReportsOnTheReachOfALog) {
+  const fs::path dir = TestDirectory("report-log");
+  const std::vector<Event> events = DaemonRun(PrbsRecord(), kStartUtime);
+  WriteLog(dir / "run.lcmlog", events, events.size());
+  const ProgramRun run =
+      RunProgram(CanalidProgram() + " report --input " + (dir / "run.lcmlog").string() +
+                     " --model id --out " + (dir / "rep").string(),
+                 dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(fs::exists(dir / "rep" / "index.html"));
+  EXPECT_GT(fs::file_size(dir / "rep" / "fit_id.png"), 8000U);
+  const ProgramRun identify =
+      RunProgram(CanalidProgram() + " identify --model id --input " +
+                     (dir / "rep" / "data" / "pool2.csv").string() +
+                     " --qin pool2_inflow --qout pool2_outflow --level pool2_level",
+                 dir);
+  ASSERT_EQ(identify.exit_code, 0) << identify.err;
+  const nlohmann::json expected = nlohmann::json::parse(identify.out);
+  const nlohmann::json reported =
+      nlohmann::json::parse(ReadFile(dir / "rep" / "models" / "id.json"));
+  EXPECT_EQ(reported.at("area_m2"), expected.at("area_m2"));
+  EXPECT_EQ(reported.at("delay_s"), expected.at("delay_s"));
+
+  const ProgramRun unknown =
+      RunProgram(CanalidProgram() + " report --input " + (dir / "run.lcmlog").string() +
+                     " --reach pool7 --model id --out " + (dir / "rep2").string(),
+                 dir);
+  EXPECT_EQ(unknown.exit_code, 2);
+  EXPECT_NE(unknown.err.find("--reach pool7"), std::string::npos) << unknown.err;
+}
+
 }  // namespace
 }  // namespace canalid::testing
