@@ -5,11 +5,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
 #include "sim/canal_config.h"
 #include "sim/saint_venant.h"
+#include "sim/scenario.h"
 
 namespace canalid::sim {
 namespace {
@@ -81,6 +84,62 @@ TEST(LabFlume, ActuatorMustBeAPump) {
   canal.level_controls[0].actuator_pool.clear();
   canal.level_controls[0].level_pool = "9";
   EXPECT_THROW(SaintVenantCanal{canal}, std::invalid_argument);
+}
+
+std::string WriteTemp(const std::string& name, const std::string& text) {
+  const auto path = std::filesystem::path(CANALID_BINARY_DIR) / "tests" / ("lab_canals_" + name);
+  std::ofstream(path) << text;
+  return path.string();
+}
+
+TEST(LabFlume, ScenarioEventsOnThePidsPumpAndBadLoopKeysAreConfigErrors) {
+  const Canal canal = Load("lab-flume.toml");
+  const std::string scenario = WriteTemp("pump-event.toml", R"(duration_s = 1.0
+output_period_s = 0.15
+[[event]]
+time_s = 0.0
+target = "inflow"
+kind = "set"
+value = 0.001
+[output]
+y = "pool2.level_downstream"
+)");
+  try {
+    LoadScenario(scenario, canal);
+    FAIL() << "an event on the PID's pump must be refused";
+  } catch (const ConfigError& e) {
+    ASSERT_EQ(e.problems().size(), 1u);
+    EXPECT_NE(e.problems()[0].find("level control pump"), std::string::npos) << e.problems()[0];
+  }
+  // Simulating only the main pool drops the loop (its pump is not simulated), and the inflow is
+  // then free for events.
+  const std::string main_only = WriteTemp("main-only.toml", R"(duration_s = 1.0
+output_period_s = 0.15
+first_pool = "2"
+[[event]]
+time_s = 0.0
+target = "inflow"
+kind = "set"
+value = 0.0004
+[output]
+y = "pool2.level_downstream"
+)");
+  EXPECT_TRUE(LoadScenario(main_only, canal).canal.level_controls.empty());
+
+  std::ifstream in(std::string(CANALID_SOURCE_DIR) + "/config/sim/lab-flume.toml");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string bad = WriteTemp(
+      "bad-loop.toml", text +
+                           "\n[[level_control]]\nlevel = \"pool2.depth\"\npump = \"pool2.gate\"\n"
+                           "setpoint_m = 0.05\nmax_flow_m3s = 0.001\nsample_time_s = 0.15\n"
+                           "kq = 1.0\n");
+  try {
+    LoadCanal(bad);
+    FAIL() << "a bad level control must be refused";
+  } catch (const ConfigError& e) {
+    // The unknown key, the level and the pump, each with its line.
+    EXPECT_EQ(e.problems().size(), 3u);
+  }
 }
 
 struct Record {
