@@ -17,6 +17,13 @@ void Require(bool ok, const std::string& where, const char* field, double value,
 
 }  // namespace
 
+int FindPoolIndex(const Canal& canal, const std::string& name) {
+  for (std::size_t i = 0; i < canal.pools.size(); ++i) {
+    if (canal.pools[i].name == name) return static_cast<int>(i);
+  }
+  return -1;
+}
+
 void ValidateCanal(const Canal& canal) {
   if (canal.pools.empty()) throw std::invalid_argument("canal " + canal.name + ": no pools");
   Require(canal.max_dx_m > 0.0, "canal " + canal.name, "max_dx_m", canal.max_dx_m, "> 0");
@@ -45,6 +52,38 @@ void ValidateCanal(const Canal& canal) {
     Require(p.offtake.setting >= 0.0, where, "offtake setting", p.offtake.setting, ">= 0");
     Require(p.offtake.coefficient > 0.0, where, "offtake coefficient", p.offtake.coefficient,
             "> 0");
+  }
+  for (std::size_t i = 0; i < canal.level_controls.size(); ++i) {
+    const LevelControl& c = canal.level_controls[i];
+    const std::string where = "level control " + c.name;
+    if (FindPoolIndex(canal, c.level_pool) < 0) {
+      throw std::invalid_argument(where + ": level pool '" + c.level_pool +
+                                  "' is not in the canal");
+    }
+    if (c.actuator_pool.empty()) {
+      if (canal.upstream.type != UpstreamBoundary::Type::kFlow) {
+        throw std::invalid_argument(where +
+                                    ": the upstream inflow is its pump, so [upstream] type must "
+                                    "be \"flow\"");
+      }
+    } else {
+      const int a = FindPoolIndex(canal, c.actuator_pool);
+      if (a < 0 || canal.pools[a].structure.type != Structure::Type::kPump) {
+        throw std::invalid_argument(where + ": actuator pool '" + c.actuator_pool +
+                                    "' must be a pool of the canal whose structure is a pump");
+      }
+    }
+    for (std::size_t j = 0; j < i; ++j) {
+      if (canal.level_controls[j].actuator_pool == c.actuator_pool) {
+        throw std::invalid_argument(where + ": its pump is already driven by level control " +
+                                    canal.level_controls[j].name);
+      }
+    }
+    try {
+      LevelPid check(c.pid);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(where + ": " + e.what());
+    }
   }
 }
 

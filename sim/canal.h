@@ -2,6 +2,8 @@
 #include <string>
 #include <vector>
 
+#include "sim/level_pid.h"
+
 namespace canalid::sim {
 
 /// Gravity acceleration (m/s^2) used by every hydraulic formula of the simulator.
@@ -60,6 +62,21 @@ struct UpstreamBoundary {
   double flow_m3s = 0.0;  ///< steady inflow (kFlow) or the flow the steady state is built for.
 };
 
+/// A local level loop of the plant: a PID (LevelPid) that sets a pump's flow so as to hold the
+/// depth at one end of a pool.  The pump is the upstream inflow (`actuator_pool` empty; the
+/// upstream boundary must be a flow) or the pump structure of a named pool.  More flow raises
+/// the held level when the pump is upstream of the level's pool (the inflow, or a pool before
+/// it) and lowers it otherwise (the pool's own outflow pump or one further down); that sign is
+/// derived, so the gains are all >= 0.  While the loop runs it owns its pump: a setting written
+/// to that input from outside is replaced at every step.
+struct LevelControl {
+  std::string name;
+  std::string level_pool;        ///< pool whose depth is held.
+  bool level_downstream = true;  ///< depth at the pool's downstream end, else upstream end.
+  std::string actuator_pool;     ///< empty: the upstream inflow; else that pool's pump.
+  LevelPidConfig pid;            ///< direct_action is derived (see above).
+};
+
 /// A chain of pools.  Numerical parameters of the Preissmann scheme are part of it.
 struct Canal {
   std::string name;
@@ -67,9 +84,14 @@ struct Canal {
   UpstreamBoundary upstream;
   double max_dx_m = 100.0;  ///< largest space step; each pool gets ceil(L / max_dx) cells.
   double theta = 0.65;      ///< Preissmann time weighting, 0.5 < theta <= 1.
+  std::vector<LevelControl> level_controls;
 };
 
-/// Throws std::invalid_argument naming the pool and the field if a value is outside its range.
+/// Index of the pool named `name`, or -1.
+int FindPoolIndex(const Canal& canal, const std::string& name);
+
+/// Throws std::invalid_argument naming the pool and the field if a value is outside its range,
+/// or naming the level control whose pools do not exist or whose actuator is not a pump.
 void ValidateCanal(const Canal& canal);
 
 }  // namespace canalid::sim

@@ -19,6 +19,63 @@ const toml::table* SubTable(ConfigReader& reader, const toml::table& table, std:
   return node->as_table();
 }
 
+// "pool<name>.level_downstream" or "pool<name>.level_upstream".
+bool ParseLevel(const std::string& text, LevelControl* c) {
+  for (const char* end : {".level_downstream", ".level_upstream"}) {
+    const std::string suffix(end);
+    if (text.size() > 4 + suffix.size() && text.rfind("pool", 0) == 0 &&
+        text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0) {
+      c->level_pool = text.substr(4, text.size() - 4 - suffix.size());
+      c->level_downstream = suffix == ".level_downstream";
+      return true;
+    }
+  }
+  return false;
+}
+
+// "inflow" or "pool<name>.structure".
+bool ParsePump(const std::string& text, LevelControl* c) {
+  if (text == "inflow") {
+    c->actuator_pool.clear();
+    return true;
+  }
+  const std::string suffix = ".structure";
+  if (text.size() > 4 + suffix.size() && text.rfind("pool", 0) == 0 &&
+      text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0) {
+    c->actuator_pool = text.substr(4, text.size() - 4 - suffix.size());
+    return true;
+  }
+  return false;
+}
+
+void ReadLevelControl(ConfigReader& reader, const toml::table& t, const std::string& where,
+                      LevelControl* c) {
+  reader.CheckKeys(t, where,
+                   {"name", "level", "pump", "setpoint_m", "kp", "ki", "kd", "min_flow_m3s",
+                    "max_flow_m3s", "sample_time_s"});
+  c->name = reader.String(t, "name", where, c->name);
+  const std::string level = reader.String(t, "level", where, std::nullopt);
+  if (!level.empty() && !ParseLevel(level, c)) {
+    reader.Problem(t.get("level")->source(), "'" + KeyPath(where, "level") + "' = \"" + level +
+                                                 "\" must be \"pool<name>.level_downstream\" "
+                                                 "or \"pool<name>.level_upstream\"");
+  }
+  const std::string pump = reader.String(t, "pump", where, "inflow");
+  if (!ParsePump(pump, c)) {
+    reader.Problem(t.get("pump")->source(), "'" + KeyPath(where, "pump") + "' = \"" + pump +
+                                                "\" must be \"inflow\" or "
+                                                "\"pool<name>.structure\"");
+  }
+  LevelPidConfig& p = c->pid;
+  p.setpoint_m = reader.Number(t, "setpoint_m", where, std::nullopt, 0.0, 100.0);
+  p.kp = reader.Number(t, "kp", where, 0.0, 0.0, 1e6);
+  p.ki = reader.Number(t, "ki", where, 0.0, 0.0, 1e6);
+  p.kd = reader.Number(t, "kd", where, 0.0, 0.0, 1e6);
+  p.min_flow_m3s = reader.Number(t, "min_flow_m3s", where, 0.0, 0.0, 1e5);
+  p.max_flow_m3s = reader.Number(t, "max_flow_m3s", where, std::nullopt, 0.0, 1e5);
+  p.sample_time_s = reader.Number(t, "sample_time_s", where, std::nullopt, 1e-4, 1e5);
+}
+
 }  // namespace
 
 void ReadStructure(ConfigReader& reader, const toml::table& t, const std::string& where,
@@ -68,7 +125,7 @@ Canal LoadCanal(const std::string& path) {
   ConfigReader reader(path);
   const toml::table& root = reader.root();
   Canal canal;
-  reader.CheckKeys(root, "", {"name", "max_dx_m", "theta", "upstream", "pool"});
+  reader.CheckKeys(root, "", {"name", "max_dx_m", "theta", "upstream", "pool", "level_control"});
   canal.name = reader.String(root, "name", "", path);
   canal.max_dx_m = reader.Number(root, "max_dx_m", "", 100.0, 0.01, 1e4);
   canal.theta = reader.Number(root, "theta", "", 0.6, 0.5000001, 1.0);
@@ -98,7 +155,7 @@ Canal LoadCanal(const std::string& path) {
                         "manning_n", "bank_depth_m", "target_depth_m", "structure", "offtake"});
       Pool p;
       p.name = reader.String(*t, "name", where, std::to_string(i + 1));
-      p.length_m = reader.Number(*t, "length_m", where, std::nullopt, 1.0, 1e6);
+      p.length_m = reader.Number(*t, "length_m", where, std::nullopt, 0.01, 1e6);
       p.bottom_width_m = reader.Number(*t, "bottom_width_m", where, std::nullopt, 0.0, 1e3);
       p.side_slope = reader.Number(*t, "side_slope", where, std::nullopt, 0.0, 100.0);
       p.bed_slope = reader.Number(*t, "bed_slope", where, std::nullopt, -0.1, 0.1);
@@ -113,6 +170,25 @@ Canal LoadCanal(const std::string& path) {
         ReadOfftake(reader, *o, where + ".offtake", &p.offtake);
       }
       canal.pools.push_back(p);
+    }
+  }
+  if (const toml::node* node = root.get("level_control")) {
+    const toml::array* controls = node->as_array();
+    if (controls == nullptr) {
+      reader.Problem(node->source(),
+                     "'level_control' must be an array of tables ([[level_control]])");
+    }
+    for (std::size_t i = 0; controls != nullptr && i < controls->size(); ++i) {
+      const std::string where = "level_control[" + std::to_string(i) + "]";
+      const toml::table* t = (*controls)[i].as_table();
+      if (t == nullptr) {
+        reader.Problem((*controls)[i].source(), where + " must be a table");
+        continue;
+      }
+      LevelControl c;
+      c.name = std::to_string(i + 1);
+      ReadLevelControl(reader, *t, where, &c);
+      canal.level_controls.push_back(c);
     }
   }
   reader.Finish();

@@ -42,6 +42,18 @@ SaintVenantCanal::SaintVenantCanal(const Canal& canal) : canal_(canal) {
   delta_.setZero(n);
   jacobian_.resize(n, n);
   BuildSteadyState();
+  for (const LevelControl& c : canal_.level_controls) {
+    LevelPidConfig config = c.pid;
+    const int level_pool = FindPoolIndex(canal_, c.level_pool);
+    const int actuator = c.actuator_pool.empty() ? -1 : FindPoolIndex(canal_, c.actuator_pool);
+    // A pump upstream of the held pool fills it; the pool's own pump, or one below, drains it.
+    config.direct_action = actuator < level_pool;
+    BoundControl bound{LevelPid(config), level_pool, c.level_downstream, actuator, 0};
+    controls_.push_back(bound);
+    const int k = static_cast<int>(controls_.size()) - 1;
+    const double flow = actuator < 0 ? upstream_value_ : structure_setting_[actuator];
+    controls_[k].pid.Reset(flow, ControlledLevel(k));
+  }
   old_x_ = x_;
   initial_volume_m3_ = Volume();
   boundary_ = CurrentBoundaryFlows();
@@ -107,6 +119,30 @@ void SaintVenantCanal::BuildSteadyState() {
   }
   upstream_value_ = canal_.upstream.type == UpstreamBoundary::Type::kFlow ? canal_.upstream.flow_m3s
                                                                           : UpstreamDepth(0);
+}
+
+double SaintVenantCanal::ControlledLevel(int k) const {
+  const BoundControl& c = controls_.at(k);
+  return c.level_downstream ? DownstreamDepth(c.level_pool) : UpstreamDepth(c.level_pool);
+}
+
+void SaintVenantCanal::RunLevelControls() {
+  for (int k = 0; k < num_level_controls(); ++k) {
+    BoundControl& c = controls_[k];
+    // Sample instants are compared with a tolerance so that k Ts is not missed by rounding.
+    const double eps = 1e-9 * (1.0 + time_s_);
+    const double ts = c.pid.config().sample_time_s;
+    if (time_s_ + eps >= static_cast<double>(c.next_sample) * ts) {
+      c.pid.Update(ControlledLevel(k));
+      c.next_sample = static_cast<long>(std::floor((time_s_ + eps) / ts)) + 1;
+    }
+    // Held between samples, and it overrides any setting written to the pump from outside.
+    if (c.actuator_pool < 0) {
+      upstream_value_ = c.pid.output_m3s();
+    } else {
+      structure_setting_[c.actuator_pool] = c.pid.output_m3s();
+    }
+  }
 }
 
 double SaintVenantCanal::StructureFlow(int pool) const {
@@ -253,6 +289,7 @@ void SaintVenantCanal::Step(double dt_s) {
     throw std::invalid_argument("SaintVenantCanal::Step: dt_s " + std::to_string(dt_s) +
                                 " must be > 0");
   }
+  RunLevelControls();
   old_x_ = x_;
   bool converged = false;
   int it = 0;

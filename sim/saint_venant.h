@@ -6,6 +6,7 @@
 
 #include "sim/canal.h"
 #include "sim/hydraulics.h"
+#include "sim/level_pid.h"
 
 namespace canalid::sim {
 
@@ -32,6 +33,10 @@ struct MassBalance {
 /// last pool its structure law against the tailwater.
 /// Construction starts from the steady state for `canal.upstream.flow_m3s` and the pools'
 /// target depths (SteadyProfile), with the structure settings that hold it where asked.
+/// The canal's level controls (LevelControl) run inside Step: at each of their sample instants
+/// (t = 0, Ts, 2 Ts, ..., taken at the first step starting at or after it) they read the held
+/// depth and set their pump's flow, which then holds until the next sample; they start bumpless
+/// from the steady flow.
 /// Not thread-safe.  Allocates only in the constructor.
 class SaintVenantCanal final {
  public:
@@ -70,6 +75,11 @@ class SaintVenantCanal final {
   double PoolVolume(int pool) const;
   double Volume() const;
   const MassBalance& mass_balance() const { return mass_; }
+  int num_level_controls() const { return static_cast<int>(controls_.size()); }
+  const LevelPid& level_control(int k) const { return controls_.at(k).pid; }
+  /// Depth (m) the control `k` holds, now.
+  double ControlledLevel(int k) const;
+  void SetLevelSetpoint(int k, double setpoint_m) { controls_.at(k).pid.SetSetpoint(setpoint_m); }
   int last_iterations() const { return last_iterations_; }
 
  private:
@@ -83,6 +93,15 @@ class SaintVenantCanal final {
   void Assemble(const Eigen::VectorXd& old_x, double dt_s);
   void Add(int row, int col, double value);
   double TailLevel(int pool) const;
+  void RunLevelControls();
+
+  struct BoundControl {
+    LevelPid pid;
+    int level_pool = 0;
+    bool level_downstream = true;
+    int actuator_pool = -1;  // -1: the upstream inflow
+    long next_sample = 0;    // index of the next sample instant
+  };
 
   Canal canal_;
   std::vector<TrapezoidSection> sections_;
@@ -106,6 +125,7 @@ class SaintVenantCanal final {
   double initial_volume_m3_ = 0.0;
   MassBalance mass_;
   BoundaryFlows boundary_;
+  std::vector<BoundControl> controls_;
 };
 
 }  // namespace canalid::sim

@@ -136,6 +136,12 @@ Scenario LoadScenario(const std::string& path, const Canal& full) {
     inflow -= OfftakeFlow(p.offtake, p.offtake.setting, p.target_depth_m);
   }
   if (i0 > 0) sc.canal.upstream.type = UpstreamBoundary::Type::kFlow;
+  // Level loops come along only when both their level and their pump are simulated.
+  std::erase_if(sc.canal.level_controls, [&](const LevelControl& c) {
+    const bool pump_in =
+        c.actuator_pool.empty() ? i0 == 0 : FindPool(sc.canal, c.actuator_pool) >= 0;
+    return !pump_in || FindPool(sc.canal, c.level_pool) < 0;
+  });
   sc.canal.upstream.flow_m3s = reader.Number(root, "inflow_m3s", "", inflow, 0.0, 1e5);
   sc.canal.max_dx_m = reader.Number(root, "max_dx_m", "", full.max_dx_m, 0.01, 1e4);
   sc.canal.theta = reader.Number(root, "theta", "", full.theta, 0.5000001, 1.0);
@@ -187,12 +193,25 @@ Scenario LoadScenario(const std::string& path, const Canal& full) {
       Event e;
       e.time_s = reader.Number(*t, "time_s", where, std::nullopt, 0.0, 1e9);
       const std::string target = reader.String(*t, "target", where, std::nullopt);
-      if (!ParseInput(sc.canal, target, &e.input)) {
+      const bool parsed = ParseInput(sc.canal, target, &e.input);
+      if (!parsed) {
         reader.Problem(t->get("target") != nullptr ? t->get("target")->source() : t->source(),
                        "'" + where + ".target' = \"" + target +
                            "\" must be \"inflow\", \"pool<name>.structure\" or "
                            "\"pool<name>.offtake\" with a simulated pool (" +
                            PoolNames(sc.canal) + ")");
+      }
+      for (const LevelControl& c : sc.canal.level_controls) {
+        if (!parsed) break;
+        const bool owned = c.actuator_pool.empty()
+                               ? e.input.kind == InputRef::Kind::kUpstream
+                               : e.input.kind == InputRef::Kind::kStructure &&
+                                     sc.canal.pools[e.input.pool].name == c.actuator_pool;
+        if (owned) {
+          reader.Problem(t->source(), "'" + where + ".target' = \"" + target +
+                                          "\" is the pump of level control " + c.name +
+                                          ", which sets it");
+        }
       }
       const std::string kind =
           reader.Choice(*t, "kind", where, std::nullopt, {"set", "step", "prbs"});
