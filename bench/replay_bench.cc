@@ -11,11 +11,13 @@
 #include <canalid/sample_t.hpp>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "daemon/canalid/replay_session.h"
+#include "daemon/config/config_loader.h"
 #include "drivers/lcm/log_messages.h"
 
 namespace {
@@ -88,12 +90,23 @@ std::string MakeLog(std::int64_t samples) {
   return path.string();
 }
 
+// range(1): the online bank's longest delay, s (the config's is 1400 s: 24 delays of 60 s);
+// another value replays with the config changed to it (--config).
 void BM_ReplayThroughput(benchmark::State& state) {
   const std::string log = MakeLog(state.range(0));
+  std::optional<canalid::core::DaemonConfig> config;
+  if (state.range(1) != 1400) {
+    std::string text =
+        ReadText(std::string(CANALID_BENCH_SOURCE_DIR) + "/config/canalidd-asce2.toml");
+    const std::string key = "max_delay_s = 1400.0";
+    text.replace(text.find(key), key.size(), "max_delay_s = " + std::to_string(state.range(1)));
+    config = canalid::daemon::ParseDaemonConfig(text, "bench");
+  }
   std::int64_t samples = 0;
   for (auto _ : state) {
     canalid::cli::ReplaySessionOptions options;
     options.log_path = log;
+    options.config = config;
     canalid::cli::ReplaySession session(
         options, [](const canalid::cli::ReplayModel&) {}, [](const std::string&) {});
     const canalid::drivers::LogScanResult result =
@@ -104,7 +117,11 @@ void BM_ReplayThroughput(benchmark::State& state) {
   state.counters["samples_per_s"] =
       benchmark::Counter(static_cast<double>(samples), benchmark::Counter::kIsRate);
 }
-BENCHMARK(BM_ReplayThroughput)->Arg(200000)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_ReplayThroughput)
+    ->Args({200000, 1400})
+    ->Args({200000, 600})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 // Reading and decoding alone (a visitor that does nothing).
 void BM_ReadAndDecode(benchmark::State& state) {
