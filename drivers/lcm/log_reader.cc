@@ -65,7 +65,8 @@ bool LogReader::Fail(LogEnd end, std::string problem) {
 bool LogReader::Next(LogEvent* event) {
   if (end_ != LogEnd::kReading) return false;
   const std::uint64_t start = position_;
-  const std::string at = "byte " + std::to_string(start) + ": ";
+  // Built only for a message: Next() runs once per event and does not allocate.
+  auto at = [start] { return "byte " + std::to_string(start) + ": "; };
   std::array<std::uint8_t, kHeaderBytes> header{};
   const std::size_t got = std::fread(header.data(), 1, header.size(), file_);
   if (got == 0 && std::feof(file_)) {
@@ -75,12 +76,12 @@ bool LogReader::Next(LogEvent* event) {
   if (got >= 4) {
     const auto sync = static_cast<std::uint32_t>(BigEndian(header.data(), 4));
     if (sync != kSyncWord) {
-      return Fail(LogEnd::kCorrupt, at + "not an LCM event (sync word " + Hex(sync) +
+      return Fail(LogEnd::kCorrupt, at() + "not an LCM event (sync word " + Hex(sync) +
                                         ", expected " + Hex(kSyncWord) + ")");
     }
   }
   if (got < header.size()) {
-    return Fail(LogEnd::kTruncated, at + "the log ends inside an event header (" +
+    return Fail(LogEnd::kTruncated, at() + "the log ends inside an event header (" +
                                         std::to_string(got) + " of " +
                                         std::to_string(header.size()) + " bytes)");
   }
@@ -89,19 +90,19 @@ bool LogReader::Next(LogEvent* event) {
   const auto channel_length = static_cast<std::int32_t>(BigEndian(header.data() + 20, 4));
   const auto data_length = static_cast<std::int32_t>(BigEndian(header.data() + 24, 4));
   if (channel_length <= 0 || channel_length > kMaxChannelLength) {
-    return Fail(LogEnd::kCorrupt, at + "event " + std::to_string(event_number) +
+    return Fail(LogEnd::kCorrupt, at() + "event " + std::to_string(event_number) +
                                       ": impossible channel length " +
                                       std::to_string(channel_length) + " (allowed 1.." +
                                       std::to_string(kMaxChannelLength) + ")");
   }
   if (data_length < 0) {
-    return Fail(LogEnd::kCorrupt, at + "event " + std::to_string(event_number) +
+    return Fail(LogEnd::kCorrupt, at() + "event " + std::to_string(event_number) +
                                       ": negative data length " + std::to_string(data_length));
   }
   const std::uint64_t body =
       static_cast<std::uint64_t>(channel_length) + static_cast<std::uint64_t>(data_length);
   if (start + header.size() + body > size_) {
-    return Fail(LogEnd::kTruncated, at + "event " + std::to_string(event_number) + " needs " +
+    return Fail(LogEnd::kTruncated, at() + "event " + std::to_string(event_number) + " needs " +
                                         std::to_string(header.size() + body) +
                                         " bytes, the log ends at byte " + std::to_string(size_));
   }
@@ -109,7 +110,7 @@ bool LogReader::Next(LogEvent* event) {
   data_.resize(static_cast<std::size_t>(data_length));
   if (std::fread(channel_.data(), 1, channel_.size(), file_) != channel_.size() ||
       std::fread(data_.data(), 1, data_.size(), file_) != data_.size()) {
-    return Fail(LogEnd::kTruncated, at + "event " + std::to_string(event_number) +
+    return Fail(LogEnd::kTruncated, at() + "event " + std::to_string(event_number) +
                                         ": read failed: " + std::strerror(errno));
   }
   position_ = start + header.size() + body;
