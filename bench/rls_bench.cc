@@ -105,8 +105,8 @@ BENCHMARK_TEMPLATE(BM_IvRlsUpdate, 4);
 // Arg 0: the daemon's default (3 parameters, least squares); 1: with the wave-front term, as
 // `canalid identify --online --closed-loop off`; 2: closed loop, IvRls<4> (`--closed-loop on`);
 // 3: auto during its decision window (both banks); 4: the three-step method (`--closed-loop
-// three-step`: the ls-4 bank for the delay plus one OnlineThreeStep per candidate, IV-RLS<8> for F
-// and Rls<7> for the level).
+// three-step`: the IvRls<4> bank for the delay plus one OnlineThreeStep per candidate, Rls<8> for
+// F, its simulation and Rls<7> for the level).
 void BM_IdBank64(benchmark::State& state) {
   OnlineIdOptions options;
   options.sample_time_s = 60.0;
@@ -138,7 +138,7 @@ void BM_IdBank64(benchmark::State& state) {
   }
   static const char* const kLabels[] = {"ls-3", "ls-4(wave front)", "iv-4(closed loop)",
                                         "auto window(ls-4 + iv-4)",
-                                        "three-step(ls-4 + ivrls-8 + rls-7)"};
+                                        "three-step(iv-4 + rls-8 + rls-7)"};
   state.SetLabel(kLabels[variant]);
 }
 BENCHMARK(BM_IdBank64)->Arg(0)->Arg(1)->Arg(2)->Arg(3)->Arg(4);
