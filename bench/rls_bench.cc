@@ -104,7 +104,9 @@ BENCHMARK_TEMPLATE(BM_IvRlsUpdate, 4);
 // One sample through a bank of 64 ID candidates (nk = 0..63), lambda 0.99 with re-centring.
 // Arg 0: the daemon's default (3 parameters, least squares); 1: with the wave-front term, as
 // `canalid identify --online --closed-loop off`; 2: closed loop, IvRls<4> (`--closed-loop on`);
-// 3: auto during its decision window (both banks).
+// 3: auto during its decision window (both banks); 4: the three-step method (`--closed-loop
+// three-step`: the IvRls<4> bank for the delay plus one OnlineThreeStep per candidate, Rls<8> for
+// F, its simulation and Rls<7> for the level).
 void BM_IdBank64(benchmark::State& state) {
   OnlineIdOptions options;
   options.sample_time_s = 60.0;
@@ -114,6 +116,7 @@ void BM_IdBank64(benchmark::State& state) {
   options.wave_front_term = variant >= 1;
   options.closed_loop = variant == 2   ? ClosedLoopMode::kOn
                         : variant == 3 ? ClosedLoopMode::kAuto
+                        : variant == 4 ? ClosedLoopMode::kThreeStep
                                        : ClosedLoopMode::kOff;
   options.closed_loop_window_samples = 1000000000;
   OnlineIdBank bank(options);
@@ -134,10 +137,11 @@ void BM_IdBank64(benchmark::State& state) {
     k = (k + 1) & (kPool - 1);
   }
   static const char* const kLabels[] = {"ls-3", "ls-4(wave front)", "iv-4(closed loop)",
-                                        "auto window(ls-4 + iv-4)"};
+                                        "auto window(ls-4 + iv-4)",
+                                        "three-step(iv-4 + rls-8 + rls-7)"};
   state.SetLabel(kLabels[variant]);
 }
-BENCHMARK(BM_IdBank64)->Arg(0)->Arg(1)->Arg(2)->Arg(3);
+BENCHMARK(BM_IdBank64)->Arg(0)->Arg(1)->Arg(2)->Arg(3)->Arg(4);
 
 // One sample through 8 fractional estimators (alpha grid 0.5..1.4, GL memory L = 200).
 void BM_FractionalBank8(benchmark::State& state) {

@@ -69,6 +69,8 @@ class SensitivityModel {
   }
 
   double simulation_error() const { return simulation_error_; }
+  int order() const { return order_; }
+  const Eigen::VectorXd& theta() const { return theta_; }
 
   /// Noise-free total flow from the inflow alone, from a zero initial state.
   Eigen::VectorXd Simulate() const { return Simulate(-1); }
@@ -118,6 +120,8 @@ class SensitivityModel {
 struct TotalFlowModel {
   Eigen::VectorXd flow;            // noise-free total flow from the inflow, from rest
   Eigen::MatrixXd free_responses;  // homogeneous solutions (unknown initial state)
+  int order = 0;                   // 0: no usable model, the measured flow is used
+  Eigen::VectorXd theta;
 };
 
 TotalFlowModel NoiseFreeTotalFlow(const Eigen::VectorXd& delayed_inflow_d,
@@ -132,8 +136,8 @@ TotalFlowModel NoiseFreeTotalFlow(const Eigen::VectorXd& delayed_inflow_d,
   }
   // Order 1 cannot fail to be stable unless the data are degenerate; fall back to the measured
   // flow.
-  if (!best) return {total_flow_d, Eigen::MatrixXd(total_flow_d.size(), 0)};
-  return {best->Simulate(), best->FreeResponses()};
+  if (!best) return {total_flow_d, Eigen::MatrixXd(total_flow_d.size(), 0), 0, {}};
+  return {best->Simulate(), best->FreeResponses(), best->order(), best->theta()};
 }
 
 // Least squares on [Q, q_in(k-nk), 1, k] with the wave-front gain p21 >= 0 (a jump *up* when the
@@ -279,6 +283,7 @@ IdFitResult FitIdModel(const Eigen::Ref<const Eigen::VectorXd>& q_in,
   const bool outflow_moves = StandardDeviation(q_out.tail(n - k0)) > 0.02 * StandardDeviation(q_in);
   switch (options.closed_loop) {
     case ClosedLoopMode::kOn:
+    case ClosedLoopMode::kThreeStep:
       result.closed_loop = true;
       result.closed_loop_reason = "requested";
       break;
@@ -317,6 +322,8 @@ IdFitResult FitIdModel(const Eigen::Ref<const Eigen::VectorXd>& q_in,
     const TotalFlowModel flow_model =
         NoiseFreeTotalFlow(Detrended(delayed_inflow), Detrended(total_flow));
     const Eigen::Index free = flow_model.free_responses.cols();
+    result.sensitivity_order = flow_model.order;
+    result.sensitivity_theta = flow_model.theta;
     x.resize(n - k0, 3 + free);
     x.col(0) = CumulativeSum(flow_model.flow);
     for (Eigen::Index i = 0; i < free; ++i)

@@ -17,7 +17,9 @@ struct IdModel {
   double area_m2() const { return sample_time_s / b; }
 };
 
-enum class ClosedLoopMode { kAuto, kOn, kOff };
+/// kThreeStep: the batch FitIdModel treats it as kOn (its closed-loop method is the three-step
+/// one); OnlineIdBank runs OnlineThreeStep instead of its instrumental-variable bank.
+enum class ClosedLoopMode { kAuto, kOn, kOff, kThreeStep };
 
 struct IdFitOptions {
   int min_nk = 0;
@@ -35,9 +37,14 @@ struct IdFitResult {
   bool closed_loop = false;               ///< true: the three-step closed-loop method was used
   std::string closed_loop_reason;         ///< why (option, or the correlation found by kAuto)
   double outflow_level_correlation = 0.0;
-  Eigen::VectorXd loss_by_nk;       ///< mean squared residual of the scan, index nk - min_nk
-  double open_loop_area_m2 = 0.0;   ///< the plain fit at the chosen nk
-  double iv_area_m2 = 0.0;          ///< instrumental-variable cross-check (instrument: inflow)
+  Eigen::VectorXd loss_by_nk;      ///< mean squared residual of the scan, index nk - min_nk
+  double open_loop_area_m2 = 0.0;  ///< the plain fit at the chosen nk
+  double iv_area_m2 = 0.0;         ///< instrumental-variable cross-check (instrument: inflow)
+  /// Closed loop: the sensitivity model of step (2), order m (1..4, 0 when not fitted) and
+  /// theta = [a_1..a_m, b_0..b_{m-1}] of t(k) = -sum a_i t(k-i) + sum b_j (u(k-j) - u(k-m)),
+  /// u the detrended delayed inflow and t the detrended total flow over samples k0..N-1.
+  int sensitivity_order = 0;
+  Eigen::VectorXd sensitivity_theta;
   FitMetrics metrics;               ///< simulated level against measured, samples k0..N-1
   Eigen::VectorXd simulated_level;  ///< samples k0..N-1
   std::vector<std::string> warnings;

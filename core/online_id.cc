@@ -36,6 +36,7 @@ void OnlineIdOptions::Validate() const {
   }
   rls.Validate(wave_front_term ? 4 : 3);
   selector.Validate();
+  if (closed_loop == ClosedLoopMode::kThreeStep) three_step.Validate();
 }
 
 OnlineIdBank::OnlineIdBank(const OnlineIdOptions& options)
@@ -46,9 +47,12 @@ OnlineIdBank::OnlineIdBank(const OnlineIdOptions& options)
       q_in_history_(options.max_delay_samples + 1) {
   const int n = options_.max_delay_samples - options_.min_delay_samples + 1;
   const auto un = static_cast<std::size_t>(n);
-  ls_active_ = options_.closed_loop != ClosedLoopMode::kOn;
+  three_step_active_ = options_.closed_loop == ClosedLoopMode::kThreeStep;
+  // kThreeStep runs the IV bank for its delay choice (OnlineIdOptions::closed_loop).
+  ls_active_ =
+      options_.closed_loop == ClosedLoopMode::kOff || options_.closed_loop == ClosedLoopMode::kAuto;
   iv_active_ = options_.closed_loop != ClosedLoopMode::kOff;
-  health_.closed_loop = options_.closed_loop == ClosedLoopMode::kOn;
+  health_.closed_loop = options_.closed_loop == ClosedLoopMode::kOn || three_step_active_;
   health_.closed_loop_decided = options_.closed_loop != ClosedLoopMode::kAuto;
   if (ls_active_ && options_.wave_front_term) wave_estimators_.assign(un, Rls<4>(options_.rls));
   if (ls_active_ && !options_.wave_front_term) estimators_.assign(un, Rls<3>(options_.rls));
@@ -66,6 +70,15 @@ OnlineIdBank::OnlineIdBank(const OnlineIdOptions& options)
     recentre_period_ = options_.recentre_samples;
   } else if (options_.recentre_samples == 0 && lambda < 1.0) {
     recentre_period_ = static_cast<int>(std::ceil(1.0 / (1.0 - lambda)));
+  }
+  if (three_step_active_) {
+    ThreeStepOptions t = options_.three_step;
+    t.regression = options_.rls;
+    t.regression.lower.resize(0);
+    t.regression.upper.resize(0);
+    t.sensitivity.forgetting = lambda;
+    t.recentre_samples = recentre_period_;
+    three_step_.assign(un, OnlineThreeStep(t));
   }
 }
 
@@ -99,8 +112,16 @@ bool OnlineIdBank::Update(double q_in_m3s, double q_out_m3s, double level_m) {
     }
     const bool level_ok = Good(level_m, options_.level_abs_max_m);
     if (!level_ok) ++health_.bad_level_samples;
+    const double y_fit = level_m + options_.outflow_direct_gain_s_per_m2 * q_out_good_;
+    if (three_step_active_) {
+      // Runs on bad levels too: its flow integrators must stay continuous.
+      for (int i = 0; i < num_candidates(); ++i) {
+        const double u = q_in_history_[options_.min_delay_samples + i];
+        three_step_[static_cast<std::size_t>(i)].Update(u, u - q_out_previous_, y_fit, level_ok);
+      }
+    }
     if (level_ok) {
-      const double y = level_m + options_.outflow_direct_gain_s_per_m2 * q_out_good_;
+      const double y = y_fit;
       if (ls_active_ && options_.wave_front_term) UpdateCandidates(wave_estimators_, t, y);
       if (ls_active_ && !options_.wave_front_term) UpdateCandidates(estimators_, t, y);
       if (iv_active_ && options_.wave_front_term) UpdateIvCandidates(iv_wave_estimators_, t, y);
@@ -221,7 +242,9 @@ IdSnapshot OnlineIdBank::CandidateSnapshot(int delay_samples) const {
   s.sample = k_;
   s.delay_samples = delay_samples;
   s.delay_s = delay_samples * options_.sample_time_s;
-  if (health_.closed_loop) {
+  if (three_step_active_) {
+    FillThreeStepSnapshot(three_step_[ui], s);
+  } else if (health_.closed_loop) {
     if (options_.wave_front_term) {
       FillSnapshot<4>(iv_wave_estimators_[ui], ui, s);
     } else {
@@ -234,6 +257,21 @@ IdSnapshot OnlineIdBank::CandidateSnapshot(int delay_samples) const {
   }
   s.loss = reported_selector().loss(i);
   return s;
+}
+
+void OnlineIdBank::FillThreeStepSnapshot(const OnlineThreeStep& t, IdSnapshot& s) const {
+  const auto& rls = t.regression();
+  s.valid = rls.health().updates > 0;
+  s.b = t.b();
+  s.wave_front_gain_s_per_m2 = 0.0;
+  s.c_m = t.c_m();
+  s.d_m = t.d_m();
+  s.area_m2 = options_.sample_time_s / s.b;
+  t.StandardDeviations(s.b_std, s.c_std_m, s.d_std_m);
+  s.area_std_m2 = options_.sample_time_s * s.b_std / (s.b * s.b);
+  s.prediction_error_m = rls.last_prediction_error();
+  s.innovation_std_m = std::sqrt(rls.innovation_variance());
+  s.health = rls.health();
 }
 
 template <int N, typename Estimator>

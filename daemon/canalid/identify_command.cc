@@ -80,10 +80,11 @@ void AddIdentifyModelOptions(CLI::App& cmd, IdentifyOptions& options) {
       ->check(CLI::PositiveNumber);
   id->add_option("--closed-loop", options.closed_loop,
                  "auto: decide from the data; on: three-step method (--online: instrumental-"
-                 "variable RLS, instrument the integrated delayed inflow); off: plain fit "
+                 "variable RLS, instrument the integrated delayed inflow); three-step: the "
+                 "three-step method (--online: recursive, per candidate delay); off: plain fit "
                  "(--online: RLS).  --online auto runs both over the first 200 samples after the "
                  "longest delay (all of them if fewer), then keeps the one the batch test picks")
-      ->check(CLI::IsMember({"auto", "on", "off"}))
+      ->check(CLI::IsMember({"auto", "on", "three-step", "off"}))
       ->capture_default_str();
   id->add_option("--p22", options.p22,
                  "--online: IDZ direct outflow gain p22, s/m2 (from the geometry, e.g. Litrico & "

@@ -135,9 +135,11 @@ nlohmann::json OnlineId(const IdentifyOptions& options, const drivers::CsvTable&
   id.rls = ParseRlsOptions(options, 4);
   // The batch flag: on = instrumental-variable RLS, off = least squares, auto = both over the
   // first samples, then FitIdModel's closed-loop test picks one (core::OnlineIdOptions).
-  id.closed_loop = options.closed_loop == "on"    ? core::ClosedLoopMode::kOn
-                   : options.closed_loop == "off" ? core::ClosedLoopMode::kOff
-                                                  : core::ClosedLoopMode::kAuto;
+  // three-step = the recursive three-step method (core::OnlineThreeStep).
+  id.closed_loop = options.closed_loop == "on"           ? core::ClosedLoopMode::kOn
+                   : options.closed_loop == "off"        ? core::ClosedLoopMode::kOff
+                   : options.closed_loop == "three-step" ? core::ClosedLoopMode::kThreeStep
+                                                         : core::ClosedLoopMode::kAuto;
   id.outflow_direct_gain_s_per_m2 = options.p22;
   // p21 >= 0 as in the batch fit: a negative wave-front gain lets Q_(nk-1) - b q_in(k-nk+1) mimic
   // Q_nk, so the delay would be ambiguous by one sample.
@@ -198,7 +200,7 @@ nlohmann::json OnlineId(const IdentifyOptions& options, const drivers::CsvTable&
   health["dropped_samples"] = bank_health.dropped_samples;
   health["switches"] = bank_health.switches;
   health["candidates"] = bank->num_candidates();
-  std::string reason = options.closed_loop == "on" ? "requested" : "disabled";
+  std::string reason = options.closed_loop == "off" ? "disabled" : "requested";
   if (id.closed_loop == core::ClosedLoopMode::kAuto) {
     reason = !bank_health.closed_loop_decided
                  ? "undecided: fewer than " + std::to_string(id.closed_loop_window_samples) +
@@ -225,7 +227,9 @@ nlohmann::json OnlineId(const IdentifyOptions& options, const drivers::CsvTable&
           {"area_std_m2", s.area_std_m2},
           {"prediction_error_m", s.prediction_error_m},
           {"innovation_std_m", s.innovation_std_m},
-          {"estimator", bank_health.closed_loop ? "online-iv" : "online-" + options.method},
+          {"estimator", id.closed_loop == core::ClosedLoopMode::kThreeStep ? "online-three-step"
+                        : bank_health.closed_loop                          ? "online-iv"
+                                                  : "online-" + options.method},
           {"forgetting", options.forgetting},
           {"health", health},
           {"preprocessing", {{"level_outliers_replaced", outliers.count}}},

@@ -154,6 +154,33 @@ TEST(OnlineAllocation, ClosedLoopIdBankUpdateAndSnapshotNeverAllocate) {
   EXPECT_TRUE(bank.health().closed_loop_decided);
 }
 
+// The three-step variant: step (2), the simulation, step (3) with re-centring, a bad flow and a
+// bad level, and the snapshots (covariance of step (3)) on every sample.
+TEST(OnlineAllocation, ThreeStepIdBankUpdateAndSnapshotNeverAllocate) {
+  testdata::PoolSpec spec;
+  spec.samples = 600;
+  const testdata::PoolData d = testdata::MakePool(spec);
+  OnlineIdOptions o;
+  o.sample_time_s = 60.0;
+  o.max_delay_samples = 20;
+  o.wave_front_term = true;
+  o.rls.forgetting = 0.99;
+  o.closed_loop = ClosedLoopMode::kThreeStep;
+  o.three_step.warmup_samples = 50;
+  OnlineIdBank bank(o);
+  const long before = g_allocations;
+  double sum = 0.0;
+  for (std::size_t k = 0; k < d.level.size(); ++k) {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    bank.Update(d.q_in[k], k == 300 ? nan : d.q_out[k], k == 400 ? nan : d.level[k]);
+    sum += bank.Snapshot().b;
+  }
+  const long allocations = g_allocations - before;
+  EXPECT_EQ(allocations, 0);
+  EXPECT_TRUE(std::isfinite(sum));
+  EXPECT_TRUE(bank.Snapshot().valid);
+}
+
 TEST(OnlineAllocation, ArxBankUpdateAndSnapshotNeverAllocate) {
   OnlineArxOptions o;
   o.na = 3;
