@@ -106,78 +106,61 @@ INSTANTIATE_TEST_SUITE_P(All, AllocationByMethod,
                                            RlsMethod::kConstantTrace, RlsMethod::kStabilised,
                                            RlsMethod::kKalman, RlsMethod::kNlms));
 
-TEST(OnlineAllocation, IdBankUpdateAndSnapshotNeverAllocate) {
+// Runs `bank` over 600 samples of a synthetic pool (a bad outflow at sample 300, a bad
+// level at `bad_level_sample` when >= 0), taking a snapshot after every update, and returns the
+// allocations made meanwhile.
+long IdBankAllocations(OnlineIdBank& bank, int bad_level_sample = -1) {
   testdata::PoolSpec spec;
   spec.samples = 600;
   const testdata::PoolData d = testdata::MakePool(spec);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const long before = g_allocations;
+  double sum = 0.0;
+  for (std::size_t k = 0; k < d.level.size(); ++k) {
+    const bool bad_level = static_cast<int>(k) == bad_level_sample;
+    bank.Update(d.q_in[k], k == 300 ? nan : d.q_out[k], bad_level ? nan : d.level[k]);
+    sum += bank.Snapshot().b;
+  }
+  const long allocations = g_allocations - before;
+  EXPECT_TRUE(std::isfinite(sum));
+  return allocations;
+}
+
+OnlineIdOptions IdBankOptions() {
   OnlineIdOptions o;
   o.sample_time_s = 60.0;
   o.max_delay_samples = 20;
   o.rls.forgetting = 0.99;  // re-centring every 100 samples is exercised too
+  return o;
+}
+
+TEST(OnlineAllocation, IdBankUpdateAndSnapshotNeverAllocate) {
+  const OnlineIdOptions o = IdBankOptions();
   OnlineIdBank bank(o);
-  const long before = g_allocations;
-  double sum = 0.0;
-  for (std::size_t k = 0; k < d.level.size(); ++k) {
-    bank.Update(d.q_in[k], k == 300 ? std::numeric_limits<double>::quiet_NaN() : d.q_out[k],
-                d.level[k]);
-    sum += bank.Snapshot().b;
-  }
-  const long allocations = g_allocations - before;
-  EXPECT_EQ(allocations, 0);
-  EXPECT_TRUE(std::isfinite(sum));
+  EXPECT_EQ(IdBankAllocations(bank), 0);
 }
 
 // The closed-loop variant: auto runs both banks through the decision, IV re-centring included.
 TEST(OnlineAllocation, ClosedLoopIdBankUpdateAndSnapshotNeverAllocate) {
-  testdata::PoolSpec spec;
-  spec.samples = 600;
-  const testdata::PoolData d = testdata::MakePool(spec);
-  OnlineIdOptions o;
-  o.sample_time_s = 60.0;
-  o.max_delay_samples = 20;
+  OnlineIdOptions o = IdBankOptions();
   o.wave_front_term = true;
-  o.rls.forgetting = 0.99;
   o.closed_loop = ClosedLoopMode::kAuto;
   o.closed_loop_window_samples = 250;
   o.outflow_direct_gain_s_per_m2 = 0.02;
   OnlineIdBank bank(o);
-  const long before = g_allocations;
-  double sum = 0.0;
-  for (std::size_t k = 0; k < d.level.size(); ++k) {
-    bank.Update(d.q_in[k], k == 300 ? std::numeric_limits<double>::quiet_NaN() : d.q_out[k],
-                d.level[k]);
-    sum += bank.Snapshot().b;
-  }
-  const long allocations = g_allocations - before;
-  EXPECT_EQ(allocations, 0);
-  EXPECT_TRUE(std::isfinite(sum));
+  EXPECT_EQ(IdBankAllocations(bank), 0);
   EXPECT_TRUE(bank.health().closed_loop_decided);
 }
 
 // The three-step variant: step (2), the simulation, step (3) with re-centring, a bad flow and a
 // bad level, and the snapshots (covariance of step (3)) on every sample.
 TEST(OnlineAllocation, ThreeStepIdBankUpdateAndSnapshotNeverAllocate) {
-  testdata::PoolSpec spec;
-  spec.samples = 600;
-  const testdata::PoolData d = testdata::MakePool(spec);
-  OnlineIdOptions o;
-  o.sample_time_s = 60.0;
-  o.max_delay_samples = 20;
+  OnlineIdOptions o = IdBankOptions();
   o.wave_front_term = true;
-  o.rls.forgetting = 0.99;
   o.closed_loop = ClosedLoopMode::kThreeStep;
   o.three_step.warmup_samples = 50;
   OnlineIdBank bank(o);
-  const long before = g_allocations;
-  double sum = 0.0;
-  for (std::size_t k = 0; k < d.level.size(); ++k) {
-    const double nan = std::numeric_limits<double>::quiet_NaN();
-    bank.Update(d.q_in[k], k == 300 ? nan : d.q_out[k], k == 400 ? nan : d.level[k]);
-    sum += bank.Snapshot().b;
-  }
-  const long allocations = g_allocations - before;
-  EXPECT_EQ(allocations, 0);
-  EXPECT_TRUE(std::isfinite(sum));
+  EXPECT_EQ(IdBankAllocations(bank, 400), 0);
   EXPECT_TRUE(bank.Snapshot().valid);
 }
 

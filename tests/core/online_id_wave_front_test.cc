@@ -11,37 +11,13 @@
 
 #include "core/id_model.h"
 #include "core/online_id.h"
+#include "pool_record.h"
 
 namespace canalid::core {
 namespace {
 
-struct Record {
-  double ts = 0.0;
-  Eigen::VectorXd q_in, q_out, level;
-};
-
-Record ReadRecord(const std::string& name) {
-  std::ifstream in(std::string(CANALID_SOURCE_DIR) + "/tests/data/sim/" + name);
-  std::string line;
-  std::getline(in, line);  // header
-  std::vector<double> t, qi, qo, y;
-  while (std::getline(in, line)) {
-    std::istringstream row(line);
-    double v[4];
-    char comma;
-    row >> v[0] >> comma >> v[1] >> comma >> v[2] >> comma >> v[3];
-    t.push_back(v[0]);
-    qi.push_back(v[1]);
-    qo.push_back(v[2]);
-    y.push_back(v[3]);
-  }
-  Record r;
-  r.ts = t.at(1) - t.at(0);
-  r.q_in = Eigen::Map<Eigen::VectorXd>(qi.data(), static_cast<Eigen::Index>(qi.size()));
-  r.q_out = Eigen::Map<Eigen::VectorXd>(qo.data(), static_cast<Eigen::Index>(qo.size()));
-  r.level = Eigen::Map<Eigen::VectorXd>(y.data(), static_cast<Eigen::Index>(y.size()));
-  return r;
-}
+using testdata::PoolRecord;
+using testdata::ReadPoolRecord;
 
 double Rel(double a, double b) { return std::abs(a - b) / std::abs(b); }
 
@@ -52,7 +28,7 @@ double Rel(double a, double b) { return std::abs(a - b) / std::abs(b); }
 // batch solution is the unconstrained one and the two must agree.
 TEST(OnlineIdWaveFront, ForgettingOneEqualsBatchOpenLoopFit) {
   for (const char* name : {"asce2-pool2-prbs.csv", "asce2-pool2-prbs-fixed-gate.csv"}) {
-    const Record r = ReadRecord(name);
+    const PoolRecord r = ReadPoolRecord(name);
     const int max_nk = 30;  // 1800 s, beyond the pool's 682 s delay
     IdFitOptions fit_options;
     fit_options.max_nk = max_nk;
@@ -88,7 +64,7 @@ TEST(OnlineIdWaveFront, ForgettingOneEqualsBatchOpenLoopFit) {
 
 // Re-centring with the wave-front term is still an exact re-parameterisation.
 TEST(OnlineIdWaveFront, RecentringDoesNotChangeTheFit) {
-  const Record r = ReadRecord("asce2-pool2-prbs.csv");
+  const PoolRecord r = ReadPoolRecord("asce2-pool2-prbs.csv");
   OnlineIdOptions a;
   a.sample_time_s = r.ts;
   a.min_delay_samples = 11;
