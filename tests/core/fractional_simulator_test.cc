@@ -44,7 +44,7 @@ struct ReferenceRow {
 };
 
 std::vector<ReferenceRow> ReadReference() {
-  std::ifstream file(std::string(CANALID_SHARED_DIR) + "/domain/reference/frac_step_reference.csv");
+  std::ifstream file(std::string(CANALID_REFERENCE_DIR) + "/frac_step_reference.csv");
   std::vector<ReferenceRow> rows;
   std::string line;
   std::getline(file, line);

@@ -66,7 +66,7 @@ TEST(MittagLefflerTest, CompletelyMonotoneBelowOrderOne) {
 }
 
 TEST(MittagLefflerTest, ReproducesTheReferenceStepResponses) {
-  std::ifstream file(std::string(CANALID_SHARED_DIR) + "/domain/reference/frac_step_reference.csv");
+  std::ifstream file(std::string(CANALID_REFERENCE_DIR) + "/frac_step_reference.csv");
   ASSERT_TRUE(file.good());
   std::string line;
   std::getline(file, line);

@@ -14,7 +14,7 @@ namespace canalid::sim {
 namespace {
 
 const std::string kSource = CANALID_SOURCE_DIR;
-const std::string kShared = CANALID_SHARED_DIR;
+const std::string kReference = CANALID_REFERENCE_DIR;
 
 TEST(SaintVenantCanal, FullCanal2StaysAtItsSteadyState) {
   const Canal canal = LoadCanal(kSource + "/config/sim/asce-canal2.toml");
@@ -185,7 +185,7 @@ struct IdzRow {
 };
 
 std::vector<IdzRow> ReadIdz() {
-  std::ifstream in(kShared + "/domain/reference/asce_idz_litrico_fromion_2004.csv");
+  std::ifstream in(kReference + "/asce_idz_litrico_fromion_2004.csv");
   std::string line;
   std::getline(in, line);
   std::vector<IdzRow> rows;
