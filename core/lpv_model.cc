@@ -99,8 +99,13 @@ LocalModelKind CommensurateKind(int q, int max_delay_samples,
   const int n = 2 * q;
   LocalModelKind kind;
   kind.name = "frac_ss_q" + std::to_string(q);
-  for (int i = 1; i <= n; ++i) kind.parameter_names.push_back("a" + std::to_string(i));
-  for (int i = 1; i < n; ++i) kind.parameter_names.push_back("c" + std::to_string(i));
+  // Appended, not `"a" + std::to_string(i)`: GCC 12 at -O3 reports a false -Wrestrict through
+  // libstdc++'s operator+(const char*, string&&) (GCC bug 105329).
+  const auto indexed = [](char prefix, int i) {
+    return std::string(1, prefix).append(std::to_string(i));
+  };
+  for (int i = 1; i <= n; ++i) kind.parameter_names.push_back(indexed('a', i));
+  for (int i = 1; i < n; ++i) kind.parameter_names.push_back(indexed('c', i));
   kind.parameter_names.push_back("nk");
   kind.fit = [q, n, max_delay_samples, options](const Eigen::VectorXd& u, const Eigen::VectorXd& y,
                                                 double ts) {
