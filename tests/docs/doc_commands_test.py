@@ -14,8 +14,9 @@ PROGRAMS (bare, as on PATH, or as build/.../NAME) or a scripts/ file. Three kind
 - transcripts: `$ COMMAND` lines of a plain block, run as examples; each output line the document
   shows after it that has no `...` and no decimal number (numbers may vary in the last digits)
   must appear in the command's stdout or stderr (whitespace-normalised).
-- synopses: lines of a plain block with `[`, `|` or `...`: the program and subcommand must exist,
-  and every option the line names must appear in that program's (subcommand's) --help.
+- synopses: lines of a plain block with `[`, `|` or `...`, and `code spans` of the prose that
+  start with a program and name an option: the program and subcommand must exist, and every
+  option the line names must appear in that program's (subcommand's) --help.
 
 Where commands run: a fresh directory per document holding copies of the repository's config/
 and tests/data/ and links build -> BUILD and scripts -> SRC/scripts, so the documents' relative
@@ -222,6 +223,23 @@ def commands_of(doc, path):
     return commands, others
 
 
+def inline_commands(doc, path):
+    """Synopses of the prose: `code spans` outside fences that start with a program and name an
+    option (`canalid identify --online --closed-loop off`)."""
+    commands, fenced = [], False
+    with open(path, encoding="utf-8") as f:
+        for number, text in enumerate(f, 1):
+            if text.lstrip().startswith("```"):
+                fenced = not fenced
+                continue
+            for span in [] if fenced else re.findall(r"`([^`]+)`", text):
+                words = span.split()
+                if (words and program_of(words[0]) and not words[0].startswith("scripts/")
+                        and options_of(span)):
+                    commands.append(Command(doc, number, span.strip(), "synopsis"))
+    return commands
+
+
 class Programs:
     def __init__(self, build_dir):
         self.build_dir = build_dir
@@ -400,6 +418,7 @@ def main():
             if args.only and doc != args.only:
                 continue
             commands, others = commands_of(doc, os.path.join(source_dir, doc))
+            commands += inline_commands(doc, os.path.join(source_dir, doc))
             installed, problems = installed_paths(source_dir, build_dir, others)
             for p in problems:
                 failures.append(p)
