@@ -106,6 +106,30 @@ TEST_F(CommandAuthenticatorTest, RejectsForgedAndAlteredCommands) {
   EXPECT_TRUE(auth_.last_counters().empty());
 }
 
+TEST_F(CommandAuthenticatorTest, RefusesATagDifferingInOneByte) {
+  auto c = Make(key_, 1);
+  for (std::size_t i : {std::size_t{0}, c.mac.size() - 1}) {
+    SignedCommand altered = c;
+    altered.mac[i] ^= 0x01;
+    EXPECT_EQ(auth_.Verify(altered.Get(), kNowUs), CommandVerdict::kBadMac) << "byte " << i;
+  }
+  // The untouched command is still accepted: the refusals were the altered bytes.
+  EXPECT_EQ(auth_.Verify(c.Get(), kNowUs), CommandVerdict::kAccepted);
+}
+
+TEST_F(CommandAuthenticatorTest, RefusesATagOfTheWrongLength) {
+  auto c = Make(key_, 1);
+  // One byte short (a right prefix) and one byte more (the right tag, then a byte).
+  CommandFields f = c.Get();
+  f.mac = std::span<const uint8_t>(c.mac.data(), c.mac.size() - 1);
+  EXPECT_EQ(auth_.Verify(f, kNowUs), CommandVerdict::kMalformed);
+  std::vector<uint8_t> longer(c.mac.begin(), c.mac.end());
+  longer.push_back(0);
+  f.mac = longer;
+  EXPECT_EQ(auth_.Verify(f, kNowUs), CommandVerdict::kMalformed);
+  EXPECT_TRUE(auth_.last_counters().empty());
+}
+
 TEST_F(CommandAuthenticatorTest, ForgeriesDoNotBurnCounters) {
   auto forged = Make(Key("attacker"), 1'000'000);
   EXPECT_EQ(auth_.Verify(forged.Get(), kNowUs), CommandVerdict::kBadMac);
