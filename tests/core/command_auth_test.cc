@@ -62,6 +62,14 @@ TEST(CanonicalCommandBytes, MatchesTheDocumentedLayout) {
   CanonicalCommandBytes(f, out);
   EXPECT_EQ(out, expected);
   EXPECT_EQ(SignCommand(Key("k"), f), HmacSha256::Mac(Key("k"), expected));
+  // The tag itself, as Python's hmac.new(b"k", expected, hashlib.sha256) and the hand-written
+  // HMAC this project had before OpenSSL both give it: the wire format does not depend on the
+  // library that computes the MAC.
+  const Sha256Digest tag = SignCommand(Key("k"), f);
+  const Sha256Digest known = {0x4a, 0x4b, 0x1b, 0x98, 0x2f, 0x33, 0xc7, 0x77, 0x8e, 0xaa, 0x5e,
+                              0x27, 0x89, 0x4e, 0x47, 0x68, 0x97, 0x00, 0x73, 0x4a, 0x0a, 0xb7,
+                              0x32, 0x4a, 0xf3, 0xaf, 0x44, 0xea, 0xe3, 0x14, 0xd0, 0xd5};
+  EXPECT_EQ(tag, known);
 }
 
 TEST(CanonicalCommandBytes, LengthPrefixesSeparateFields) {
