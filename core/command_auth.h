@@ -6,7 +6,7 @@
 #include <string_view>
 #include <vector>
 
-#include "core/sha256.h"
+#include "core/hmac.h"
 
 namespace canalid::core {
 
@@ -44,6 +44,7 @@ inline constexpr std::size_t kMaxCommandArgumentBytes = 1024;
 void CanonicalCommandBytes(const CommandFields& fields, std::vector<uint8_t>& out);
 
 /// HMAC-SHA256 of CanonicalCommandBytes(fields) under `key`.
+/// @throws std::runtime_error when OpenSSL fails (HmacSha256::Mac).
 Sha256Digest SignCommand(std::span<const uint8_t> key, const CommandFields& fields);
 
 /// Outcome of verifying one command; every one is counted by the receiver.
@@ -80,6 +81,7 @@ class CommandAuthenticator final {
   ///   option or an empty key while enabled.
   CommandAuthenticator(const CommandAuthOptions& options, std::vector<uint8_t> key);
 
+  /// @throws std::runtime_error when OpenSSL fails to compute the MAC (HmacSha256::Mac).
   CommandVerdict Verify(const CommandFields& fields, int64_t now_us);
 
   /// Last accepted counter of each sender (to persist across restarts).

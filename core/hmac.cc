@@ -1,49 +1,58 @@
 #include "core/hmac.h"
 
-#include <algorithm>
+#include <openssl/crypto.h>
+#include <openssl/err.h>
+#include <openssl/evp.h>
+#include <openssl/hmac.h>
+
+#include <climits>
+#include <stdexcept>
+#include <string>
 
 namespace canalid::core {
+namespace {
 
-HmacSha256::HmacSha256(std::span<const uint8_t> key) {
-  std::array<uint8_t, Sha256::kBlockBytes> k0{};
-  if (key.size() > Sha256::kBlockBytes) {
-    const Sha256Digest hashed = Sha256::Hash(key);
-    std::copy(hashed.begin(), hashed.end(), k0.begin());
-  } else {
-    std::copy(key.begin(), key.end(), k0.begin());
+// "<what> failed: <each entry of OpenSSL's error queue>", emptying the queue.
+std::string OpenSslFailure(const std::string& what) {
+  std::string message = what + " failed";
+  int entries = 0;
+  for (unsigned long code = ERR_get_error(); code != 0; code = ERR_get_error()) {
+    char text[256];
+    ERR_error_string_n(code, text, sizeof text);
+    message += entries++ == 0 ? ": " : "; ";
+    message += text;
   }
-  for (std::size_t i = 0; i < k0.size(); ++i) {
-    inner_pad_[i] = static_cast<uint8_t>(k0[i] ^ 0x36);
-    outer_pad_[i] = static_cast<uint8_t>(k0[i] ^ 0x5c);
-  }
-  inner_.Update(inner_pad_);
+  if (entries == 0) message += " (OpenSSL queued no error)";
+  return message;
 }
 
-Sha256Digest HmacSha256::Finish() {
-  const Sha256Digest inner_digest = inner_.Finish();
-  Sha256 outer;
-  outer.Update(outer_pad_);
-  outer.Update(inner_digest);
-  inner_.Reset();
-  inner_.Update(inner_pad_);
-  return outer.Finish();
-}
+}  // namespace
 
 Sha256Digest HmacSha256::Mac(std::span<const uint8_t> key, std::span<const uint8_t> message) {
-  HmacSha256 hmac(key);
-  hmac.Update(message);
-  return hmac.Finish();
+  if (key.size() > static_cast<std::size_t>(INT_MAX)) {
+    throw std::invalid_argument("HMAC-SHA256 key of " + std::to_string(key.size()) +
+                                " bytes is longer than OpenSSL accepts (INT_MAX)");
+  }
+  // An empty span may have a null data(); give OpenSSL a valid pointer with length 0 instead, so
+  // the empty key never depends on how OpenSSL treats a null key.
+  static constexpr unsigned char kNoKey = 0;
+  const unsigned char* key_bytes = key.empty() ? &kNoKey : key.data();
+  Sha256Digest tag{};
+  unsigned int tag_bytes = 0;
+  if (HMAC(EVP_sha256(), key_bytes, static_cast<int>(key.size()), message.data(), message.size(),
+           tag.data(), &tag_bytes) == nullptr) {
+    throw std::runtime_error(OpenSslFailure("HMAC-SHA256 (OpenSSL HMAC)"));
+  }
+  if (tag_bytes != tag.size()) {
+    throw std::runtime_error("HMAC-SHA256 (OpenSSL HMAC) gave " + std::to_string(tag_bytes) +
+                             " bytes instead of " + std::to_string(tag.size()));
+  }
+  return tag;
 }
 
 bool ConstantTimeEqual(std::span<const uint8_t> a, std::span<const uint8_t> b) {
   if (a.size() != b.size()) return false;
-  // Accumulate every difference instead of returning at the first one; volatile keeps the
-  // compiler from turning the loop back into an early exit.
-  volatile uint8_t difference = 0;
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    difference = static_cast<uint8_t>(difference | (a[i] ^ b[i]));
-  }
-  return difference == 0;
+  return CRYPTO_memcmp(a.data(), b.data(), a.size()) == 0;
 }
 
 }  // namespace canalid::core

@@ -1,36 +1,31 @@
 #pragma once
+#include <array>
 #include <cstdint>
 #include <span>
 
-#include "core/sha256.h"
-
 namespace canalid::core {
 
-/// HMAC-SHA256 (RFC 2104 with SHA-256, B = 64, L = 32):
-///   HMAC(K, m) = H((K0 ^ opad) || H((K0 ^ ipad) || m)),  ipad = 0x36..., opad = 0x5c...,
-/// where K0 is K padded with zeros to 64 bytes, or H(K) padded when K is longer than 64 bytes.
-/// Incremental like Sha256; pure, never allocates. The key may be empty (RFC 2104 allows it;
-/// callers decide their own minimum).
+/// An HMAC-SHA256 tag: 32 bytes (the SHA-256 digest size).
+using Sha256Digest = std::array<uint8_t, 32>;
+
+/// HMAC-SHA256 (RFC 2104 with SHA-256) and the constant-time tag compare, both from OpenSSL's
+/// libcrypto; this file only gives them the project's names and turns OpenSSL's failures into
+/// exceptions. The RFC 4231 vectors are in tests/core/hmac_test.cc.
 class HmacSha256 final {
  public:
-  explicit HmacSha256(std::span<const uint8_t> key);
-  void Update(std::span<const uint8_t> data) { inner_.Update(data); }
-  /// The MAC of everything given to Update since construction or the last Finish; the object is
-  /// ready for a new message with the same key afterwards.
-  Sha256Digest Finish();
+  HmacSha256() = delete;
 
-  /// The MAC of `message` under `key` in one call.
+  /// The MAC of `message` under `key`. The key may be empty (RFC 2104 allows it; callers decide
+  /// their own minimum); a key longer than 64 bytes is hashed first, as RFC 2104 says.
+  /// Thread-safe. @throws std::invalid_argument when the key is longer than INT_MAX bytes;
+  ///   std::runtime_error with OpenSSL's error queue when OpenSSL fails.
   static Sha256Digest Mac(std::span<const uint8_t> key, std::span<const uint8_t> message);
-
- private:
-  std::array<uint8_t, Sha256::kBlockBytes> inner_pad_;  // K0 ^ ipad
-  std::array<uint8_t, Sha256::kBlockBytes> outer_pad_;  // K0 ^ opad
-  Sha256 inner_;
 };
 
-/// True when a and b have the same length and bytes. The time taken depends only on the
-/// lengths, never on where the first difference is, so a MAC check does not leak how many
-/// leading bytes of a forgery were right.
+/// True when a and b have the same length and bytes. The lengths are compared first (a tag's
+/// length is no secret); the bytes with OpenSSL's CRYPTO_memcmp, whose time depends only on the
+/// length, never on where the first difference is, so a MAC check does not leak how many leading
+/// bytes of a forgery were right.
 bool ConstantTimeEqual(std::span<const uint8_t> a, std::span<const uint8_t> b);
 
 }  // namespace canalid::core

@@ -61,7 +61,8 @@ void CommandReceiver::Receive(std::span<const uint8_t> data) noexcept {
       }
     }
   } catch (...) {
-    // A throwing clock or callback (an accepted command is already counted as accepted).
+    // A throwing clock, callback or MAC computation (an accepted command is already counted as
+    // accepted).
     ++callback_failures_;
     return;
   }

@@ -22,8 +22,9 @@ struct AcceptedCommand {
 /// Receives canalid.command_t on one channel of a Bus, verifies each message with a
 /// core::CommandAuthenticator against the daemon clock `now_us()`, counts every verdict (bytes
 /// that do not decode as command_t count as malformed) and calls `on_accepted` for accepted ones.
-/// Never throws from the bus handler: an exception from `on_accepted` or the clock is caught and
-/// counted in callback_failures(). Runs on the Bus's thread; not thread-safe.
+/// Never throws from the bus handler: an exception from `on_accepted`, the clock or the MAC
+/// computation (an OpenSSL failure) is caught and counted in callback_failures(). Runs on the
+/// Bus's thread; not thread-safe.
 class CommandReceiver final {
  public:
   using Clock = std::function<int64_t()>;

@@ -62,6 +62,14 @@ TEST(CanonicalCommandBytes, MatchesTheDocumentedLayout) {
   CanonicalCommandBytes(f, out);
   EXPECT_EQ(out, expected);
   EXPECT_EQ(SignCommand(Key("k"), f), HmacSha256::Mac(Key("k"), expected));
+  // The tag itself, as Python's hmac.new(b"k", expected, hashlib.sha256) and the hand-written
+  // HMAC this project had before OpenSSL both give it: the wire format does not depend on the
+  // library that computes the MAC.
+  const Sha256Digest tag = SignCommand(Key("k"), f);
+  const Sha256Digest known = {0x4a, 0x4b, 0x1b, 0x98, 0x2f, 0x33, 0xc7, 0x77, 0x8e, 0xaa, 0x5e,
+                              0x27, 0x89, 0x4e, 0x47, 0x68, 0x97, 0x00, 0x73, 0x4a, 0x0a, 0xb7,
+                              0x32, 0x4a, 0xf3, 0xaf, 0x44, 0xea, 0xe3, 0x14, 0xd0, 0xd5};
+  EXPECT_EQ(tag, known);
 }
 
 TEST(CanonicalCommandBytes, LengthPrefixesSeparateFields) {
@@ -103,6 +111,30 @@ TEST_F(CommandAuthenticatorTest, RejectsForgedAndAlteredCommands) {
   f.mac = flipped;
   EXPECT_EQ(auth_.Verify(f, kNowUs), CommandVerdict::kBadMac);
   // Nothing above was accepted, so no counter was recorded.
+  EXPECT_TRUE(auth_.last_counters().empty());
+}
+
+TEST_F(CommandAuthenticatorTest, RefusesATagDifferingInOneByte) {
+  auto c = Make(key_, 1);
+  for (std::size_t i : {std::size_t{0}, c.mac.size() - 1}) {
+    SignedCommand altered = c;
+    altered.mac[i] ^= 0x01;
+    EXPECT_EQ(auth_.Verify(altered.Get(), kNowUs), CommandVerdict::kBadMac) << "byte " << i;
+  }
+  // The untouched command is still accepted: the refusals were the altered bytes.
+  EXPECT_EQ(auth_.Verify(c.Get(), kNowUs), CommandVerdict::kAccepted);
+}
+
+TEST_F(CommandAuthenticatorTest, RefusesATagOfTheWrongLength) {
+  auto c = Make(key_, 1);
+  // One byte short (a right prefix) and one byte more (the right tag, then a byte).
+  CommandFields f = c.Get();
+  f.mac = std::span<const uint8_t>(c.mac.data(), c.mac.size() - 1);
+  EXPECT_EQ(auth_.Verify(f, kNowUs), CommandVerdict::kMalformed);
+  std::vector<uint8_t> longer(c.mac.begin(), c.mac.end());
+  longer.push_back(0);
+  f.mac = longer;
+  EXPECT_EQ(auth_.Verify(f, kNowUs), CommandVerdict::kMalformed);
   EXPECT_TRUE(auth_.last_counters().empty());
 }
 
