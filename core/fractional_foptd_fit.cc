@@ -28,9 +28,9 @@ class UnitResponse {
   const Eigen::VectorXd& Simulate(double time_constant_s, double alpha, double delay_s) {
     ++count_;
     const FractionalFoptdParams p{1.0, time_constant_s, alpha, delay_s};
-    OustaloupOptions band = DefaultOustaloupOptions(p, ts_, du_.size() * ts_);
-    band.sections_per_decade = spd_;
-    OustaloupFoptdSimulator sim(p, ts_, band);
+    FractionalFoptdFitOptions density;
+    density.sections_per_decade = spd_;
+    OustaloupFoptdSimulator sim(p, ts_, FitOustaloupBand(p, ts_, du_.size(), density));
     for (Eigen::Index k = 0; k < du_.size(); ++k) {
       y_(k) = sim.output();
       sim.Advance(du_(k));
@@ -230,6 +230,14 @@ FractionalFoptdFitResult FitFractionalFoptd(const Eigen::Ref<const Eigen::Vector
   result.metrics = ComputeMetrics(output, result.simulated, ts);
   result.simulations = unit.count();
   return result;
+}
+
+OustaloupOptions FitOustaloupBand(const FractionalFoptdParams& params, double sample_time_s,
+                                  Eigen::Index samples, const FractionalFoptdFitOptions& options) {
+  OustaloupOptions band =
+      DefaultOustaloupOptions(params, sample_time_s, static_cast<double>(samples) * sample_time_s);
+  band.sections_per_decade = options.sections_per_decade;
+  return band;
 }
 
 }  // namespace canalid::core

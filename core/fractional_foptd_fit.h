@@ -2,6 +2,7 @@
 #include <Eigen/Core>
 
 #include "core/fractional_foptd.h"
+#include "core/fractional_simulator.h"
 #include "core/metrics.h"
 
 namespace canalid::core {
@@ -57,5 +58,14 @@ FractionalFoptdFitResult FitFractionalFoptd(const Eigen::Ref<const Eigen::Vector
                                             const Eigen::Ref<const Eigen::VectorXd>& output,
                                             double sample_time_s,
                                             const FractionalFoptdFitOptions& options = {});
+
+/// The Oustaloup band the fit simulates `params` with on a record of `samples` at
+/// `sample_time_s`: DefaultOustaloupOptions over the record's length (samples x Ts; 0 samples
+/// gives its 1000 Ts floor) at `options.sections_per_decade`.  `canalid identify` records it in
+/// the model JSON; `canalid simulate` uses it for a model written without one.
+/// @throws std::invalid_argument on invalid params or sample_time_s <= 0.
+OustaloupOptions FitOustaloupBand(const FractionalFoptdParams& params, double sample_time_s,
+                                  Eigen::Index samples,
+                                  const FractionalFoptdFitOptions& options = {});
 
 }  // namespace canalid::core

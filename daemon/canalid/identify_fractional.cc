@@ -27,9 +27,7 @@ nlohmann::json FitFractionalFoptd(const IdentifyOptions& options, const Eigen::V
   const core::FractionalFoptdFitResult result = core::FitFractionalFoptd(u, y, ts, fit);
   // The band the fit simulated with (it depends on T, alpha and the record length), recorded so
   // that `canalid simulate` reproduces the fitted output exactly.
-  core::OustaloupOptions band =
-      core::DefaultOustaloupOptions(result.params, ts, static_cast<double>(u.size()) * ts);
-  band.sections_per_decade = fit.sections_per_decade;
+  const core::OustaloupOptions band = core::FitOustaloupBand(result.params, ts, u.size(), fit);
   nlohmann::json json = drivers::ToJson(result, band);
   json["alpha_fixed"] = options.alpha > 0.0;
   return json;

@@ -71,9 +71,13 @@ void AddSimulateCommand(CLI::App& app, SimulateOptions& options, int& exit_code)
       "arx its inputs (and its output, for the initial values, when present); foptd, soptd,\n"
       "frac-foptd, frac-ss u; lpv u and its schedule column (arx locals).\n"
       "Process and fractional models start at steady state at the record's first input value.\n"
+      "Optional keys default as in docs/model-json.md: offsets 0, discrete models at the record's\n"
+      "sample time, frac-foptd's Oustaloup band as identify would choose it for this record.\n"
       "Output: OUT.csv with time_s and y; on stdout a JSON line with the rows written and, when\n"
       "the measured output column is in the input, the metrics. Exit 2 on bad input.");
-  cmd->add_option("--model-json", options.model_json, "Model JSON written by canalid identify")
+  cmd->add_option("--model-json", options.model_json,
+                  "Model JSON written by canalid identify, or by hand with the required keys of "
+                  "docs/model-json.md")
       ->required();
   cmd->add_option("--input", options.input, "CSV file: header row, time_s first, uniform sampling")
       ->required();

@@ -41,8 +41,13 @@ void RequireSampleTime(const drivers::CsvTable& table, double model_ts, const st
 
 SimulatedOutput SimulateId(const nlohmann::json& model, const std::string& source,
                            const drivers::CsvTable& table, const SimulateOptions& options) {
-  const drivers::IdModelRecord r = drivers::IdModelFromJson(model, source);
-  RequireSampleTime(table, r.model.sample_time_s, source);
+  drivers::IdModelRecord r = drivers::IdModelFromJson(model, source);
+  // A model written without its sample time is taken at the record's.
+  if (r.model.sample_time_s > 0.0) {
+    RequireSampleTime(table, r.model.sample_time_s, source);
+  } else {
+    r.model.sample_time_s = table.sample_time_s();
+  }
   const auto names = InputNames(model, source, options, {"q_in", "q_out"});
   const Eigen::VectorXd q_in = RequireColumn(table, names[0]);
   const Eigen::VectorXd q_out = RequireColumn(table, names[1]);
@@ -130,7 +135,8 @@ SimulatedOutput SimulateContinuous(const std::string& kind, const nlohmann::json
     const drivers::FractionalFoptdRecord r = drivers::FractionalFoptdFromJson(model, source);
     const Deviations d = FromFirstInput(table, u, r.params.input_offset);
     const double level = r.params.output_offset + r.params.model.gain * d.start_offset;
-    core::OustaloupFoptdSimulator sim(r.params.model, ts, r.band);
+    // Without a recorded band: the one the fit would have used on this record.
+    core::OustaloupFoptdSimulator sim(r.params.model, ts, r.Band(ts, d.du.size()));
     out.y.resize(d.du.size());
     for (Eigen::Index k = 0; k < d.du.size(); ++k) {
       out.y(k) = sim.output() + level;
@@ -143,7 +149,7 @@ SimulatedOutput SimulateContinuous(const std::string& kind, const nlohmann::json
 SimulatedOutput SimulateFracSs(const nlohmann::json& model, const std::string& source,
                                const drivers::CsvTable& table, const SimulateOptions& options) {
   const drivers::CommensurateRecord r = drivers::CommensurateFromJson(model, source);
-  RequireSampleTime(table, r.sample_time_s, source);
+  if (r.sample_time_s > 0.0) RequireSampleTime(table, r.sample_time_s, source);
   const std::string u = InputNames(model, source, options, {"u"})[0];
   const Deviations d = FromFirstInput(table, u, r.model.input_offset);
   SimulatedOutput out;

@@ -1,5 +1,6 @@
 // canalidd: the identification daemon beside a PLC.  Wiring only: configuration, drivers, loop.
 #include <CLI/CLI.hpp>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <sstream>
@@ -45,20 +46,35 @@ std::optional<canalid::daemon::DaemonPlan> LoadPlan(const std::string& path,
   return std::nullopt;
 }
 
+// The same file named twice (also through another spelling of its path) is not a conflict.
+bool SameFile(const std::string& a, const std::string& b) {
+  if (a == b) return true;
+  std::error_code error;
+  const bool same = std::filesystem::equivalent(a, b, error);
+  return !error && same;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{
       "canalidd: identification daemon for canal pools, beside a PLC (Modbus) on an LCM bus"};
   std::string config_path;
-  bool check_only = false;
+  std::string check_path;
   app.add_option("-c,--config", config_path,
-                 "Configuration file (TOML, see config/canalidd.example.toml)")
-      ->required();
-  app.add_flag("--check-config", check_only,
-               "Validate the configuration, print every problem, and exit (0 or 78)");
+                 "Configuration file (TOML, see config/canalidd.example.toml); runs the daemon")
+      ->type_name("FILE");
+  // Zero or one value: `--check-config FILE` (the documented form) or `--config FILE
+  // --check-config` (the older one); an argument starting with '-' is never taken as the file.
+  CLI::Option* check =
+      app.add_option("--check-config", check_path,
+                     "Validate FILE (or the --config file when FILE is left out), print every "
+                     "problem, and exit 0 (valid) or 78: canalidd --check-config FILE")
+          ->type_name("[FILE]")
+          ->expected(0, 1);
   app.set_version_flag("--version", "canalidd 0.1.0");
   app.footer(
+      "Run: canalidd --config FILE.  Validate only: canalidd --check-config FILE.\n"
       "Signals: SIGTERM/SIGINT stop experiments, restore nominal setpoints and exit 0; SIGHUP "
       "reloads\n"
       "the configuration when it is valid. Exit 78: configuration error. Docs: "
@@ -67,6 +83,20 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : kExitConfig;
+  }
+  const bool check_only = check->count() > 0;
+  if (!check_path.empty()) {
+    if (!config_path.empty() && !SameFile(config_path, check_path)) {
+      std::cerr << "canalidd: --config " << config_path << " and --check-config " << check_path
+                << " name different files; validate one: canalidd --check-config FILE\n";
+      return kExitConfig;
+    }
+    config_path = check_path;
+  }
+  if (config_path.empty()) {
+    std::cerr << "canalidd: no configuration file: run with --config FILE, validate with "
+                 "--check-config FILE (--help)\n";
+    return kExitConfig;
   }
 
   canalid::core::LogLevel level = canalid::core::LogLevel::kInfo;

@@ -1,6 +1,9 @@
 #include "drivers/json/model_json_read.h"
 
 #include <cmath>
+#include <optional>
+
+#include "core/fractional_foptd_fit.h"
 
 namespace canalid::drivers {
 namespace {
@@ -25,6 +28,12 @@ double Number(const json& j, const std::string& key, const std::string& source) 
   const double x = v.get<double>();
   if (!std::isfinite(x)) Fail(source, key, "not finite");
   return x;
+}
+
+// An optional number: `fallback` when the key is absent, else checked as Number.
+double NumberOr(const json& j, const std::string& key, const std::string& source, double fallback) {
+  if (!j.is_object() || !j.contains(key)) return fallback;
+  return Number(j, key, source);
 }
 
 double Positive(const json& j, const std::string& key, const std::string& source) {
@@ -83,10 +92,23 @@ void ExpectKind(const json& j, const std::string& kind, const std::string& sourc
   if (found != kind) Fail(source, "model", "'" + found + "', expected '" + kind + "'");
 }
 
+// Optional: the model in deviations from 0 when the offsets are left out.
 template <class Model>
 void ReadOffsets(const json& j, const std::string& source, OffsetModelRecord<Model>& record) {
-  record.input_offset = Number(j, "input_offset", source);
-  record.output_offset = Number(j, "output_offset", source);
+  record.input_offset = NumberOr(j, "input_offset", source, 0.0);
+  record.output_offset = NumberOr(j, "output_offset", source, 0.0);
+}
+
+// An optional sample time: 0 when absent (the caller takes its record's), else > 0.
+double SampleTimeOrZero(const json& j, const std::string& source) {
+  if (!j.is_object() || !j.contains("sample_time_s")) return 0.0;
+  return Positive(j, "sample_time_s", source);
+}
+
+std::optional<double> OptionalPositive(const json& j, const std::string& key,
+                                       const std::string& source) {
+  if (!j.contains(key)) return std::nullopt;
+  return Positive(j, key, source);
 }
 
 }  // namespace
@@ -114,18 +136,21 @@ IdModelRecord IdModelFromJson(const json& j, const std::string& source) {
   IdModelRecord r;
   r.model.b = Number(j, "b", source);
   r.model.nk = Integer(j, "nk", source, 0);
-  r.model.sample_time_s = Positive(j, "sample_time_s", source);
-  r.p21_s_per_m2 = Number(j, "p21_s_per_m2", source);
-  r.offset_m = Number(j, "offset_m", source);
-  r.drift_m_per_s = Number(j, "drift_m_per_s", source);
-  r.fit_from_sample = Integer(j, "fit_from_sample", source, 0);
+  r.model.sample_time_s = SampleTimeOrZero(j, source);
+  r.p21_s_per_m2 = NumberOr(j, "p21_s_per_m2", source, 0.0);
+  r.offset_m = NumberOr(j, "offset_m", source, 0.0);
+  r.drift_m_per_s = NumberOr(j, "drift_m_per_s", source, 0.0);
+  r.fit_from_sample =
+      j.contains("fit_from_sample") ? Integer(j, "fit_from_sample", source, 0) : r.model.nk + 1;
   if (r.fit_from_sample < r.model.nk + 1) {
     Fail(source, "fit_from_sample",
          std::to_string(r.fit_from_sample) + " must be > nk = " + std::to_string(r.model.nk));
   }
-  const json& closed = Get(j, "closed_loop", source);
-  if (!closed.is_boolean()) Fail(source, "closed_loop", "not true or false: " + closed.dump());
-  r.closed_loop = closed.get<bool>();
+  if (j.contains("closed_loop")) {
+    const json& closed = j.at("closed_loop");
+    if (!closed.is_boolean()) Fail(source, "closed_loop", "not true or false: " + closed.dump());
+    r.closed_loop = closed.get<bool>();
+  }
   return r;
 }
 
@@ -155,7 +180,8 @@ core::ArxModel ArxModelFromJson(const json& j, const std::string& source) {
     }
     m.b.push_back(Vector(bi));
   }
-  m.first_sample = Integer(j, "fit_from_sample", source, 0);
+  m.first_sample = j.contains("fit_from_sample") ? Integer(j, "fit_from_sample", source, 0)
+                                                 : m.orders.min_first_sample();
   return m;
 }
 
@@ -194,11 +220,15 @@ FractionalFoptdRecord FractionalFoptdFromJson(const json& j, const std::string& 
   if (!(p.alpha < 2.0)) Fail(source, "alpha", std::to_string(p.alpha) + " must be < 2");
   p.delay_s = NonNegative(j, "delay_s", source);
   ReadOffsets(j, source, r.params);
-  const json& band = Get(j, "oustaloup", source);
-  r.band.low_frequency_rad_s = Positive(band, "low_frequency_rad_s", source + ": oustaloup");
-  r.band.high_frequency_rad_s = Positive(band, "high_frequency_rad_s", source + ": oustaloup");
-  r.band.sections_per_decade = Positive(band, "sections_per_decade", source + ": oustaloup");
-  if (!(r.band.high_frequency_rad_s > r.band.low_frequency_rad_s)) {
+  if (!j.contains("oustaloup")) return r;
+  const json& band = j.at("oustaloup");
+  if (!band.is_object()) Fail(source, "oustaloup", "not an object: " + band.dump());
+  const std::string where = source + ": oustaloup";
+  r.low_frequency_rad_s = OptionalPositive(band, "low_frequency_rad_s", where);
+  r.high_frequency_rad_s = OptionalPositive(band, "high_frequency_rad_s", where);
+  r.sections_per_decade = OptionalPositive(band, "sections_per_decade", where);
+  if (r.low_frequency_rad_s && r.high_frequency_rad_s &&
+      !(*r.high_frequency_rad_s > *r.low_frequency_rad_s)) {
     Fail(source, "oustaloup", "high_frequency_rad_s must exceed low_frequency_rad_s");
   }
   return r;
@@ -243,8 +273,8 @@ CommensurateRecord CommensurateFromJson(const json& j, const std::string& source
   }
   m.c = Vector(c).tail(n - 1);
   m.delay_samples = Integer(j, "delay_samples", source, 0);
-  r.sample_time_s = Positive(j, "sample_time_s", source);
-  r.memory_length = Integer(j, "memory_length", source, 0);
+  r.sample_time_s = SampleTimeOrZero(j, source);
+  r.memory_length = j.contains("memory_length") ? Integer(j, "memory_length", source, 0) : 0;
   ReadOffsets(j, source, r.model);
   return r;
 }
@@ -265,22 +295,34 @@ LpvRecord LpvFromJson(const json& j, const std::string& source) {
   const json& names = Get(j, "parameters", source);
   if (!names.is_array() || names.empty()) Fail(source, "parameters", "needs a list of names");
   const json& coefficients = Get(j, "coefficients", source);
+  if (!coefficients.is_object()) {
+    Fail(source, "coefficients", "not an object (parameter name -> list): " + coefficients.dump());
+  }
   r.model.coefficients.resize(static_cast<Eigen::Index>(names.size()), r.model.degree + 1);
   for (std::size_t i = 0; i < names.size(); ++i) {
     if (!names[i].is_string()) Fail(source, "parameters", "not a list of names");
     const std::string name = names[i].get<std::string>();
     r.model.parameter_names.push_back(name);
     const std::string key = "coefficients." + name;
-    if (!coefficients.is_object() || !coefficients.contains(name)) Fail(source, key, "missing");
+    if (!coefficients.contains(name)) Fail(source, key, "missing");
     const std::vector<double> p = NumberList(coefficients.at(name), key, source);
     if (p.size() != static_cast<std::size_t>(r.model.degree + 1)) {
       Fail(source, key, "needs degree + 1 = " + std::to_string(r.model.degree + 1) + " values");
     }
     r.model.coefficients.row(static_cast<Eigen::Index>(i)) = Vector(p).transpose();
   }
-  r.input_offset = Number(j, "input_offset", source);
-  r.output_offset = Number(j, "output_offset", source);
+  r.input_offset = NumberOr(j, "input_offset", source, 0.0);
+  r.output_offset = NumberOr(j, "output_offset", source, 0.0);
   return r;
+}
+
+core::OustaloupOptions FractionalFoptdRecord::Band(double sample_time_s,
+                                                   Eigen::Index samples) const {
+  core::OustaloupOptions band = core::FitOustaloupBand(params.model, sample_time_s, samples);
+  if (low_frequency_rad_s) band.low_frequency_rad_s = *low_frequency_rad_s;
+  if (high_frequency_rad_s) band.high_frequency_rad_s = *high_frequency_rad_s;
+  if (sections_per_decade) band.sections_per_decade = *sections_per_decade;
+  return band;
 }
 
 }  // namespace canalid::drivers

@@ -82,8 +82,13 @@ std::unique_ptr<SampledPlant> PlantFromModelJson(
   RequireInitialInputs(initial_inputs, source);
   const std::string kind = drivers::ModelKind(json, source);
   if (kind == "id") {
-    const drivers::IdModelRecord r = drivers::IdModelFromJson(json, source);
-    RequireSampleTime(r.model.sample_time_s, sample_time_s, source);
+    drivers::IdModelRecord r = drivers::IdModelFromJson(json, source);
+    // A model written without its sample time runs at the plant's.
+    if (r.model.sample_time_s > 0.0) {
+      RequireSampleTime(r.model.sample_time_s, sample_time_s, source);
+    } else {
+      r.model.sample_time_s = sample_time_s;
+    }
     return std::make_unique<IdLevelPlant>(r.model, r.p21_s_per_m2, r.offset_m,
                                           r.drift_m_per_s * r.model.sample_time_s,
                                           r.fit_from_sample, initial_inputs(0));
@@ -106,9 +111,11 @@ std::unique_ptr<SampledPlant> PlantFromModelJson(
   }
   if (kind == "frac-foptd") {
     const drivers::FractionalFoptdRecord r = drivers::FractionalFoptdFromJson(json, source);
-    return std::make_unique<FractionalFoptdPlant>(r.params.model, r.band, sample_time_s,
-                                                  r.params.input_offset, r.params.output_offset,
-                                                  initial_inputs(0));
+    // A run has no length known in advance: without a recorded band, the fit's band for a
+    // record of 1000 samples (FractionalFoptdRecord::Band's floor).
+    return std::make_unique<FractionalFoptdPlant>(r.params.model, r.Band(sample_time_s, 0),
+                                                  sample_time_s, r.params.input_offset,
+                                                  r.params.output_offset, initial_inputs(0));
   }
   if (kind == "soptd") {
     const auto r = drivers::SoptdFromJson(json, source);
@@ -117,7 +124,7 @@ std::unique_ptr<SampledPlant> PlantFromModelJson(
   }
   if (kind == "frac-ss") {
     const drivers::CommensurateRecord r = drivers::CommensurateFromJson(json, source);
-    RequireSampleTime(r.sample_time_s, sample_time_s, source);
+    if (r.sample_time_s > 0.0) RequireSampleTime(r.sample_time_s, sample_time_s, source);
     return std::make_unique<CommensuratePlant>(r.model.model, r.memory_length, sample_time_s,
                                                r.model.input_offset, r.model.output_offset,
                                                initial_inputs(0));

@@ -13,10 +13,13 @@ inline constexpr const char* kModelPlantKinds = "id, arx, foptd, soptd, frac-fop
 
 /// The plant of a `canalid identify` model JSON (read with drivers/json/model_json_read.h), with
 /// the conventions of `canalid simulate`, so the two give the same output on the same input:
-/// - "id": IdLevelPlant, inputs (q_in, q_out), the model's own sample time; `initial_inputs(0)`
+/// - "id": IdLevelPlant, inputs (q_in, q_out), the model's own sample time (the plant's when the
+///   model has none); `initial_inputs(0)`
 ///   is the inflow before sample 0.
 /// - "foptd": FractionalFoptdPlant with alpha = 1 (exact ZOH first order); "frac-foptd": with
-///   the model's alpha and recorded Oustaloup band; "soptd": SoptdPlant (exact ZOH second order,
+///   the model's alpha and recorded Oustaloup band (without one: the fit's band for 1000
+///   samples, as the run's length is not known; `canalid simulate` uses its record's length,
+///   so the two agree only when the band is recorded); "soptd": SoptdPlant (exact ZOH second order,
 ///   sub-sample delay).  One input; `initial_inputs(0)` = u[0], the input the plant rests at
 ///   when it starts (y = output_offset + K (u[0] - input_offset) + G(s) (u - u[0])).
 /// - "frac-ss": CommensuratePlant with the record's memory_length (0 = full memory, whose cost

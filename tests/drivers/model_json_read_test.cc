@@ -4,8 +4,12 @@
 
 #include <gtest/gtest.h>
 
+#include <map>
 #include <string>
+#include <utility>
+#include <vector>
 
+#include "core/fractional_foptd_fit.h"
 #include "drivers/json/model_json.h"
 
 namespace canalid::drivers {
@@ -36,9 +40,11 @@ TEST(ModelJsonReadTest, FractionalFoptdRoundTrip) {
   EXPECT_EQ(r.params.model.delay_s, 4.05);
   EXPECT_EQ(r.params.input_offset, 20.0);
   EXPECT_EQ(r.params.output_offset, 60.5);
-  EXPECT_EQ(r.band.low_frequency_rad_s, 1e-5);
-  EXPECT_EQ(r.band.high_frequency_rad_s, 333.0);
-  EXPECT_EQ(r.band.sections_per_decade, 2.0);
+  // The recorded band wins over the fit's choice for any record.
+  const core::OustaloupOptions read = r.Band(0.15, 2400);
+  EXPECT_EQ(read.low_frequency_rad_s, 1e-5);
+  EXPECT_EQ(read.high_frequency_rad_s, 333.0);
+  EXPECT_EQ(read.sections_per_decade, 2.0);
 
   nlohmann::json bad = json;
   bad.erase("gain");
@@ -144,6 +150,130 @@ TEST(ModelJsonReadTest, LpvArxIdAndProcessModelsRoundTrip) {
   EXPECT_EQ(s.output_offset, 7.0);
   ExpectError([&] { SoptdFromJson(nlohmann::json::array(), "s.json"); },
               "s.json: key 'model': the model is not a JSON object");
+}
+
+// The minimal forms of docs/model-json.md: the keys that define each model, nothing else.
+nlohmann::json Minimal(const std::string& kind) {
+  using nlohmann::json;
+  if (kind == "id") return json{{"model", "id"}, {"b", 0.00176}, {"nk", 11}};
+  if (kind == "arx") {
+    return json{{"model", "arx"}, {"na", 2},          {"nb", {2, 1}},
+                {"nk", {1, 2}},   {"a", {-1.5, 0.7}}, {"b_coeffs", {{1.0, 0.5}, {0.3}}}};
+  }
+  if (kind == "foptd") {
+    return json{{"model", "foptd"}, {"gain", 0.4}, {"time_constant_s", 12.0}, {"delay_s", 2.5}};
+  }
+  if (kind == "soptd") {
+    return json{
+        {"model", "soptd"}, {"gain", 0.4}, {"time_constants_s", {12.0, 3.0}}, {"delay_s", 2.5}};
+  }
+  if (kind == "frac-foptd") {
+    return json{{"model", "frac-foptd"},
+                {"gain", 0.372},
+                {"time_constant_s", 10.975},
+                {"alpha", 0.8},
+                {"delay_s", 0.0}};
+  }
+  if (kind == "frac-ss") {
+    return json{{"model", "frac-ss"}, {"q", 1},          {"A", {{0.0, 1.0}, {-0.5, -1.5}}},
+                {"B", {0.0, 0.5}},    {"C", {1.0, 0.2}}, {"delay_samples", 3}};
+  }
+  return json{{"model", "lpv"},
+              {"kind", "first_order_arx"},
+              {"local_model", "arx"},
+              {"schedule", "theta"},
+              {"degree", 0},
+              {"parameters", {"a1", "b1", "nk"}},
+              {"coefficients", {{"a1", {-0.7}}, {"b1", {0.1}}, {"nk", {3.0}}}}};
+}
+
+// Reads `json` with the reader of its kind (the result is dropped: only errors matter here).
+void Read(const nlohmann::json& json, const std::string& kind) {
+  if (kind == "id") IdModelFromJson(json, "m.json");
+  if (kind == "arx") ArxModelFromJson(json, "m.json");
+  if (kind == "foptd") FoptdFromJson(json, "m.json");
+  if (kind == "soptd") SoptdFromJson(json, "m.json");
+  if (kind == "frac-foptd") FractionalFoptdFromJson(json, "m.json");
+  if (kind == "frac-ss") CommensurateFromJson(json, "m.json");
+  if (kind == "lpv") LpvFromJson(json, "m.json");
+}
+
+TEST(ModelJsonReadTest, MinimalFormsTakeTheDocumentedDefaults) {
+  const IdModelRecord id = IdModelFromJson(Minimal("id"), "m.json");
+  EXPECT_EQ(id.model.sample_time_s, 0.0);  // the caller's record's
+  EXPECT_EQ(id.p21_s_per_m2, 0.0);
+  EXPECT_EQ(id.offset_m, 0.0);
+  EXPECT_EQ(id.drift_m_per_s, 0.0);
+  EXPECT_EQ(id.fit_from_sample, 12);  // nk + 1
+  EXPECT_FALSE(id.closed_loop);
+  EXPECT_EQ(ArxModelFromJson(Minimal("arx"), "m.json").first_sample, 2);  // max(na, nb + nk - 1)
+  const auto foptd = FoptdFromJson(Minimal("foptd"), "m.json");
+  EXPECT_EQ(foptd.input_offset, 0.0);
+  EXPECT_EQ(foptd.output_offset, 0.0);
+  EXPECT_EQ(SoptdFromJson(Minimal("soptd"), "m.json").output_offset, 0.0);
+  const CommensurateRecord ss = CommensurateFromJson(Minimal("frac-ss"), "m.json");
+  EXPECT_EQ(ss.sample_time_s, 0.0);
+  EXPECT_EQ(ss.memory_length, 0);
+  EXPECT_EQ(ss.model.input_offset, 0.0);
+  EXPECT_EQ(LpvFromJson(Minimal("lpv"), "m.json").output_offset, 0.0);
+
+  // frac-foptd: the band is the fit's for the record, key by key when only some are given.
+  const FractionalFoptdRecord frac = FractionalFoptdFromJson(Minimal("frac-foptd"), "m.json");
+  EXPECT_EQ(frac.params.input_offset, 0.0);
+  const core::OustaloupOptions fit =
+      core::FitOustaloupBand(frac.params.model, 0.15, 2400, core::FractionalFoptdFitOptions{});
+  const core::OustaloupOptions band = frac.Band(0.15, 2400);
+  EXPECT_EQ(band.low_frequency_rad_s, fit.low_frequency_rad_s);
+  EXPECT_EQ(band.high_frequency_rad_s, fit.high_frequency_rad_s);
+  EXPECT_EQ(band.sections_per_decade, 2.0);  // the fit's density, not the simulator's default 3
+  nlohmann::json partial = Minimal("frac-foptd");
+  partial["oustaloup"] = {{"sections_per_decade", 4.0}};
+  const core::OustaloupOptions dense = FractionalFoptdFromJson(partial, "m.json").Band(0.15, 2400);
+  EXPECT_EQ(dense.sections_per_decade, 4.0);
+  EXPECT_EQ(dense.low_frequency_rad_s, fit.low_frequency_rad_s);
+}
+
+TEST(ModelJsonReadTest, MinimalFormsNameEveryMissingOrMistypedKey) {
+  const std::map<std::string, std::vector<std::string>> required = {
+      {"id", {"b", "nk"}},
+      {"arx", {"na", "nb", "nk", "a", "b_coeffs"}},
+      {"foptd", {"gain", "time_constant_s", "delay_s"}},
+      {"soptd", {"gain", "time_constants_s", "delay_s"}},
+      {"frac-foptd", {"gain", "time_constant_s", "alpha", "delay_s"}},
+      {"frac-ss", {"q", "A", "B", "C", "delay_samples"}},
+      {"lpv", {"kind", "local_model", "schedule", "degree", "parameters", "coefficients"}}};
+  for (const auto& [kind, keys] : required) {
+    SCOPED_TRACE(kind);
+    EXPECT_NO_THROW(Read(Minimal(kind), kind));
+    for (const std::string& key : keys) {
+      nlohmann::json json = Minimal(kind);
+      json.erase(key);
+      ExpectError([&] { Read(json, kind); }, "m.json: key '" + key + "': missing");
+      json[key] = nullptr;  // present but of no type a reader takes
+      ExpectError([&] { Read(json, kind); }, "m.json: key '" + key + "'");
+    }
+  }
+  // Optional keys are checked when present.
+  const std::vector<std::pair<std::string, std::string>> optional = {
+      {"id", "sample_time_s"},        {"id", "p21_s_per_m2"},      {"id", "offset_m"},
+      {"id", "drift_m_per_s"},        {"id", "fit_from_sample"},   {"id", "closed_loop"},
+      {"arx", "fit_from_sample"},     {"foptd", "input_offset"},   {"soptd", "output_offset"},
+      {"frac-foptd", "input_offset"}, {"frac-foptd", "oustaloup"}, {"frac-ss", "sample_time_s"},
+      {"frac-ss", "memory_length"},   {"lpv", "output_offset"}};
+  for (const auto& [kind, key] : optional) {
+    SCOPED_TRACE(kind + " " + key);
+    nlohmann::json json = Minimal(kind);
+    json[key] = "x";
+    ExpectError([&] { Read(json, kind); }, "m.json: key '" + key + "'");
+  }
+  nlohmann::json band = Minimal("frac-foptd");
+  band["oustaloup"] = {{"low_frequency_rad_s", -1.0}};
+  ExpectError([&] { Read(band, "frac-foptd"); }, "m.json: oustaloup: key 'low_frequency_rad_s'");
+  band["oustaloup"] = {{"low_frequency_rad_s", 10.0}, {"high_frequency_rad_s", 1.0}};
+  ExpectError([&] { Read(band, "frac-foptd"); }, "key 'oustaloup': high_frequency_rad_s must");
+  nlohmann::json id = Minimal("id");
+  id["fit_from_sample"] = 5;  // nk = 11
+  ExpectError([&] { Read(id, "id"); }, "key 'fit_from_sample': 5 must be > nk = 11");
 }
 
 }  // namespace
