@@ -3,7 +3,9 @@
 #include <fstream>
 #include <iostream>
 #include <sstream>
+#include <string>
 
+#include "canalid/version.h"
 #include "daemon/canalidd/daemon.h"
 #include "daemon/canalidd/log.h"
 #include "daemon/canalidd/plan_builder.h"
@@ -57,7 +59,7 @@ int main(int argc, char** argv) {
       ->required();
   app.add_flag("--check-config", check_only,
                "Validate the configuration, print every problem, and exit (0 or 78)");
-  app.set_version_flag("--version", "canalidd 0.1.0");
+  app.set_version_flag("--version", "canalidd " + std::string(canalid::kVersion));
   app.footer(
       "Signals: SIGTERM/SIGINT stop experiments, restore nominal setpoints and exit 0; SIGHUP "
       "reloads\n"
