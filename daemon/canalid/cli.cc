@@ -3,7 +3,9 @@
 #include <CLI/CLI.hpp>
 #include <exception>
 #include <iostream>
+#include <string>
 
+#include "canalid/version.h"
 #include "daemon/canalid/design_command.h"
 #include "daemon/canalid/export_command.h"
 #include "daemon/canalid/identify_command.h"
@@ -19,7 +21,7 @@ int Run(int argc, char** argv) {
   app.require_subcommand(1);
   app.footer(
       "Run 'canalid COMMAND --help' for a command's options. Documentation: README.md, docs/.");
-  app.set_version_flag("--version", "canalid 0.1.0");
+  app.set_version_flag("--version", "canalid " + std::string(canalid::kVersion));
   int exit_code = kExitOk;
   IdentifyOptions identify;
   AddIdentifyCommand(app, identify, exit_code);

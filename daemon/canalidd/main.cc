@@ -4,7 +4,9 @@
 #include <fstream>
 #include <iostream>
 #include <sstream>
+#include <string>
 
+#include "canalid/version.h"
 #include "daemon/canalidd/daemon.h"
 #include "daemon/canalidd/log.h"
 #include "daemon/canalidd/plan_builder.h"
@@ -72,7 +74,7 @@ int main(int argc, char** argv) {
                      "problem, and exit 0 (valid) or 78: canalidd --check-config FILE")
           ->type_name("[FILE]")
           ->expected(0, 1);
-  app.set_version_flag("--version", "canalidd 0.1.0");
+  app.set_version_flag("--version", "canalidd " + std::string(canalid::kVersion));
   app.footer(
       "Run: canalidd --config FILE.  Validate only: canalidd --check-config FILE.\n"
       "Signals: SIGTERM/SIGINT stop experiments, restore nominal setpoints and exit 0; SIGHUP "

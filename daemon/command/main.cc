@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "canalid/version.h"
 #include "core/command_auth.h"
 #include "daemon/canalidd/key_file.h"
 #include "drivers/lcm/bus.h"
@@ -60,6 +61,7 @@ int main(int argc, char** argv) {
   app.add_option("action", action, "start | stop | reset | publish-config")
       ->required()
       ->check(CLI::IsMember({"start", "stop", "reset", "publish-config"}));
+  app.set_version_flag("--version", "canalid-command " + std::string(canalid::kVersion));
   CLI11_PARSE(app, argc, argv);
 
   try {

@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "canalid/version.h"
 #include "sim/canal_config.h"
 #include "sim/canalsim/plant_command.h"
 #include "sim/canalsim/serve_command.h"
@@ -89,6 +90,7 @@ int Run(const std::string& canal_path, const std::string& scenario_path,
 int main(int argc, char** argv) {
   CLI::App app{"canalsim: Saint-Venant canal simulator (Preissmann scheme). See docs/canalsim.md."};
   app.require_subcommand(1);
+  app.set_version_flag("--version", "canalsim " + std::string(canalid::kVersion));
   CLI::App* run = app.add_subcommand(
       "run", "Run a scenario headless from its steady state and write the outputs as CSV");
   std::string canal_path, scenario_path, out_path;
