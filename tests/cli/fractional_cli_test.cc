@@ -199,7 +199,8 @@ TEST_F(FractionalCli, CompareOverAFolderPrintsSeed2sTable) {
 TEST_F(FractionalCli, CompareShowsProgressWhenStderrIsATerminal) {
   // util-linux script(1) gives the program a pseudo-terminal; its output is what the terminal
   // would show (the table goes to /dev/null).
-  if (std::system("command -v script >/dev/null 2>&1") != 0) GTEST_SKIP() << "no script(1)";
+  ASSERT_EQ(std::system("command -v script >/dev/null 2>&1"), 0)
+      << "no script(1) (Debian bsdutils)";
   WriteExperiments(dir_ / "steps");
   const std::string inner = CanalidProgram() + " identify --compare foptd --u gate --y level " +
                             "--input '" + (dir_ / "steps").string() + "/*.csv' >/dev/null";

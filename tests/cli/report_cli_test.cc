@@ -380,7 +380,8 @@ TEST_F(ReportCli, MissingOrFailingGnuplotIsExit1) {
 }
 
 TEST_F(ReportCli, ProgressOnATerminalOnly) {
-  if (!std::filesystem::exists("/usr/bin/script")) GTEST_SKIP() << "no script(1) for a pty";
+  ASSERT_TRUE(std::filesystem::exists("/usr/bin/script"))
+      << "no script(1) for a pty (Debian bsdutils)";
   // script(1) runs the report on a pseudo-terminal and copies what it wrote.
   const ProgramRun run =
       RunProgram("/usr/bin/script -qec '" + CanalidProgram() + " report --model id --input " +

@@ -28,6 +28,7 @@
 
 #include "tests/sim/serve_process.h"
 #include "tests/support/child_process.h"
+#include "tests/support/private_network.h"
 #include "tests/support/run_program.h"
 
 namespace canalid::testing {
@@ -449,21 +450,11 @@ const std::string kUdpmEnv = std::string("LCM_DEFAULT_URL=") + kUdpmUrl;
 
 int SendCommand(const fs::path& dir, pid_t daemon_pid, const fs::path& key,
                 const std::vector<std::string>& args) {
-  std::vector<std::string> argv = {"/usr/bin/nsenter",
-                                   "--preserve-credentials",
-                                   "-U",
-                                   "-n",
-                                   "-t",
-                                   std::to_string(daemon_pid),
-                                   CommandProgram(),
-                                   "--key",
-                                   key.string(),
-                                   "--channel",
-                                   "CANALID_ASCE2_COMMAND",
-                                   "--reach",
-                                   "pool2",
-                                   "--sender",
-                                   "test"};
+  std::vector<std::string> argv = InPrivateNetworkOf(daemon_pid);
+  const std::vector<std::string> sender = {
+      CommandProgram(), "--key", key.string(), "--channel", "CANALID_ASCE2_COMMAND",
+      "--reach",        "pool2", "--sender",   "test"};
+  argv.insert(argv.end(), sender.begin(), sender.end());
   argv.insert(argv.end(), args.begin(), args.end());
   ChildProcess command(argv, {kUdpmEnv}, dir / "command.log");
   return command.WaitExit(10000);
@@ -477,36 +468,36 @@ void WriteKey(const fs::path& path, const std::string& hex) {
 // 6. Commands: a genuine start starts the experiment; a forged, a stale and a replayed command
 // are rejected and change nothing.
 TEST(DaemonCanalsim, CommandsStartOnlyWhenGenuine) {
-  if (!fs::exists("/usr/bin/unshare") || !fs::exists("/usr/bin/nsenter")) {
-    GTEST_SKIP() << "unshare/nsenter missing: no private network namespace for the udpm bus";
-  }
-  if (!fs::exists("/usr/bin/lcm-logger")) GTEST_SKIP() << "lcm-logger (liblcm-bin) missing";
+  ASSERT_TRUE(fs::exists("/usr/bin/lcm-logger")) << "lcm-logger (Debian liblcm-bin) missing";
   const fs::path dir = TestDir();
+  const std::string network_problem = PrivateNetworkProblem(dir);
+  ASSERT_TRUE(network_problem.empty()) << network_problem;
   const fs::path key = dir / "command.key";
   const fs::path wrong_key = dir / "wrong.key";
   WriteKey(key, "00112233445566778899aabbccddeeff00112233445566778899aabbccddeeff");
   WriteKey(wrong_key, "ffeeddccbbaa99887766554433221100ffeeddccbbaa99887766554433221100");
   const std::string commands = "[commands]\nenabled = true\nkey_file = \"" + key.string() + "\"\n";
-  // Without permission to make namespaces (some containers), skip rather than fail.
-  ChildProcess probe({"/usr/bin/unshare", "-rn", "true"}, {}, dir / "probe.log");
-  if (probe.WaitExit(10000) != 0) GTEST_SKIP() << "unshare -rn is not permitted here";
   // canalsim makes the namespace (its loopback is the only one the daemon can reach there); the
   // daemon and every canalid-command enter it.
-  ChildProcess canal({"/usr/bin/unshare", "-rn", "sh", "-c",
-                      "ip link set lo up && ip route add 224.0.0.0/4 dev lo && exec \"$0\" "
-                      "\"$@\"",
-                      CanalsimProgram(), "serve", "--listen", "127.0.0.1:0", "--canal",
-                      SourcePath("config/sim/asce-canal2.toml"), "--plc",
-                      SourcePath("config/sim/plc/asce2.toml"), "--time-scale", "600"},
-                     {}, dir / "canalsim.log");
+  std::vector<std::string> canal_argv = InNewPrivateNetwork();
+  for (const std::string& a :
+       {CanalsimProgram(), std::string("serve"), std::string("--listen"),
+        std::string("127.0.0.1:0"), std::string("--canal"),
+        SourcePath("config/sim/asce-canal2.toml"), std::string("--plc"),
+        SourcePath("config/sim/plc/asce2.toml"), std::string("--time-scale"), std::string("600")}) {
+    canal_argv.push_back(a);
+  }
+  ChildProcess canal(canal_argv, {}, dir / "canalsim.log");
   const std::string ready = canal.WaitForLine("listening on 127.0.0.1:", 60000);
   ASSERT_FALSE(ready.empty()) << canal.output();
   const int port = std::stoi(ready.substr(ready.find("127.0.0.1:") + 10));
   const std::string config = WriteConfig(dir / "canalidd.toml", BaseKeys(port, dir),
                                          ExplicitExperiment(0.05, 7, "manual", commands));
-  ChildProcess daemon({"/usr/bin/nsenter", "--preserve-credentials", "-U", "-n", "-t",
-                       std::to_string(canal.pid()), DaemonProgram(), "--config", config},
-                      {kUdpmEnv}, dir / "canalidd.log");
+  std::vector<std::string> daemon_argv = InPrivateNetworkOf(canal.pid());
+  for (const std::string& a : {DaemonProgram(), std::string("--config"), config}) {
+    daemon_argv.push_back(a);
+  }
+  ChildProcess daemon(daemon_argv, {kUdpmEnv}, dir / "canalidd.log");
   ASSERT_FALSE(daemon.WaitForLine("commands enabled", 20000).empty()) << daemon.output();
   ASSERT_FALSE(daemon.WaitForLine("answers: ready", 20000).empty()) << daemon.output();
 
@@ -514,11 +505,13 @@ TEST(DaemonCanalsim, CommandsStartOnlyWhenGenuine) {
   // health message. It is ready once a configuration the daemon republishes on a genuine
   // publish-config command shows up in its file (bounded: 50 tries, 100 ms apart).
   const fs::path bus_log = dir / "bus.lcmlog";
-  ChildProcess logger(
-      {"/usr/bin/nsenter", "--preserve-credentials", "-U", "-n", "-t", std::to_string(canal.pid()),
-       "/usr/bin/lcm-logger", "-f", "--flush-interval=10", std::string("--lcm-url=") + kUdpmUrl,
-       bus_log.string()},
-      {}, dir / "lcm-logger.log");
+  std::vector<std::string> logger_argv = InPrivateNetworkOf(canal.pid());
+  for (const std::string& a :
+       {std::string("/usr/bin/lcm-logger"), std::string("-f"), std::string("--flush-interval=10"),
+        std::string("--lcm-url=") + kUdpmUrl, bus_log.string()}) {
+    logger_argv.push_back(a);
+  }
+  ChildProcess logger(logger_argv, {}, dir / "lcm-logger.log");
   int probes = 0;
   for (; probes < 50 && ReadLcmLog(bus_log).configs == 0; ++probes) {
     EXPECT_EQ(SendCommand(dir, canal.pid(), key, {"publish-config"}), 0);
@@ -620,13 +613,10 @@ double MeanValue(const std::vector<canalid::sample_t>& samples, const std::strin
 // The second canal runs 1 m3/s less into pool 1; the offtakes are fixed flows, so its pool 2
 // inflow is the first's minus 1 m3/s: a sample on the wrong prefix would show it.
 TEST(DaemonCanalsim, TwoDaemonsShareOneBusOnTheirOwnPrefixes) {
-  if (!fs::exists("/usr/bin/unshare") || !fs::exists("/usr/bin/nsenter")) {
-    GTEST_SKIP() << "unshare/nsenter missing: no private network namespace for the udpm bus";
-  }
-  if (!fs::exists("/usr/bin/lcm-logger")) GTEST_SKIP() << "lcm-logger (liblcm-bin) missing";
+  ASSERT_TRUE(fs::exists("/usr/bin/lcm-logger")) << "lcm-logger (Debian liblcm-bin) missing";
   const fs::path dir = TestDir();
-  ChildProcess probe({"/usr/bin/unshare", "-rn", "true"}, {}, dir / "probe.log");
-  if (probe.WaitExit(10000) != 0) GTEST_SKIP() << "unshare -rn is not permitted here";
+  const std::string network_problem = PrivateNetworkProblem(dir);
+  ASSERT_TRUE(network_problem.empty()) << network_problem;
 
   // The second canal: config/sim/asce-canal2.toml with 10 instead of 11 m3/s at the head (more
   // does not pass the gates at their level setpoints).
@@ -643,18 +633,14 @@ TEST(DaemonCanalsim, TwoDaemonsShareOneBusOnTheirOwnPrefixes) {
         "--canal",         canal,   "--plc",    SourcePath("config/sim/plc/asce2.toml"),
         "--time-scale",    "600"};
   };
-  std::vector<std::string> argv_a = {"/usr/bin/unshare", "-rn", "sh", "-c",
-                                     "ip link set lo up && ip route add 224.0.0.0/4 dev lo && "
-                                     "exec \"$0\" \"$@\""};
+  std::vector<std::string> argv_a = InNewPrivateNetwork();
   for (const std::string& a : ServeArgs(SourcePath("config/sim/asce-canal2.toml")))
     argv_a.push_back(a);
   ChildProcess canal_a(argv_a, {}, dir / "canalsim-a.log");
   const std::string ready_a = canal_a.WaitForLine("listening on 127.0.0.1:", 60000);
   ASSERT_FALSE(ready_a.empty()) << canal_a.output();
   const int port_a = std::stoi(ready_a.substr(ready_a.find("127.0.0.1:") + 10));
-  const std::vector<std::string> enter = {
-      "/usr/bin/nsenter",           "--preserve-credentials", "-U", "-n", "-t",
-      std::to_string(canal_a.pid())};
+  const std::vector<std::string> enter = InPrivateNetworkOf(canal_a.pid());
   auto InNamespace = [&](const std::vector<std::string>& argv) {
     std::vector<std::string> all = enter;
     all.insert(all.end(), argv.begin(), argv.end());

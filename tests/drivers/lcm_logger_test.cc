@@ -1,6 +1,7 @@
 // lcm-logger (Debian's liblcm-bin) records what LcmBus publishes on udpm, so operators can log
-// the daemon with the stock tool and replay the file. Needs a multicast route; the test never
-// changes routes and skips when there is none.
+// the daemon with the stock tool and replay the file.  udpm needs a multicast route: the test runs
+// itself again in a private network namespace whose loopback has one (the host's routes are never
+// touched), and fails with the reason where no such namespace can be made.
 #include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
@@ -13,6 +14,7 @@
 #include <array>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <optional>
 #include <random>
@@ -21,6 +23,7 @@
 
 #include "drivers/lcm/lcm_bus.h"
 #include "lcm_test_messages.h"
+#include "tests/support/private_network.h"
 
 namespace canalid::drivers {
 namespace {
@@ -53,10 +56,21 @@ std::vector<std::vector<uint8_t>> Events(const std::filesystem::path& path,
 }
 
 TEST(LcmLogger, RecordsASamplePublishedOnUdpm) {
-  if (!HasMulticastRoute()) {
-    GTEST_SKIP() << "no 224.0.0.0/4 route in `ip route`: udpm cannot work here (on a host with "
-                    "only lo: `ip route add 224.0.0.0/4 dev lo`, which this test will not do)";
+  constexpr const char* kInside = "CANALID_LCM_LOGGER_TEST_IN_PRIVATE_NETWORK";
+  if (std::getenv(kInside) == nullptr) {
+    const auto scratch = std::filesystem::path(CANALID_BINARY_DIR) / "test-output" / "lcm_logger";
+    std::filesystem::create_directories(scratch);
+    const std::string problem = canalid::testing::PrivateNetworkProblem(scratch);
+    ASSERT_TRUE(problem.empty()) << problem;
+    std::vector<std::string> argv = canalid::testing::InNewPrivateNetwork();
+    argv.push_back(std::filesystem::read_symlink("/proc/self/exe").string());
+    argv.emplace_back("--gtest_filter=LcmLogger.RecordsASamplePublishedOnUdpm");
+    canalid::testing::ChildProcess inside(argv, {std::string(kInside) + "=1"},
+                                          scratch / "private-network-run.log");
+    EXPECT_EQ(inside.WaitExit(60000), 0) << inside.output();
+    return;
   }
+  ASSERT_TRUE(HasMulticastRoute()) << "no 224.0.0.0/4 route inside the private network";
   // A private port so concurrent runs and real daemons on the default group do not mix in.
   std::mt19937 rng(static_cast<unsigned>(getpid()));
   const int port = 20000 + static_cast<int>(rng() % 20000);
