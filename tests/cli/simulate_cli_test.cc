@@ -12,6 +12,7 @@
 #include "core/mittag_leffler.h"
 #include "support/run_program.h"
 #include "support/simulate_round_trip.h"
+#include "tests/support/frac_step_reference.h"
 
 namespace canalid::testing {
 namespace {
@@ -201,23 +202,6 @@ TEST_F(SimulateCli, BadModelFilesAndInputsNameTheFileAndTheKey) {
   EXPECT_NE(missing.err.find("nope.json: cannot open the model file"), std::string::npos);
 }
 
-// Step responses K (1 - E_alpha(-t^alpha / T)) of K/(1 + T s^alpha) from the Mittag-Leffler
-// series, copied from ../shared/domain/reference/frac_step_reference.csv (columns gain,
-// time_constant_s, alpha, t_s, step_response; all 16 rows).
-struct ReferenceRow {
-  double gain, time_constant_s, alpha, t_s, response;
-};
-constexpr ReferenceRow kFracStepReference[] = {
-    {0.372, 10.975, 0.8, 1, 0.03432321283},  {0.372, 10.975, 0.8, 5, 0.107489572},
-    {0.372, 10.975, 0.8, 10, 0.1629250691},  {0.372, 10.975, 0.8, 20, 0.2281699831},
-    {0.372, 10.975, 0.8, 100, 0.3393701301}, {0.372, 10.975, 0.8, 1000, 0.3682552144},
-    {0.372, 10.975, 0.5, 1, 0.03535778904},  {0.372, 10.975, 0.5, 5, 0.07216161984},
-    {0.372, 10.975, 0.5, 10, 0.09566606367}, {0.372, 10.975, 0.5, 20, 0.1241053813},
-    {0.372, 10.975, 0.5, 100, 0.2034350521}, {0.372, 10.975, 1.0, 1, 0.03239686659},
-    {0.372, 10.975, 1.0, 5, 0.1361224089},   {0.372, 10.975, 1.0, 10, 0.2224348441},
-    {0.372, 10.975, 1.0, 20, 0.3118663015},  {0.372, 10.975, 1.0, 100, 0.3719589401},
-};
-
 // A unit step of u (0 -> 1) at row `step_row`, `rows` rows every `ts` seconds.
 std::string UnitStepCsv(int rows, int step_row, double ts) {
   std::ostringstream csv;
@@ -250,7 +234,7 @@ TEST_F(SimulateCli, HandWrittenMinimalFracFoptdMatchesTheMittagLefflerReference)
     const Eigen::VectorXd y = drivers::CsvTable::Read((dir_ / "out.csv").string()).Column("y");
     EXPECT_EQ(y(kStepRow), 0.0);  // at rest at u = 0 with both offsets 0
     int checked = 0;
-    for (const ReferenceRow& row : kFracStepReference) {
+    for (const auto& row : ReadFracStepReference()) {
       if (row.alpha != alpha) continue;
       const int k = kStepRow + static_cast<int>(std::lround(row.t_s / kTs));
       EXPECT_NEAR(y(k), row.response, 0.001 * row.gain) << "alpha " << alpha << " t " << row.t_s;

@@ -1,4 +1,5 @@
 #include "core/fractional_simulator.h"
+#include "tests/support/frac_step_reference.h"
 
 #include <gtest/gtest.h>
 
@@ -39,23 +40,8 @@ double WorstStepError(const FractionalFoptdParams& p, double ts, int n, int step
   return worst;
 }
 
-struct ReferenceRow {
-  double gain, time_constant_s, alpha, t_s, response;
-};
-
-std::vector<ReferenceRow> ReadReference() {
-  std::ifstream file(std::string(CANALID_REFERENCE_DIR) + "/frac_step_reference.csv");
-  std::vector<ReferenceRow> rows;
-  std::string line;
-  std::getline(file, line);
-  while (std::getline(file, line)) {
-    std::stringstream ss(line);
-    std::vector<double> v;
-    for (std::string cell; std::getline(ss, cell, ',');) v.push_back(std::stod(cell));
-    if (v.size() == 5) rows.push_back({v[0], v[1], v[2], v[3], v[4]});
-  }
-  return rows;
-}
+using ReferenceRow = testing::FracStepReferenceRow;
+std::vector<ReferenceRow> ReadReference() { return testing::ReadFracStepReference(); }
 
 TEST(FractionalSimulatorTest, OustaloupMatchesTheReferenceCsv) {
   const std::vector<ReferenceRow> rows = ReadReference();

@@ -1,4 +1,5 @@
 #include "core/mittag_leffler.h"
+#include "tests/support/frac_step_reference.h"
 
 #include <gtest/gtest.h>
 
@@ -66,20 +67,13 @@ TEST(MittagLefflerTest, CompletelyMonotoneBelowOrderOne) {
 }
 
 TEST(MittagLefflerTest, ReproducesTheReferenceStepResponses) {
-  std::ifstream file(std::string(CANALID_REFERENCE_DIR) + "/frac_step_reference.csv");
-  ASSERT_TRUE(file.good());
-  std::string line;
-  std::getline(file, line);
   int rows = 0;
-  while (std::getline(file, line)) {
-    std::stringstream ss(line);
-    std::vector<double> v;
-    for (std::string cell; std::getline(ss, cell, ',');) v.push_back(std::stod(cell));
-    ASSERT_EQ(v.size(), 5u);
-    const double k = v[0], t_c = v[1], alpha = v[2], t = v[3];
-    const double y = k * (1.0 - MittagLeffler(alpha, -std::pow(t, alpha) / t_c));
+  for (const auto& row : testing::ReadFracStepReference()) {
+    const double y =
+        row.gain *
+        (1.0 - MittagLeffler(row.alpha, -std::pow(row.t_s, row.alpha) / row.time_constant_s));
     // The CSV carries 10 significant digits.
-    EXPECT_NEAR(y, v[4], 1e-9) << line;
+    EXPECT_NEAR(y, row.response, 1e-9) << "alpha " << row.alpha << " t " << row.t_s;
     ++rows;
   }
   EXPECT_EQ(rows, 16);
