@@ -3,27 +3,28 @@
 # is a failure), and canalidd.service must reach an offline security exposure of 3.0 or less.
 # verify needs every ExecStart binary to exist, so the units are checked as copies whose
 # /usr/local/bin/ paths point into a temporary root, where each program is a link to the one built
-# in this tree when it exists, else an empty placeholder executable (the unit syntax is what is being checked).
+# in this tree (a program that is not built is a failure, not a placeholder).
 # Usage: verify_units.sh SOURCE_DIR BINARY_DIR
 set -euo pipefail
 source_dir=$1
 binary_dir=$2
 max_exposure=3.0
+command -v systemd-analyze >/dev/null ||
+  { echo "FAIL systemd-analyze is missing (Debian package systemd; scripts/setup installs it)"; exit 1; }
 
 root=$(mktemp -d)
 trap 'rm -rf "$root"' EXIT
 mkdir -p "$root/bin" "$root/units"
 declare -A built=(
   [canalidd]="$binary_dir/daemon/canalidd/canalidd"
-  [canalsim]="$binary_dir/sim/canalsim/canalsim"
+  [canalsim]="$binary_dir/sim/canalsim"
 )
 for program in "${!built[@]}"; do
-  if [ -x "${built[$program]}" ]; then
-    ln -s "${built[$program]}" "$root/bin/$program"
-  else
-    printf '#!/bin/sh\nexit 0\n' >"$root/bin/$program"
-    chmod 755 "$root/bin/$program"
+  if [ ! -x "${built[$program]}" ]; then
+    echo "FAIL ${built[$program]} is not built (the units' ExecStart= must name a real program)"
+    exit 1
   fi
+  ln -s "${built[$program]}" "$root/bin/$program"
 done
 for unit in "$source_dir"/systemd/*.service; do
   sed "s#/usr/local/bin/#$root/bin/#g" "$unit" >"$root/units/$(basename "$unit")"
