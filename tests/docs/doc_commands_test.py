@@ -69,6 +69,10 @@ EXCEPTIONS = [
      "check"),
     ("README.md", "canalid replay run.lcmlog", "needs the LCM log of a live canalidd run "
      "(scripts/demo writes one); tests/daemon replays live runs"),
+    ("README.md", "scripts/package", "a whole Release build (minutes); tests/package/"
+     "install_deb.sh packages the build tree and installs it into a fresh Debian root"),
+    ("docs/deployment.md", "scripts/package", "a whole Release build (minutes); tests/package/"
+     "install_deb.sh packages the build tree and installs it into a fresh Debian root"),
     ("docs/deployment.md", "scripts/setup", "installs Debian packages with apt-get (root)"),
     ("docs/deployment.md", "scripts/build", "builds the whole tree (minutes); this test runs from "
      "a build"),
@@ -77,6 +81,10 @@ EXCEPTIONS = [
 # First words of ```sh lines that are not programs of the project, and why they are not run.
 NOT_OURS = {
     "cd": "cd build && ctest: runs every test, this one included",
+    "apt": "installs the Debian package (root); tests/package/install_deb.sh installs it into a "
+           "fresh Debian root",
+    "cmake": "a whole second build (minutes); scripts/check-build-types builds every build type "
+             "from a clean clone",
     "install": "installs into /usr/local and /etc (root); its sources are checked to exist",
     "systemctl": "manages the installed systemd units (root)",
     "journalctl": "reads the installed unit's journal",
@@ -292,8 +300,9 @@ def documented_status(text):
     return int(m.group(1)) if m else 0
 
 
-def installed_paths(source_dir, build_dir, others):
-    """DEST -> SRC of the documents' `install [-m M] SRC DEST` lines, and their missing sources."""
+def installed_paths(source_dir, build_dir, others, stage):
+    """DEST -> SRC of the documents' `install [-m M] SRC DEST` lines, and their missing sources
+    (a source under /usr or /etc must be one the install of the build tree puts in place)."""
     mapping, problems = {}, []
     for cmd in others:
         words = strip_comment(cmd.text).split()
@@ -307,7 +316,10 @@ def installed_paths(source_dir, build_dir, others):
             args.append(words[k])
             k += 1
         sources, dest = args[:-1], args[-1]
+        sources = [staged_form(src, stage) for src in sources]
         for src in sources:
+            if src.startswith(stage):
+                continue
             root = build_dir if src.startswith("build/") else source_dir
             rel = src[len("build/"):] if src.startswith("build/") else src
             if not glob.glob(os.path.join(root, rel)):
@@ -329,11 +341,36 @@ def prepare_directory(base, source_dir, build_dir, name):
     return work
 
 
-def runnable_form(text, installed):
+STAGED_PATH = re.compile(r"(?<![\w.~-])/(?:usr|etc)/[\w./@+-]*[\w@+-]")
+
+
+def stage_install(build_dir, stage):
+    """Installs the build tree as the package does (prefix /usr) into `stage` (cmake --install
+    with DESTDIR), so documented paths under /usr and /etc are checked against what the install
+    really puts there. Returns a problem, or None."""
+    env = dict(os.environ, DESTDIR=stage)
+    done = subprocess.run(["cmake", "--install", build_dir, "--prefix", "/usr"], env=env,
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    if done.returncode != 0:
+        return "cmake --install of the build tree failed:\n" + done.stdout
+    return None
+
+
+def staged_form(command, stage):
+    """`command` with each absolute /usr or /etc path that the install puts in place replaced by
+    its staged copy (paths the install does not make are left alone)."""
+    def replace(match):
+        staged = stage + match.group(0)
+        return staged if os.path.exists(staged) else match.group(0)
+    return STAGED_PATH.sub(replace, command)
+
+
+def runnable_form(text, installed, stage):
     """The command as run: installed paths replaced, servers in their validation form."""
     command = strip_comment(text)
     for dest, src in installed.items():
         command = re.sub(re.escape(dest) + r"(?![\w./-])", src, command)
+    command = staged_form(command, stage)
     words = command.split()
     for form in SERVER_FORMS:
         if (program_of(words[0]) == form[0] and tuple(words[1:len(form)]) == form[1:]
@@ -413,13 +450,18 @@ def main():
         env["HOME"] = home
         env["LCM_DEFAULT_URL"] = "file://" + os.path.join(base, "lcm.log") + "?mode=w"
         env.pop("CANALID_BUILD_DIR", None)
+        stage = os.path.join(base, "stage")
+        problem = stage_install(build_dir, stage)
+        if problem:
+            failures.append(problem)
+            print("FAIL " + problem)
 
         for doc in docs:
             if args.only and doc != args.only:
                 continue
             commands, others = commands_of(doc, os.path.join(source_dir, doc))
             commands += inline_commands(doc, os.path.join(source_dir, doc))
-            installed, problems = installed_paths(source_dir, build_dir, others)
+            installed, problems = installed_paths(source_dir, build_dir, others, stage)
             for p in problems:
                 failures.append(p)
                 print("FAIL " + p)
@@ -458,7 +500,7 @@ def main():
                 if work is None:
                     work = prepare_directory(base, source_dir, build_dir,
                                              doc.replace("/", "_").replace(".md", ""))
-                command = runnable_form(cmd.text, installed)
+                command = runnable_form(cmd.text, installed, stage)
                 expected = documented_status(cmd.text)
                 status, seconds, stdout, stderr = run(
                     command, work, env, os.path.join(base, f"{doc.replace('/', '_')}-{index}"))
