@@ -110,6 +110,7 @@ ReachRunnerOptions BuildReachRunnerOptions(
   for (const ExperimentConfig& experiment : config->experiments) {
     if (experiment.reach != reach.name) continue;
     options.start_experiment_on_start = experiment.start == ExperimentStart::kOnStart;
+    options.experiment_name = experiment.name;
     options.experiment_for_nominal = [config, name = experiment.name](double nominal) {
       return BuildExperimentPlan(*config, *config->FindExperiment(name), nominal);
     };

@@ -105,6 +105,8 @@ const char* AbortReasonName(AbortReason reason) {
       return "stopped by operator";
     case AbortReason::kIdentificationFailed:
       return "identification failed";
+    case AbortReason::kGuardNotPersisted:
+      return "experiment guard not persisted";
   }
   return "unknown";
 }
@@ -158,6 +160,9 @@ ExperimentTransition Step(const ExperimentPlan& plan, const ExperimentState& sta
       return OnSample(plan, state, event.sample);
     case ExperimentEventKind::kWriteFailed:
       if (Running(state.phase)) return Abort(plan, state, AbortReason::kWriteFailed);
+      return {state, {}};
+    case ExperimentEventKind::kGuardNotPersisted:
+      if (Running(state.phase)) return Abort(plan, state, AbortReason::kGuardNotPersisted);
       return {state, {}};
     case ExperimentEventKind::kIdentificationSucceeded:
       if (state.phase == ExperimentPhase::kIdentifying) return Enter(state, ExperimentPhase::kDone);

@@ -28,6 +28,7 @@ enum class AbortReason : std::uint8_t {
   kWriteFailed,           ///< a setpoint write was refused or failed
   kOperatorStop,          ///< stop command, SIGTERM, config reload
   kIdentificationFailed,  ///< the batch identification found no usable model
+  kGuardNotPersisted,     ///< the restart guard could not be written before an excitation write
 };
 
 const char* ExperimentPhaseName(ExperimentPhase phase);
@@ -54,10 +55,11 @@ struct ExperimentSample {
 };
 
 enum class ExperimentEventKind : std::uint8_t {
-  kStart,        ///< begin (from idle, done or aborted)
-  kStop,         ///< operator stop: abort with kOperatorStop
-  kSample,       ///< a new sample
-  kWriteFailed,  ///< a setpoint write failed
+  kStart,              ///< begin (from idle, done or aborted)
+  kStop,               ///< operator stop: abort with kOperatorStop
+  kSample,             ///< a new sample
+  kWriteFailed,        ///< a setpoint write failed
+  kGuardNotPersisted,  ///< the restart guard (core/experiment_guard.h) could not be persisted
   kIdentificationSucceeded,
   kIdentificationFailed,
 };
@@ -96,7 +98,8 @@ struct ExperimentTransition {
 ///   link lost -> abort (kLinkLost) and restore nominal;
 ///   invalid level for more than max_invalid_samples in a row -> abort (kSensorInvalid);
 ///   level outside the band -> abort (kLevelOutOfBand);
-/// and on a failed write -> abort (kWriteFailed).  An abort always asks for the nominal setpoint,
+/// and on a failed write -> abort (kWriteFailed); on a guard not persisted -> abort
+/// (kGuardNotPersisted).  An abort always asks for the nominal setpoint,
 /// in the same transition (the caller writes it before the next sample).  While exciting, each
 /// sample asks for the next PRBS value and is recorded; the last one ends the excitation with the
 /// nominal setpoint and starts the identification.  Start while running is ignored; Stop outside

@@ -84,6 +84,12 @@ ReachActions ReachPipeline::OnWriteFailed() {
   return Apply(event);
 }
 
+ReachActions ReachPipeline::OnGuardNotPersisted() {
+  ExperimentEvent event;
+  event.kind = ExperimentEventKind::kGuardNotPersisted;
+  return Apply(event);
+}
+
 void ReachPipeline::ResetOnlineEstimator() {
   if (online_id_) online_id_.emplace(options_.online_id);
 }

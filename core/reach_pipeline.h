@@ -54,6 +54,8 @@ class ReachPipeline final {
   ReachActions OnLinkLost();
   /// A setpoint write of this reach failed: abort if exciting.
   ReachActions OnWriteFailed();
+  /// The guard that must precede an excitation write could not be persisted: abort if running.
+  ReachActions OnGuardNotPersisted();
   /// Installs (or replaces) the experiment plan, e.g. once the actuator's nominal setpoint has
   /// been read from the PLC.  Allocates the record for the plan's length (not per sample).
   /// Returns false, changing nothing, while an experiment runs.

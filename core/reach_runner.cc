@@ -23,9 +23,18 @@ std::string ReachRunner::SetNominal(double nominal) {
   return {};
 }
 
+std::string ReachRunner::ApplyRestart(const RestartDecision& decision) {
+  refused_ = !decision.excitation_allowed;
+  held_ = decision.hold_until_restored;
+  // Refused without a nominal: the actuator may sit at a PRBS level, so its reading is no nominal.
+  adopt_reading_ = !refused_;
+  if (decision.nominal) return SetNominal(*decision.nominal);
+  return {};
+}
+
 ReachPollOutcome ReachRunner::OnPoll(const ReachReadings& r) {
   ReachPollOutcome outcome;
-  if (!nominal_known_ && r.actuator_valid) {
+  if (!nominal_known_ && adopt_reading_ && r.actuator_valid) {
     outcome.nominal_read = r.actuator;
     outcome.plan_error = SetNominal(r.actuator);
   }
@@ -43,7 +52,7 @@ ReachPollOutcome ReachRunner::OnPoll(const ReachReadings& r) {
 
 std::optional<ReachActions> ReachRunner::StartIfDue(bool status_ok, bool allowed) {
   if (!options_.start_experiment_on_start || started_ || !nominal_known_ || !status_ok ||
-      !allowed) {
+      !allowed || !excitation_allowed()) {
     return std::nullopt;
   }
   started_ = true;

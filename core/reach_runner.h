@@ -3,6 +3,7 @@
 #include <optional>
 #include <string>
 
+#include "core/experiment_guard.h"
 #include "core/reach_pipeline.h"
 
 namespace canalid::core {
@@ -26,6 +27,7 @@ struct ReachRunnerOptions {
   /// @throws std::invalid_argument when the nominal leaves no room for the PRBS inside the limits.
   std::function<ExperimentPlan(double nominal_setpoint)> experiment_for_nominal;
   bool start_experiment_on_start = false;
+  std::string experiment_name;  ///< the reach's experiment (empty: none), for its guard
 };
 
 /// One poll of a reach's PLC as the reach reads it: the four channel values (engineering units)
@@ -78,8 +80,19 @@ class ReachRunner final {
   /// pipeline().IdentifyRecord()) and then calls StartIfDue().
   ReachPollOutcome OnPoll(const ReachReadings& readings);
   /// Starts the on_start experiment once: after a poll with every block read, when the nominal is
-  /// known and `allowed` (the daemon is not stopping).  Returns the start's actions, or none.
+  /// known, excitation_allowed() and `allowed` (the daemon is not stopping).  Returns the start's
+  /// actions, or none.
   std::optional<ReachActions> StartIfDue(bool status_ok, bool allowed);
+
+  /// Applies the start-up decision on an interrupted experiment (DecideRestart), before the first
+  /// poll: adopts its nominal (installing the experiment around it; returns the plan error, empty
+  /// when none), never takes a reading as the nominal when it refuses, and holds experiments until
+  /// OnRestoreConfirmed() when it restores first.
+  std::string ApplyRestart(const RestartDecision& decision);
+  /// The PLC confirmed the restore of ApplyRestart: experiments may start (unless refused).
+  void OnRestoreConfirmed() { held_ = false; }
+  /// An experiment may start now (not refused at start-up, no restore pending confirmation).
+  bool excitation_allowed() const { return !refused_ && !held_; }
 
   /// Sets the nominal setpoint and installs the experiment around it; returns why there is no
   /// experiment (empty when there is one or none is planned).
@@ -100,6 +113,9 @@ class ReachRunner final {
   bool nominal_known_ = false;
   double nominal_ = 0.0;
   bool started_ = false;
+  bool refused_ = false;
+  bool held_ = false;
+  bool adopt_reading_ = true;
   std::string initial_plan_error_;
 };
 

@@ -116,6 +116,15 @@ void ReplaySession::OnSample(const std::string& plc_name, const canalid::sample_
         on_warning_("reach " + reach.config.name +
                     ": no experiment: " + reach.runner->initial_plan_error());
       }
+      // The daemon that polls here found an interrupted experiment at its start.
+      if (const auto restart = pending_restarts_.find(reach.config.name);
+          restart != pending_restarts_.end()) {
+        const auto decision = core::RestartDecisionFromMessage(
+            restart->second.first, restart->second.second, reach.config.nominal_setpoint);
+        const std::string error = reach.runner->ApplyRestart(*decision);
+        if (!error.empty()) on_warning_("reach " + reach.config.name + ": no experiment: " + error);
+        pending_restarts_.erase(restart);
+      }
     }
     const core::ReachReadings readings = core::ReadReach(
         reach.runner->options().channels, sample.values,
@@ -158,6 +167,12 @@ void ReplaySession::Step(Reach& reach, const core::ReachActions& actions, double
 
 void ReplaySession::OnExperiment(const canalid::experiment_state_t& live,
                                  const drivers::LogEvent& event) {
+  // Published by a daemon at start, before its first poll: it belongs to the reach's next runner
+  // (whose configuration may be the one this daemon published just before).
+  if (core::RestartDecisionFromMessage(live.reason, live.setpoint, std::nullopt)) {
+    pending_restarts_[live.reach] = {live.reason, live.setpoint};
+    return;
+  }
   for (auto& reach : reaches_) {
     if (reach->config.name != live.reach || !reach->runner) continue;
     core::ReachPipeline& pipeline = reach->runner->pipeline();
@@ -172,6 +187,8 @@ void ReplaySession::OnExperiment(const canalid::experiment_state_t& live,
         Step(*reach, pipeline.OnLinkLost(), t);
       } else if (live.reason == core::AbortReasonName(core::AbortReason::kWriteFailed)) {
         Step(*reach, pipeline.OnWriteFailed(), t);
+      } else if (live.reason == core::AbortReasonName(core::AbortReason::kGuardNotPersisted)) {
+        Step(*reach, pipeline.OnGuardNotPersisted(), t);
       } else {
         if (live.reason != core::AbortReasonName(core::AbortReason::kOperatorStop)) {
           on_warning_(At(options_.log_path, event) + ": reach " + live.reach +

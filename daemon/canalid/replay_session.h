@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/reach_runner.h"
@@ -83,6 +84,9 @@ class ReplaySession final : public drivers::LogMessageVisitor {
   std::map<std::string, std::map<std::string, canalid::model_snapshot_t>> live_models_;
   std::optional<std::int64_t> first_utime_;
   std::int64_t samples_used_ = 0;
+  // Reach -> (reason, setpoint) of a start-up message on an interrupted experiment, for the
+  // reach's next runner (core::RestartDecisionFromMessage).
+  std::map<std::string, std::pair<std::string, double>> pending_restarts_;
 };
 
 }  // namespace canalid::cli

@@ -67,6 +67,9 @@ struct Daemon::Reach {
   const ReachWiring& wiring;
   core::ReachRunner runner;
   bool restore_pending = false;  // a nominal setpoint not yet confirmed by the PLC
+  double restore_target = 0.0;   // the value that restore waits for
+  bool guard_on_disk = false;    // <reach>.experiment.json exists (written, or left by a crash)
+  bool keep_guard = false;       // a refused start-up: the guard stays for an operator to check
   double last_time_s = 0.0;
   const std::string& name() const { return runner.name(); }
   core::ReachPipeline& pipeline() { return runner.pipeline(); }
@@ -122,6 +125,7 @@ DaemonExit Daemon::Run() {
   watchdog_period_s_ = WatchdogPeriodS();
   publisher_.PublishConfig(plan_.config_path, plan_.config_text, WallNowS());
   LoadState();
+  ResumeInterruptedExperiments();
   StartCommands();
   StartSignals();
   StartBusWatch();
@@ -257,7 +261,7 @@ void Daemon::OnPoll(int index, const drivers::PollSample& s) {
                                  "rls-bank");
     }
     if (reach.restore_pending && link_ok && !outcome.actions.write_setpoint)
-      RequestSetpoint(reach, reach.runner.nominal());
+      RequestSetpoint(reach, reach.restore_target);
     if (const auto start = reach.runner.StartIfDue(s.status.ok(), !stopping_)) {
       LogInfo("reach " + reach.name() + ": starting the experiment");
       Handle(reach, *start, s.time_s);
@@ -276,11 +280,12 @@ void Daemon::OnWriteResult(int index, const drivers::WriteResult& result) {
     if (reach.wiring.runner.channels.actuator != result.channel) continue;
     const bool written = result.outcome == drivers::WriteOutcome::kWritten;
     if (written && reach.restore_pending &&
-        std::abs(result.written - reach.runner.nominal()) <=
-            1e-9 * (1.0 + std::abs(reach.runner.nominal()))) {
+        std::abs(result.written - reach.restore_target) <=
+            1e-9 * (1.0 + std::abs(reach.restore_target))) {
       reach.restore_pending = false;
       LogInfo("reach " + reach.name() + ": nominal setpoint " +
-              std::to_string(reach.runner.nominal()) + " restored");
+              std::to_string(reach.restore_target) + " restored");
+      OnRestoreConfirmed(reach);
     }
     if (!written) {
       LogWarning("reach " + reach.name() + ": setpoint write failed (" +
@@ -304,7 +309,15 @@ void Daemon::Handle(Reach& reach, const core::ReachActions& actions, double time
   const std::string& name = reach.name();
   const int actuator = reach.wiring.runner.channels.actuator;
   if (actions.write_setpoint && actuator >= 0) {
-    if (actions.restore_nominal) reach.restore_pending = true;
+    if (!actions.restore_nominal && !reach.guard_on_disk && !PersistGuard(reach)) {
+      // No excitation write without a durable guard: abort instead, which restores the nominal.
+      Handle(reach, reach.pipeline().OnGuardNotPersisted(), time_s);
+      return;
+    }
+    if (actions.restore_nominal) {
+      reach.restore_pending = true;
+      reach.restore_target = *actions.write_setpoint;
+    }
     RequestSetpoint(reach, *actions.write_setpoint);
   }
   const auto& plan = reach.pipeline().experiment_plan();
@@ -353,6 +366,99 @@ void Daemon::LoadState() {
     LogInfo("reach " + model.reach + ": resumed the persisted " + model.model_kind + " model " +
             model.model.dump());
   }
+}
+
+void Daemon::ResumeInterruptedExperiments() {
+  for (auto& r : reaches_) {
+    Reach& reach = *r;
+    const int actuator = reach.wiring.runner.channels.actuator;
+    if (actuator < 0) continue;
+    const drivers::PollChannel& channel =
+        plcs_[static_cast<std::size_t>(reach.wiring.plc)]
+            ->wiring.poller.channels[static_cast<std::size_t>(actuator)];
+    core::GuardReading reading;
+    if (store_) {
+      try {
+        reading = store_->LoadGuard(reach.name());
+      } catch (const std::exception& e) {
+        reading.kind = core::GuardReading::Kind::kCorrupt;
+        reading.problem = e.what();
+      }
+    }
+    if (reading.kind == core::GuardReading::Kind::kNone) continue;
+    core::RestartContext context;
+    context.reach = reach.name();
+    context.actuator = channel.name;
+    context.setpoint_min = channel.limits.min_value;
+    context.setpoint_max = channel.limits.max_value;
+    context.configured_nominal = reach.wiring.runner.nominal_setpoint;
+    const core::RestartDecision decision = core::DecideRestart(context, reading);
+    (decision.error ? LogError : LogWarning)(decision.message);
+    const std::string plan_error = reach.runner.ApplyRestart(decision);
+    if (!plan_error.empty()) LogError("reach " + reach.name() + ": no experiment: " + plan_error);
+    reach.guard_on_disk = true;
+    reach.keep_guard = decision.action == core::RestartDecision::Action::kRefuse;
+    // The first write once the PLC answers (OnPoll asks it again until confirmed).
+    if (decision.restore_setpoint) {
+      reach.restore_pending = true;
+      reach.restore_target = *decision.restore_setpoint;
+    }
+    const bool restore = decision.action == core::RestartDecision::Action::kRestore;
+    const std::string reason =
+        restore ? std::string(core::kRestartRestoreReason) + " " +
+                      std::to_string(*decision.restore_setpoint) + " persisted at " +
+                      core::FormatUtcTime(reading.guard.started_utime_us)
+                : std::string(core::kRestartRefusedReason) + ": " + decision.message;
+    publisher_.PublishRestart(reach.name(), channel.name,
+                              decision.restore_setpoint ? *decision.restore_setpoint : std::nan(""),
+                              reason, WallNowS());
+  }
+}
+
+bool Daemon::PersistGuard(Reach& reach) {
+  const double nominal = reach.runner.nominal();
+  const std::string refused = "reach " + reach.name() + ": experiment guard not persisted";
+  if (!store_) {
+    LogError(refused + " (no state directory): no excitation, restoring nominal " +
+             std::to_string(nominal));
+    return false;
+  }
+  core::ExperimentGuard guard;
+  guard.reach = reach.name();
+  guard.actuator = plcs_[static_cast<std::size_t>(reach.wiring.plc)]->channel_names.at(
+      static_cast<std::size_t>(reach.wiring.runner.channels.actuator));
+  guard.experiment = reach.wiring.runner.experiment_name;
+  guard.nominal_setpoint = nominal;
+  guard.started_utime_us = ToUtime(WallNowS());
+  try {
+    // Blocking (write, fsync, rename, fsync of the directory: a few ms), once per experiment, on
+    // the loop thread: the excitation write must wait for it, and the poller keeps polling.
+    store_->SaveGuard(guard);
+  } catch (const std::exception& e) {
+    LogError(refused + " (" + e.what() + "): no excitation, restoring nominal " +
+             std::to_string(nominal));
+    return false;
+  }
+  reach.guard_on_disk = true;
+  LogInfo("reach " + reach.name() + ": experiment guard persisted (" + guard.actuator +
+          ", nominal " + std::to_string(nominal) + ")");
+  return true;
+}
+
+void Daemon::OnRestoreConfirmed(Reach& reach) {
+  const core::ExperimentPhase phase = reach.pipeline().experiment_state().phase;
+  if (phase == core::ExperimentPhase::kSettling || phase == core::ExperimentPhase::kExciting)
+    return;  // a new experiment's settling write, not an end: its guard stays
+  if (reach.guard_on_disk && !reach.keep_guard) {
+    try {
+      store_->RemoveGuard(reach.name());
+    } catch (const std::exception& e) {
+      // The file stays and names a nominal the PLC has confirmed; the next experiment rewrites it.
+      LogError(std::string("state: ") + e.what());
+    }
+    reach.guard_on_disk = false;
+  }
+  reach.runner.OnRestoreConfirmed();
 }
 
 void Daemon::SaveModel(const Reach& reach, const core::IdPipelineResult& result) {
@@ -422,6 +528,10 @@ void Daemon::OnCommand(const drivers::AcceptedCommand& command) {
       case core::CommandKind::kStartExperiment:
         if (!reach->pipeline().experiment_plan()) {
           LogWarning("reach " + command.reach + ": no experiment to start");
+        } else if (!reach->runner.excitation_allowed()) {
+          LogWarning("reach " + command.reach +
+                     ": experiment refused: an interrupted experiment's nominal is not restored "
+                     "(see the start-up log)");
         } else if (!stopping_) {
           Handle(*reach, reach->pipeline().StartExperiment(), reach->last_time_s);
         }

@@ -29,10 +29,14 @@ enum class DaemonExit { kStopped, kReload, kFailed };
 ///
 /// Safety: every restore of a nominal setpoint stays pending until the PLC confirms the nominal
 /// value was written (a write refused while the link is down, or shortened by the rate limit, is
-/// asked again on the next sample).  SIGTERM/SIGINT stop the experiments, wait (at most
-/// `stop_timeout_s`) for the nominal setpoints to be written, then stop.  SIGHUP asks `reload`
-/// for a new plan: when it returns one, Run() stops safely and returns kReload (the caller builds
-/// a new Daemon); when it returns none (invalid configuration), the daemon carries on.
+/// asked again on the next sample).  No excitation write goes out before the reach's experiment
+/// guard (core/experiment_guard.h) is durably in the state directory; the guard is removed once
+/// the PLC confirms the nominal at the experiment's end.  At start, a guard left by a crash is
+/// decided on by core::DecideRestart: its nominal is restored first, before any experiment.
+/// SIGTERM/SIGINT stop the experiments, wait (at most `stop_timeout_s`) for the nominal setpoints
+/// to be written, then stop.  SIGHUP asks `reload` for a new plan: when it returns one, Run() stops
+/// safely and returns kReload (the caller builds a new Daemon); when it returns none (invalid
+/// configuration), the daemon carries on.
 class Daemon final {
  public:
   using PortFactory = std::function<std::unique_ptr<drivers::PlcPort>(const PlcWiring&)>;
@@ -71,6 +75,12 @@ class Daemon final {
   void StartSignals();
   void PublishHealth();
   void LoadState();
+  // Applies core::DecideRestart to each reach's guard (before the pollers start).
+  void ResumeInterruptedExperiments();
+  // Writes the reach's experiment guard; false (logged) when it is not durably on disk.
+  bool PersistGuard(Reach& reach);
+  // The PLC confirmed the reach's pending restore.
+  void OnRestoreConfirmed(Reach& reach);
   void SaveModel(const Reach& reach, const core::IdPipelineResult& result);
   void StartCommands();
   void OnCommand(const drivers::AcceptedCommand& command);

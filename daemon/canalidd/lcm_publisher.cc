@@ -168,6 +168,19 @@ void LcmPublisher::PublishExperiment(const std::string& reach, const core::Exper
   Send(Channel(experiment_channels_, "EXPERIMENT_", reach), experiment_);
 }
 
+void LcmPublisher::PublishRestart(const std::string& reach, const std::string& actuator,
+                                  double setpoint, const std::string& reason, double time_s) {
+  experiment_.utime = ToUtime(time_s);
+  experiment_.reach = reach;
+  experiment_.state = canalid::experiment_state_t::STATE_ABORTED;
+  experiment_.step = 0;
+  experiment_.num_steps = 0;
+  experiment_.setpoint_channel = actuator;
+  experiment_.setpoint = setpoint;
+  experiment_.reason = reason;
+  Send(Channel(experiment_channels_, "EXPERIMENT_", reach), experiment_);
+}
+
 void LcmPublisher::PublishHealth(const HealthReport& report, double uptime_s, double time_s) {
   health_.utime = ToUtime(time_s);
   health_.component = report.component;

@@ -45,6 +45,11 @@ class LcmPublisher final {
   void PublishExperiment(const std::string& reach, const core::ExperimentState& state,
                          const core::ExperimentPlan& plan, const std::string& actuator,
                          double time_s);
+  /// The start-up decision on an interrupted experiment (state aborted, `reason` one of
+  /// core::kRestartRestoreReason / kRestartRefusedReason and details, `setpoint` the value restored
+  /// first, NaN when none).
+  void PublishRestart(const std::string& reach, const std::string& actuator, double setpoint,
+                      const std::string& reason, double time_s);
   void PublishHealth(const HealthReport& report, double uptime_s, double time_s);
   void PublishConfig(const std::string& path, const std::string& text, double time_s);
 

@@ -18,6 +18,8 @@ constexpr const char* kFormat = "canalid-state-v1";
 constexpr const char* kTempSuffix = ".tmp";
 constexpr const char* kCountersFormat = "canalid-command-counters-v1";
 constexpr const char* kCountersFile = "command-counters.json";
+constexpr const char* kGuardFormat = "canalid-experiment-guard-v1";
+constexpr const char* kGuardSuffix = ".experiment.json";
 
 bool ValidName(const std::string& name) {
   if (name.empty() || name.size() > 64) return false;
@@ -71,6 +73,9 @@ StateStore::StateStore(std::filesystem::path directory) : directory_(std::move(d
 
 std::filesystem::path StateStore::PathFor(const std::string& reach,
                                           const std::string& model_kind) const {
+  if (model_kind == "experiment") {
+    throw std::invalid_argument("state store: model kind 'experiment' names the experiment guard");
+  }
   for (const auto* name : {&reach, &model_kind}) {
     if (!ValidName(*name)) {
       throw std::invalid_argument("state store: name '" + *name +
@@ -91,9 +96,83 @@ void StateStore::AtomicWrite(const std::filesystem::path& target, const std::str
   if (crash_before_rename_) return;
   if (::rename(temp.c_str(), target.c_str()) != 0) SystemFail("cannot rename over", target);
   // The rename is durable only once the directory entry is on disk.
+  SyncDirectory();
+}
+
+void StateStore::SyncDirectory() {
   Fd dir(::open(directory_.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC));
   if (dir.get() < 0) SystemFail("cannot open directory", directory_);
   if (::fsync(dir.get()) != 0) SystemFail("cannot fsync directory", directory_);
+}
+
+std::filesystem::path StateStore::GuardPath(const std::string& reach) const {
+  if (!ValidName(reach)) {
+    throw std::invalid_argument("state store: name '" + reach +
+                                "' is not 1 to 64 of [A-Za-z0-9_-]");
+  }
+  return directory_ / (reach + kGuardSuffix);
+}
+
+void StateStore::SaveGuard(const core::ExperimentGuard& guard) {
+  const std::filesystem::path target = GuardPath(guard.reach);
+  nlohmann::json document = {{"format", kGuardFormat},
+                             {"reach", guard.reach},
+                             {"actuator", guard.actuator},
+                             {"experiment", guard.experiment},
+                             {"nominal_setpoint", guard.nominal_setpoint},
+                             {"started_utime_us", guard.started_utime_us},
+                             {"state", "running"}};
+  AtomicWrite(target, document.dump(2) + "\n");
+}
+
+core::GuardReading StateStore::LoadGuard(const std::string& reach) const {
+  core::GuardReading reading;
+  const std::filesystem::path path = GuardPath(reach);
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec) && !ec) return reading;
+  auto corrupt = [&](const std::string& why) {
+    reading.kind = core::GuardReading::Kind::kCorrupt;
+    reading.problem = path.string() + ": " + why;
+    return reading;
+  };
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return corrupt("cannot open");
+  std::stringstream text;
+  text << in.rdbuf();
+  nlohmann::json document;
+  try {
+    document = nlohmann::json::parse(text.str());
+  } catch (const nlohmann::json::exception& e) {
+    return corrupt(std::string("corrupt or truncated JSON (") + e.what() + ")");
+  }
+  try {
+    if (!document.is_object() || document.value("format", "") != kGuardFormat) {
+      return corrupt(std::string("not an experiment guard (\"format\" is not \"") + kGuardFormat +
+                     "\")");
+    }
+    core::ExperimentGuard& g = reading.guard;
+    g.reach = document.at("reach").get<std::string>();
+    g.actuator = document.at("actuator").get<std::string>();
+    g.experiment = document.at("experiment").get<std::string>();
+    g.nominal_setpoint = document.at("nominal_setpoint").get<double>();
+    g.started_utime_us = document.at("started_utime_us").get<int64_t>();
+  } catch (const nlohmann::json::exception& e) {
+    return corrupt(std::string("missing or mistyped key (") + e.what() + ")");
+  }
+  if (reading.guard.reach != reach) {
+    return corrupt("names reach '" + reading.guard.reach + "', not '" + reach + "'");
+  }
+  reading.kind = core::GuardReading::Kind::kFound;
+  return reading;
+}
+
+void StateStore::RemoveGuard(const std::string& reach) {
+  const std::filesystem::path path = GuardPath(reach);
+  if (::unlink(path.c_str()) != 0) {
+    if (errno == ENOENT) return;
+    SystemFail("cannot remove", path);
+  }
+  SyncDirectory();
 }
 
 void StateStore::Save(const PersistedModel& model) {
@@ -145,7 +224,8 @@ StateLoadReport StateStore::LoadAll() const {
     const auto name = entry.path().filename().string();
     if (name.ends_with(kTempSuffix)) {
       report.leftover_temp_files.push_back(entry.path());
-    } else if (name.ends_with(".json") && !name.starts_with(".") && name != kCountersFile) {
+    } else if (name.ends_with(".json") && !name.starts_with(".") && name != kCountersFile &&
+               !name.ends_with(kGuardSuffix)) {
       files.push_back(entry.path());
     }
   }

@@ -8,6 +8,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/experiment_guard.h"
+
 namespace canalid::daemon {
 
 /// One persisted model of one reach.
@@ -58,6 +60,21 @@ class StateStore final {
   /// ("PATH: reason") and gives no counters (the timestamp window still bounds replays).
   std::map<std::string, int64_t, std::less<>> LoadCommandCounters(std::string* problem) const;
 
+  /// The experiment guard of a reach (core/experiment_guard.h), `<reach>.experiment.json`:
+  ///   {"format": "canalid-experiment-guard-v1", "reach", "actuator", "experiment",
+  ///    "nominal_setpoint", "started_utime_us", "state": "running"}
+  /// written atomically and durably like Save (the file and the directory entry are on disk when
+  /// it returns).  @throws std::invalid_argument on a bad reach name; std::runtime_error as Save.
+  void SaveGuard(const core::ExperimentGuard& guard);
+  /// The guard of `reach`: kNone without a file; kCorrupt (with "PATH: reason") for a file that
+  /// cannot be read, is not JSON (truncated), lacks or mistypes a key, or names another reach.
+  /// Never throws for a bad file.
+  core::GuardReading LoadGuard(const std::string& reach) const;
+  /// Removes the guard of `reach` durably (unlink, fsync of the directory); no file is no error.
+  /// @throws std::runtime_error naming the path and the system error.
+  void RemoveGuard(const std::string& reach);
+  std::filesystem::path GuardPath(const std::string& reach) const;
+
   std::filesystem::path PathFor(const std::string& reach, const std::string& model_kind) const;
   const std::filesystem::path& directory() const { return directory_; }
 
@@ -67,6 +84,7 @@ class StateStore final {
 
  private:
   void AtomicWrite(const std::filesystem::path& target, const std::string& text);
+  void SyncDirectory();
 
   std::filesystem::path directory_;
   bool crash_before_rename_ = false;

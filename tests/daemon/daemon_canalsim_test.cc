@@ -23,6 +23,7 @@
 #include <utility>
 #include <vector>
 
+#include <canalid/experiment_state_t.hpp>
 #include <canalid/health_t.hpp>
 #include <canalid/sample_t.hpp>
 
@@ -341,6 +342,134 @@ TEST(DaemonCanalsim, PlcDisconnectAbortsReconnectsAndRestores) {
   const auto& plc = record.last_health.at("plc.asce2");
   EXPECT_GE(plc.at("reconnects"), 1);
   EXPECT_GE(plc.at("read_errors.disconnected") + plc.at("connect_failures"), 1);
+}
+
+// The values of channel `name` in the valid samples of `samples`, in order.
+std::vector<double> ChannelValues(const std::vector<canalid::sample_t>& samples,
+                                  const std::string& name) {
+  std::vector<double> values;
+  for (const canalid::sample_t& m : samples) {
+    for (int c = 0; c < m.num_channels; ++c) {
+      if (m.channel_names[c] == name && m.quality[c] == canalid::sample_t::QUALITY_VALID)
+        values.push_back(m.values[c]);
+    }
+  }
+  return values;
+}
+
+// 4a. SIGKILL mid-PRBS and an immediate restart, as systemd's Restart=on-failure does (RestartSec=5
+// is far inside the PLC's 300 s watchdog; here the watchdog is 36000 plant s = 60 wall s, so the
+// gate stays at the PRBS level the killed daemon left, as on site): the restarted daemon's first
+// write is the nominal persisted before the excitation, it says so, it does not take the PRBS level
+// as the nominal, and its own experiment is centred on the true nominal.
+TEST(DaemonCanalsim, KilledMidPrbsRestartRestoresThePersistedNominalFirst) {
+  const fs::path dir = TestDir();
+  std::string plc_text = ReadText(SourcePath("config/sim/plc/asce2.toml"));
+  const std::string watchdog = "heartbeat_timeout_s = 300.0";
+  ASSERT_NE(plc_text.find(watchdog), std::string::npos);
+  plc_text.replace(plc_text.find(watchdog), watchdog.size(), "heartbeat_timeout_s = 36000.0");
+  std::ofstream(dir / "plc.toml") << plc_text;
+  ServeProcess serve({"--canal", SourcePath("config/sim/asce-canal2.toml"), "--plc",
+                      (dir / "plc.toml").string(), "--time-scale", "600"},
+                     dir / "canalsim.err");
+  Master master(serve.port(), 2.0);
+  const double nominal = ReadSetpoint(master);
+  constexpr double kAmplitude = 0.05;
+  const std::string config = WriteConfig(dir / "canalidd.toml", BaseKeys(serve.port(), dir),
+                                         ExplicitExperiment(kAmplitude, 7));  // 25 s of PRBS
+  const fs::path guard_path = dir / "state" / "pool2.experiment.json";
+
+  auto first = StartDaemon(dir, config);
+  ASSERT_TRUE(WaitExciting(*first, master, nominal)) << first->output();
+  // Kill once the gate has reached a full PRBS level (the first step may be cut by the rate
+  // limit; bounded: 200 reads, 50 ms apart).
+  bool at_level = false;
+  for (int i = 0; i < 200 && !at_level; ++i) {
+    at_level = std::abs(std::abs(ReadSetpoint(master) - nominal) - kAmplitude) < 1e-4;
+    if (!at_level) first->WaitForLine("never printed", 50);
+  }
+  ASSERT_TRUE(at_level) << first->output();
+  EXPECT_NE(first->output().find("experiment guard persisted"), std::string::npos)
+      << first->output();
+  EXPECT_EQ(first->Stop(SIGKILL), 128 + SIGKILL);
+  const double prbs_level = ReadSetpoint(master);
+  ASSERT_GT(std::abs(prbs_level - nominal), 1e-3) << "not killed mid-PRBS";
+  const nlohmann::json guard = nlohmann::json::parse(ReadText(guard_path), nullptr, false);
+  ASSERT_TRUE(guard.is_object()) << ReadText(guard_path);
+  EXPECT_EQ(guard.value("actuator", ""), "gate1_setpoint");
+  EXPECT_DOUBLE_EQ(guard.value("nominal_setpoint", 0.0), nominal);
+
+  // At once, with the same configuration and state directory.
+  auto second = StartDaemon(dir, config, "canalidd-2.log", "run-2.lcmlog");
+  const std::string marker = "interrupted experiment on reach pool2: restoring nominal ";
+  const std::string interrupted = second->WaitForLine(marker, 20000);
+  ASSERT_FALSE(interrupted.empty()) << second->output();
+  EXPECT_NEAR(std::stod(interrupted.substr(interrupted.find(marker) + marker.size())), nominal,
+              1e-6)
+      << interrupted;
+  EXPECT_NE(interrupted.find(" persisted at "), std::string::npos) << interrupted;
+  const std::string restored =
+      second->WaitForLine(" restored", 20000, Position(*second, interrupted));
+  ASSERT_FALSE(restored.empty()) << second->output();
+  ASSERT_FALSE(
+      second->WaitForLine("experiment exciting", 20000, Position(*second, restored)).empty())
+      << second->output();
+  // The new experiment moves the gate to both PRBS levels around the true nominal, never further
+  // (around the PRBS level it would reach nominal +- 2 x amplitude; bounded: 200 reads, 50 ms
+  // apart).
+  bool below = false, above = false, off_centre = false;
+  for (int i = 0; i < 200 && !(below && above); ++i) {
+    const double value = ReadSetpoint(master);
+    below = below || std::abs(value - (nominal - kAmplitude)) < 1e-4;
+    above = above || std::abs(value - (nominal + kAmplitude)) < 1e-4;
+    off_centre = off_centre || std::abs(value - nominal) > kAmplitude + 1e-4;
+    second->WaitForLine("never printed", 50);
+  }
+  EXPECT_TRUE(below && above) << second->output();
+  EXPECT_FALSE(off_centre);
+  EXPECT_EQ(second->Stop(SIGTERM), 0) << second->output();
+  EXPECT_NEAR(ReadSetpoint(master), nominal, 1e-4);
+  EXPECT_EQ(second->output().find("(read from the PLC)"), std::string::npos) << second->output();
+  // The clean stop confirmed the nominal: no guard is left for the next start.
+  EXPECT_FALSE(fs::exists(guard_path)) << ReadText(guard_path);
+
+  // The gate as the restarted daemon polled it: the PRBS level, then the restarted daemon's first
+  // writes, straight to the true nominal (in steps when the rate limit cuts them, never past it);
+  // only then the new PRBS around it.
+  const LcmRecord record = ReadLcmLog(dir / "run-2.lcmlog");
+  const std::vector<double> gate = ChannelValues(record.samples, "gate1_setpoint");
+  ASSERT_FALSE(gate.empty());
+  EXPECT_NEAR(gate.front(), prbs_level, 1e-6);
+  std::size_t k = 1;
+  for (; k < gate.size() && std::abs(gate[k] - nominal) > 1e-6; ++k) {
+    EXPECT_LE(std::abs(gate[k] - nominal), std::abs(gate[k - 1] - nominal) + 1e-9)
+        << "sample " << k << ": " << gate[k] << " moves away from the nominal " << nominal;
+  }
+  ASSERT_LT(k, gate.size()) << "the nominal never came back";
+  for (; k < gate.size(); ++k)
+    EXPECT_LE(std::abs(gate[k] - nominal), kAmplitude + 1e-4) << k << ": " << gate[k];
+  // The experiment state message says so; `canalid replay` reads the restarted run without a
+  // divergence (a second of samples gives no online estimate yet: "no model" is its exit 1).
+  bool published = false;
+  lcm::LogFile log((dir / "run-2.lcmlog").string(), "r");
+  while (const lcm::LogEvent* e = log.readNextEvent()) {
+    if (e->channel != "CANALID_ASCE2_EXPERIMENT_pool2") continue;
+    canalid::experiment_state_t m;
+    if (m.decode(e->data, 0, e->datalen) != e->datalen) continue;
+    if (m.reason.rfind("interrupted experiment: restoring nominal", 0) == 0) {
+      published = true;
+      EXPECT_EQ(static_cast<int>(m.state), +canalid::experiment_state_t::STATE_ABORTED);
+      EXPECT_NEAR(m.setpoint, nominal, 1e-9);
+    }
+  }
+  EXPECT_TRUE(published);
+  const ProgramRun replay =
+      RunProgram(CanalidProgram() + " replay " + (dir / "run-2.lcmlog").string(), dir);
+  EXPECT_TRUE(replay.exit_code == 0 || replay.err.find("no model: no reach had samples for an "
+                                                       "estimate") != std::string::npos)
+      << replay.err;
+  EXPECT_EQ(replay.err.find("diverges"), std::string::npos) << replay.err;
+  EXPECT_EQ(replay.err.find("cannot"), std::string::npos) << replay.err;
 }
 
 // canalsim serve on `port` (0: a free one) as a plain child, so it can be restarted on the same

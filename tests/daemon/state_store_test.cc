@@ -1,5 +1,6 @@
 // StateStore: round trip, atomic replacement, a crash between write and rename, and corrupt,
-// truncated or inconsistent files, which are reported with their path and ignored.
+// truncated or inconsistent files, which are reported with their path and ignored; the experiment
+// guard: round trip, removal, and corrupt or truncated guards reported as corrupt.
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
@@ -164,6 +165,74 @@ TEST(StateStoreCounters, RoundTripAndCorruption) {
   testing::WriteFile(path, full.substr(0, full.size() / 2));
   EXPECT_TRUE(store.LoadCommandCounters(&problem).empty());
   EXPECT_NE(problem.find(path.string()), std::string::npos) << problem;
+}
+
+core::ExperimentGuard Guard() {
+  core::ExperimentGuard g;
+  g.reach = "pool2";
+  g.actuator = "gate1_setpoint";
+  g.experiment = "pool2_prbs";
+  g.nominal_setpoint = 1.532637354;
+  g.started_utime_us = 1763700000123456;
+  return g;
+}
+
+TEST(StateStoreGuard, RoundTripRemoveAndNotAModel) {
+  const auto dir =
+      testing::TestDirectory(std::string("state_store_guard.") +
+                             ::testing::UnitTest::GetInstance()->current_test_info()->name());
+  StateStore store(dir);
+  EXPECT_EQ(store.LoadGuard("pool2").kind, core::GuardReading::Kind::kNone);
+  store.SaveGuard(Guard());
+  EXPECT_EQ(store.GuardPath("pool2"), dir / "pool2.experiment.json");
+  const core::GuardReading r = store.LoadGuard("pool2");
+  ASSERT_EQ(r.kind, core::GuardReading::Kind::kFound) << r.problem;
+  EXPECT_EQ(r.guard.reach, "pool2");
+  EXPECT_EQ(r.guard.actuator, "gate1_setpoint");
+  EXPECT_EQ(r.guard.experiment, "pool2_prbs");
+  EXPECT_EQ(r.guard.nominal_setpoint, 1.532637354);  // exact: JSON keeps every digit
+  EXPECT_EQ(r.guard.started_utime_us, 1763700000123456);
+  // Neither a model nor a problem for LoadAll, and no model kind may take its name.
+  const StateLoadReport report = store.LoadAll();
+  EXPECT_TRUE(report.models.empty());
+  EXPECT_TRUE(report.problems.empty());
+  EXPECT_THROW(store.PathFor("pool2", "experiment"), std::invalid_argument);
+  store.RemoveGuard("pool2");
+  EXPECT_FALSE(std::filesystem::exists(dir / "pool2.experiment.json"));
+  EXPECT_EQ(store.LoadGuard("pool2").kind, core::GuardReading::Kind::kNone);
+  store.RemoveGuard("pool2");  // none: no error
+}
+
+TEST(StateStoreGuard, CorruptTruncatedOrInconsistentGuardsAreReportedAsCorrupt) {
+  const auto dir =
+      testing::TestDirectory(std::string("state_store_guard.") +
+                             ::testing::UnitTest::GetInstance()->current_test_info()->name());
+  StateStore store(dir);
+  store.SaveGuard(Guard());
+  const auto path = dir / "pool2.experiment.json";
+  const std::string full = testing::ReadFile(path);
+  auto expect_corrupt = [&](const std::string& text, const std::string& why) {
+    testing::WriteFile(path, text);
+    const core::GuardReading r = store.LoadGuard("pool2");
+    EXPECT_EQ(r.kind, core::GuardReading::Kind::kCorrupt) << why;
+    EXPECT_NE(r.problem.find(path.string()), std::string::npos) << why << ": " << r.problem;
+  };
+  for (const std::size_t n : {std::size_t{0}, std::size_t{1}, full.size() / 2, full.size() - 3})
+    expect_corrupt(full.substr(0, n), "truncated to " + std::to_string(n) + " bytes");
+  expect_corrupt(std::string(64, '\0'), "zeros (a block never written)");
+  expect_corrupt("[1, 2]", "not an object");
+  std::string no_nominal = full;
+  no_nominal.replace(no_nominal.find("nominal_setpoint"), 16, "nominal");
+  expect_corrupt(no_nominal, "no nominal_setpoint");
+  std::string text_nominal = full;
+  text_nominal.replace(text_nominal.find("1.532637354"), 11, "\"1.53\"");
+  expect_corrupt(text_nominal, "a nominal that is text");
+  std::string other_reach = full;
+  other_reach.replace(other_reach.find("\"pool2\""), 7, "\"pool3\"");
+  expect_corrupt(other_reach, "names another reach");
+  std::string other_format = full;
+  other_format.replace(other_format.find("canalid-experiment-guard-v1"), 27, "canalid-state-v1");
+  expect_corrupt(other_format, "another format");
 }
 
 }  // namespace
