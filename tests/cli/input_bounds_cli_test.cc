@@ -135,7 +135,8 @@ TEST_F(InputBoundsCli, LpvDegreeIsCheckedBeforeUse) {
 // An unstable ARX model wrote a CSV of inf and nan rows with exit 0.
 TEST_F(InputBoundsCli, NonFiniteSimulationIsAnErrorAndWritesNothing) {
   const nlohmann::json model = {{"model", "arx"}, {"na", 1},       {"nb", {1}},
-                                {"nk", {1}},      {"a", {-1e200}}, {"b_coeffs", {{1.0}}}};
+                                {"nk", {1}},      {"a", {-1e200}}, {"b_coeffs", {{1.0}}},
+                                {"inputs", {"u"}}};
   EXPECT_INPUT_ERROR(Simulate(model, "step.csv"),
                      "(model 'arx'): the simulated output is inf from row 13 (time_s 13.000000)");
 }
