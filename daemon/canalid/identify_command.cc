@@ -168,7 +168,6 @@ void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code)
   online->add_flag("--online", options.online,
                    "Run the recursive estimator sample by sample; print its final snapshot");
   online->add_option("--forgetting", options.forgetting, "Forgetting factor lambda, 0 < L <= 1")
-      ->check(FiniteIn(0.0, 1.0, true))
       ->capture_default_str();
   online
       ->add_option("--method", options.method,
