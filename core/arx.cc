@@ -51,25 +51,32 @@ int ArxOrders::min_first_sample() const {
 }
 
 void ArxOrders::Validate(Eigen::Index num_inputs) const {
-  if (na < 0) throw std::invalid_argument("ArxOrders.na = " + Str(na) + " must be >= 0");
+  const auto check = [](const std::string& name, long long value, long long max) {
+    if (value < 0 || value > max) {
+      throw std::invalid_argument("ArxOrders." + name + " = " + std::to_string(value) +
+                                  " is out of range (allowed: 0.." + std::to_string(max) + ")");
+    }
+  };
+  check("na", na, kMaxArxOrder);
   if (static_cast<Eigen::Index>(nb.size()) != num_inputs ||
       static_cast<Eigen::Index>(nk.size()) != num_inputs) {
     throw std::invalid_argument("ArxOrders: nb has " + Str(Eigen::Index(nb.size())) +
                                 " and nk has " + Str(Eigen::Index(nk.size())) +
                                 " entries; both must have one per input (" + Str(num_inputs) + ")");
   }
+  long long parameters = na;
   for (std::size_t i = 0; i < nb.size(); ++i) {
-    if (nb[i] < 0) {
-      throw std::invalid_argument("ArxOrders.nb[" + Str(Eigen::Index(i)) + "] = " + Str(nb[i]) +
-                                  " must be >= 0");
-    }
-    if (nk[i] < 0) {
-      throw std::invalid_argument("ArxOrders.nk[" + Str(Eigen::Index(i)) + "] = " + Str(nk[i]) +
-                                  " must be >= 0");
-    }
+    check("nb[" + Str(Eigen::Index(i)) + "]", nb[i], kMaxArxOrder);
+    check("nk[" + Str(Eigen::Index(i)) + "]", nk[i], kMaxArxDelaySamples);
+    parameters += nb[i];
   }
-  if (num_parameters() < 1) {
+  if (parameters < 1) {
     throw std::invalid_argument("ArxOrders: na + sum(nb) = 0; the model needs a parameter");
+  }
+  if (parameters > kMaxArxParameters) {
+    throw std::invalid_argument("ArxOrders: na + sum(nb) = " + std::to_string(parameters) +
+                                " is out of range (allowed: 1.." +
+                                std::to_string(kMaxArxParameters) + ")");
   }
 }
 

@@ -4,6 +4,13 @@
 
 namespace canalid::core {
 
+/// Largest ARX orders accepted: na and each nb_i at most kMaxArxOrder, na + sum(nb) at most
+/// kMaxArxParameters (the regressor matrix has that many columns), each nk_i at most
+/// kMaxArxDelaySamples (so that nb_i + nk_i - 1 and every index derived from it fit an int).
+inline constexpr int kMaxArxOrder = 1000;
+inline constexpr int kMaxArxParameters = 1000;
+inline constexpr int kMaxArxDelaySamples = 10000000;
+
 /// Orders of a multi-input ARX model in MATLAB's convention:
 ///   y(t) + a_1 y(t-1) + ... + a_na y(t-na)
 ///     = sum_i [b_i1 u_i(t-nk_i) + ... + b_i,nb_i u_i(t-nk_i-nb_i+1)] + e(t)
@@ -20,7 +27,9 @@ struct ArxOrders {
   /// max(na, max_i(nb_i + nk_i - 1)) over inputs with nb_i > 0.
   int min_first_sample() const;
   /// @throws std::invalid_argument naming the field, the value and the allowed range
-  ///         (na >= 0, nb_i >= 0, nk_i >= 0, sizes == num_inputs, at least one parameter).
+  ///         (0 <= na, nb_i <= kMaxArxOrder, 0 <= nk_i <= kMaxArxDelaySamples, sizes ==
+  ///         num_inputs, 1 <= na + sum(nb) <= kMaxArxParameters).  Call it before the other
+  ///         members on orders from outside: they assume these bounds.
   void Validate(Eigen::Index num_inputs) const;
 };
 

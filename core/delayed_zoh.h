@@ -2,7 +2,10 @@
 #include <Eigen/Core>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 #include <unsupported/Eigen/MatrixFunctions>
+
+#include "core/fractional_delay.h"
 
 namespace canalid::core {
 
@@ -22,7 +25,9 @@ class DelayedZoh final {
   using Vector = Eigen::Matrix<double, N, 1>;
   using RowVector = Eigen::Matrix<double, 1, N>;
 
-  /// @throws std::invalid_argument if sample_time_s <= 0 or delay_s < 0 (or not finite).
+  /// @throws std::invalid_argument if sample_time_s <= 0 or delay_s < 0 (or not finite), or if
+  ///         delay_s / sample_time_s exceeds kMaxDelaySamples (1e7 samples: the whole count is an
+  ///         int, and SoptdPlant keeps a ring of that many inputs).
   DelayedZoh(const Matrix& a, const Vector& b, const RowVector& c, double sample_time_s,
              double delay_s)
       : c_(c) {
@@ -33,6 +38,12 @@ class DelayedZoh final {
       throw std::invalid_argument("DelayedZoh: delay_s must be >= 0");
     }
     const double samples = delay_s / sample_time_s;
+    if (!(samples <= kMaxDelaySamples)) {
+      throw std::invalid_argument(
+          "DelayedZoh: delay_s / sample_time_s = " + std::to_string(delay_s) + " s / " +
+          std::to_string(sample_time_s) + " s = " + std::to_string(samples) +
+          " samples must be in [0, 1e7]");
+    }
     whole_delay_ = static_cast<int>(std::floor(samples));
     const double fraction = samples - whole_delay_;
     Matrix phi_rest;

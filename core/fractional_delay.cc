@@ -11,7 +11,7 @@ ZohDelaySplit SplitZohDelay(double delay_s, double sample_time_s) {
     throw std::invalid_argument("SplitZohDelay: sample_time_s = " + std::to_string(sample_time_s) +
                                 " must be > 0");
   }
-  if (!(delay_s >= 0.0) || !std::isfinite(delay_s) || delay_s / sample_time_s > 1e7) {
+  if (!(delay_s >= 0.0) || !std::isfinite(delay_s) || delay_s / sample_time_s > kMaxDelaySamples) {
     throw std::invalid_argument("SplitZohDelay: delay_s = " + std::to_string(delay_s) +
                                 " must be in [0, 1e7 sample times]");
   }

@@ -3,6 +3,10 @@
 
 namespace canalid::core {
 
+/// The longest delay, in samples, that a simulator accepts: delay lines and plants keep a ring of
+/// that many inputs (8 bytes each, so at most 80 MB), and the whole count must fit an int.
+inline constexpr double kMaxDelaySamples = 1e7;
+
 /// A delay tau = (whole_samples + fraction) Ts, 0 <= fraction < 1.  Over the sample interval
 /// [k Ts, (k+1) Ts) a zero-order-held input u delayed by tau equals u[k - whole - 1] during the
 /// first fraction * Ts and u[k - whole] afterwards (the "delayed ZOH split").
@@ -12,7 +16,7 @@ struct ZohDelaySplit {
 };
 
 /// @throws std::invalid_argument unless delay_s >= 0 and sample_time_s > 0 (finite), or when the
-///         delay exceeds 1e7 samples.
+///         delay exceeds kMaxDelaySamples (1e7) samples.
 ZohDelaySplit SplitZohDelay(double delay_s, double sample_time_s);
 
 /// Ring buffer of the last whole_samples + 2 inputs (zero before the first Push), giving the two

@@ -10,6 +10,7 @@
 #include "core/fractional_simulator.h"
 #include "core/least_squares.h"
 #include "core/levenberg_marquardt.h"
+#include "core/oustaloup.h"
 
 namespace canalid::core {
 namespace {
@@ -61,9 +62,10 @@ void CheckOptions(const FractionalFoptdFitOptions& o) {
                                 std::to_string(o.alpha_min) + ", " + std::to_string(o.alpha_max) +
                                 "] must satisfy 0 < min < max < 2");
   }
-  if (!(o.sections_per_decade > 0.0)) {
+  if (!(o.sections_per_decade > 0.0 && o.sections_per_decade <= kMaxOustaloupSectionsPerDecade)) {
     throw std::invalid_argument("FractionalFoptdFitOptions: sections_per_decade = " +
-                                std::to_string(o.sections_per_decade) + " must be > 0");
+                                std::to_string(o.sections_per_decade) +
+                                " is out of range (allowed: > 0 and <= 20)");
   }
   if (o.max_iterations < 1) {
     throw std::invalid_argument("FractionalFoptdFitOptions: max_iterations = " +

@@ -18,7 +18,7 @@ struct FractionalFoptdFitOptions {
   bool refine = true;
   /// Oustaloup density used for the simulations inside the fit (2 keeps the model error below
   /// ~0.3 % of K at Ts = 0.15 s and a fit of 2,400 samples well under 0.2 s).
-  double sections_per_decade = 2.0;
+  double sections_per_decade = 2.0;  ///< (0, 20]
   int max_iterations = 60;
 };
 

@@ -35,12 +35,8 @@ OustaloupRealization FractionalFoptdModel(const FractionalFoptdParams& params, d
   }
   OustaloupOptions o = band;
   if (!(o.low_frequency_rad_s > 0.0)) o = DefaultOustaloupOptions(params, sample_time_s, 0.0);
-  if (!(o.sections_per_decade > 0.0)) {
-    throw std::invalid_argument("OustaloupOptions: sections_per_decade = " +
-                                std::to_string(o.sections_per_decade) + " must be > 0");
-  }
-  const double decades = std::log10(o.high_frequency_rad_s / o.low_frequency_rad_s);
-  const int sections = std::max(1, static_cast<int>(std::ceil(o.sections_per_decade * decades)));
+  const int sections =
+      OustaloupSections(o.low_frequency_rad_s, o.high_frequency_rad_s, o.sections_per_decade);
   const OustaloupRealization r = RealizeOustaloup(OustaloupApproximation(
       params.alpha - 1.0, o.low_frequency_rad_s, o.high_frequency_rad_s, sections));
   const Eigen::Index n = r.a.rows();

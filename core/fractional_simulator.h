@@ -18,7 +18,7 @@ namespace canalid::core {
 struct OustaloupOptions {
   double low_frequency_rad_s = 1e-4;
   double high_frequency_rad_s = 1e3;
-  double sections_per_decade = 3.0;
+  double sections_per_decade = 3.0;  ///< (0, 20]; at most 200 sections over the band (oustaloup.h)
 };
 
 /// The band used when none is given: [0.002 / H, 50 / Ts] rad/s with H = max(horizon_s,
@@ -36,7 +36,8 @@ OustaloupOptions DefaultOustaloupOptions(const FractionalFoptdParams& params, do
 /// approximation: the ZOH result equals the continuous step response to rounding).
 class OustaloupFoptdSimulator final {
  public:
-  /// @throws std::invalid_argument on invalid params, sample_time_s <= 0 or a bad band.
+  /// @throws std::invalid_argument on invalid params, sample_time_s <= 0, a delay over 1e7
+  ///         samples or a bad band (OustaloupSections: density and section count bounded).
   OustaloupFoptdSimulator(const FractionalFoptdParams& params, double sample_time_s,
                           const OustaloupOptions& options);
   double output() const { return output_; }

@@ -7,10 +7,22 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/fractional_delay.h"
 #include "core/fractional_simulator.h"
 
 namespace canalid::core {
 namespace {
+
+// A delay in samples carried as a real parameter (a polynomial in theta, or a local fit's nk),
+// rounded and clamped below at `min`.  std::lround of a value beyond long (or NaN) is undefined,
+// and the count indexes the record, so it is checked against kMaxDelaySamples first.
+long DelaySamples(double value, long min, const char* where) {
+  if (!(std::abs(value) <= kMaxDelaySamples)) {
+    throw std::invalid_argument(std::string(where) + ": delay nk = " + std::to_string(value) +
+                                " samples is out of range (allowed: |nk| <= 1e7)");
+  }
+  return std::max(min, std::lround(value));
+}
 
 constexpr const char* kArxName = "first_order_arx";
 
@@ -60,7 +72,7 @@ LocalModelKind FirstOrderArxKind(int max_delay_samples) {
     return params;
   };
   kind.simulate = [](const Eigen::VectorXd& p, const Eigen::VectorXd& du, double) {
-    const long nk = std::max(1L, std::lround(p(2)));
+    const long nk = DelaySamples(p(2), 1L, "first-order ARX local");
     Eigen::VectorXd y = Eigen::VectorXd::Zero(du.size());
     for (Eigen::Index k = 1; k < du.size(); ++k) {
       y(k) = -p(0) * y(k - 1) + p(1) * (k - nk >= 0 ? du(k - nk) : 0.0);
@@ -120,7 +132,7 @@ LocalModelKind CommensurateKind(int q, int max_delay_samples,
     m.q = q;
     m.a = p.head(n);
     m.c = p.segment(n, n - 1);
-    m.delay_samples = static_cast<int>(std::max(0L, std::lround(p(2 * n - 1))));
+    m.delay_samples = static_cast<int>(DelaySamples(p(2 * n - 1), 0L, "frac-ss local"));
     return SimulateCommensurate(m, du, options.memory_length);
   };
   return kind;
@@ -284,8 +296,8 @@ Eigen::VectorXd SimulateLpvArx(const LpvModel& model, const Eigen::Ref<const Eig
     const double b1 = EvaluatePolynomial(model.coefficients.row(1).transpose(), theta(k));
     // At least one sample, as documented: a polynomial extrapolated below 0.5 would otherwise
     // read du(k) or beyond the end of the record.
-    const long nk = std::max(
-        1L, std::lround(EvaluatePolynomial(model.coefficients.row(2).transpose(), theta(k))));
+    const long nk = DelaySamples(
+        EvaluatePolynomial(model.coefficients.row(2).transpose(), theta(k)), 1L, "SimulateLpvArx");
     y(k) = -a1 * y(k - 1) + b1 * (k - nk >= 0 ? du(k - nk) : 0.0);
   }
   return y;

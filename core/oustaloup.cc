@@ -1,10 +1,32 @@
 #include "core/oustaloup.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 
 namespace canalid::core {
+
+int OustaloupSections(double low_rad_s, double high_rad_s, double sections_per_decade) {
+  if (!(low_rad_s > 0.0 && high_rad_s > low_rad_s) || !std::isfinite(high_rad_s)) {
+    throw std::invalid_argument("Oustaloup band [" + std::to_string(low_rad_s) + ", " +
+                                std::to_string(high_rad_s) + "] rad/s must satisfy 0 < low < high");
+  }
+  if (!(sections_per_decade > 0.0 && sections_per_decade <= kMaxOustaloupSectionsPerDecade)) {
+    throw std::invalid_argument(
+        "Oustaloup sections_per_decade = " + std::to_string(sections_per_decade) +
+        " is out of range (allowed: > 0 and <= 20)");
+  }
+  const double decades = std::log10(high_rad_s / low_rad_s);
+  const double sections = std::max(1.0, std::ceil(sections_per_decade * decades));
+  if (!(sections <= kMaxOustaloupSections)) {
+    throw std::invalid_argument(
+        "Oustaloup sections = " + std::to_string(sections) + " (" +
+        std::to_string(sections_per_decade) + " per decade over " + std::to_string(decades) +
+        " decades) is out of range (allowed: 1.." + std::to_string(kMaxOustaloupSections) + ")");
+  }
+  return static_cast<int>(sections);
+}
 
 OustaloupFilter OustaloupApproximation(double gamma, double low_rad_s, double high_rad_s,
                                        int sections) {
@@ -17,9 +39,10 @@ OustaloupFilter OustaloupApproximation(double gamma, double low_rad_s, double hi
                                 ", " + std::to_string(high_rad_s) +
                                 "] rad/s must satisfy 0 < low < high");
   }
-  if (sections < 1) {
+  if (sections < 1 || sections > kMaxOustaloupSections) {
     throw std::invalid_argument("OustaloupApproximation: sections = " + std::to_string(sections) +
-                                " must be >= 1");
+                                " is out of range (allowed: 1.." +
+                                std::to_string(kMaxOustaloupSections) + ")");
   }
   OustaloupFilter filter;
   filter.gain = std::pow(high_rad_s, gamma);

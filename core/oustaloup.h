@@ -16,7 +16,21 @@ struct OustaloupFilter {
   Eigen::VectorXd poles_rad_s;
 };
 
-/// @throws std::invalid_argument unless -1 < gamma < 1, 0 < low < high and sections >= 1.
+/// Bounds on the approximation's density and size: the realisation has one state per section and
+/// is simulated with a dense matrix (cost N^2 per sample, N^3 to discretise), so beyond these
+/// the program would run for hours; the default band needs 2-3 per decade and about 25 in all.
+inline constexpr double kMaxOustaloupSectionsPerDecade = 20.0;
+inline constexpr int kMaxOustaloupSections = 200;
+
+/// The number of sections for a band at a density: ceil(sections_per_decade * log10(high/low)),
+/// at least 1.
+/// @throws std::invalid_argument naming the value unless 0 < low < high (finite), 0 <
+///         sections_per_decade <= kMaxOustaloupSectionsPerDecade and the count is at most
+///         kMaxOustaloupSections.
+int OustaloupSections(double low_rad_s, double high_rad_s, double sections_per_decade);
+
+/// @throws std::invalid_argument unless -1 < gamma < 1, 0 < low < high and
+///         1 <= sections <= kMaxOustaloupSections.
 OustaloupFilter OustaloupApproximation(double gamma, double low_rad_s, double high_rad_s,
                                        int sections);
 

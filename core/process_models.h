@@ -20,7 +20,8 @@ struct SoptdModel {
 
 /// Responses from rest to an input held constant over each sample (exact ZOH, sub-sample delay
 /// included, see DelayedZoh).  `u` and the result are deviations from the initial steady state.
-/// @throws std::invalid_argument for non-positive time constants, a negative delay or Ts <= 0.
+/// @throws std::invalid_argument for non-positive time constants, a negative delay, Ts <= 0 or a
+///         delay longer than kMaxDelaySamples (1e7) samples.
 Eigen::VectorXd Simulate(const FoptdModel& model, const Eigen::Ref<const Eigen::VectorXd>& u,
                          double sample_time_s);
 Eigen::VectorXd Simulate(const SoptdModel& model, const Eigen::Ref<const Eigen::VectorXd>& u,

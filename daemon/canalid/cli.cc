@@ -1,8 +1,10 @@
 #include "daemon/canalid/cli.h"
 
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <exception>
 #include <iostream>
+#include <sstream>
 #include <string>
 
 #include "canalid/version.h"
@@ -15,6 +17,31 @@
 #include "daemon/canalid/simulate_command.h"
 
 namespace canalid::cli {
+
+CLI::Validator FiniteIn(double lo, double hi, bool open_low) {
+  std::ostringstream range;
+  range << (open_low ? "(" : "[") << lo << ", " << hi << "]";
+  const std::string text = range.str();
+  return CLI::Validator(
+      [lo, hi, open_low, text](std::string& input) -> std::string {
+        double value = 0.0;
+        std::size_t used = 0;
+        try {
+          value = std::stod(input, &used);
+        } catch (const std::exception&) {
+          used = 0;
+        }
+        if (used == 0 || used != input.size()) return "'" + input + "' is not a number";
+        const bool above_low = open_low ? value > lo : value >= lo;
+        if (!std::isfinite(value) || !above_low || !(value <= hi)) {
+          return input + " is out of range (allowed: a finite number in " + text + ")";
+        }
+        return std::string();
+      },
+      "FINITE in " + text);
+}
+
+CLI::Validator FinitePositive() { return FiniteIn(0.0, std::numeric_limits<double>::max(), true); }
 
 int Run(int argc, char** argv) {
   CLI::App app{"canalid: identification of canal pools from experiment data (offline tool)"};

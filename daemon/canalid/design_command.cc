@@ -6,6 +6,7 @@
 
 #include "core/experiment_design.h"
 #include "core/prbs.h"
+#include "daemon/canalid/cli.h"
 #include "daemon/canalid/input_error.h"
 #include "drivers/csv/csv_table.h"
 #include "drivers/json/model_json.h"
@@ -67,16 +68,16 @@ void AddDesignCommand(CLI::App& app, DesignOptions& options, int& exit_code) {
       "  canalid design --nominal-flow 10 --delay-s 682 --sample-time-s 60 --csv prbs.csv");
   cmd->add_option("--nominal-flow", options.nominal_flow_m3s, "Nominal inflow, m3/s")
       ->required()
-      ->check(CLI::PositiveNumber);
+      ->check(FinitePositive());
   cmd->add_option("--delay-s", options.delay_s, "Expected delay of the pool, s")
       ->required()
-      ->check(CLI::PositiveNumber);
+      ->check(FinitePositive());
   cmd->add_option("--sample-time-s", options.sample_time_s, "Sample time, s")
       ->required()
-      ->check(CLI::PositiveNumber);
+      ->check(FinitePositive());
   cmd->add_option("--amplitude-percent", options.amplitude_percent,
                   "PRBS amplitude, % of the nominal flow (5-10)")
-      ->check(CLI::Range(5.0, 10.0))
+      ->check(FiniteIn(5.0, 10.0))
       ->capture_default_str();
   cmd->add_option("--csv", options.csv, "Write the PRBS inflow as time_s,value");
   cmd->add_option("--seed", options.seed, "Nonzero LFSR start state")

@@ -61,6 +61,7 @@ nlohmann::json IdentifyArx(const IdentifyOptions& options, const drivers::CsvTab
     // Validation by simulation from the first measured outputs, not one-step prediction.
     const Eigen::Index warmup = std::max<Eigen::Index>(model.first_sample, 1);
     const Eigen::VectorXd simulated = core::SimulateArx(model, u, y.head(warmup));
+    RequireFiniteOutput(simulated.tail(y.size() - warmup), warmup, table, "--model arx (fitted)");
     json["metrics"] = drivers::ToJson(core::ComputeMetrics(
         y.tail(y.size() - warmup), simulated.tail(y.size() - warmup), table.sample_time_s()));
     return json;

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "daemon/canalid/cli.h"
 #include "daemon/canalid/input_error.h"
 #include "drivers/csv/csv_table.h"
 
@@ -77,7 +78,7 @@ void AddIdentifyModelOptions(CLI::App& cmd, IdentifyOptions& options) {
                  "Longest delay tried, s (id: a third of the record; frac-foptd: half; frac-ss: "
                  "min(record/10, "
                  "100 samples); lpv arx/frac-ss locals: 20 samples)")
-      ->check(CLI::PositiveNumber);
+      ->check(FiniteIn(0.0, 1e9, true));
   id->add_option("--closed-loop", options.closed_loop,
                  "auto: decide from the data; on: three-step method (--online: instrumental-"
                  "variable RLS, instrument the integrated delayed inflow); three-step: the "
@@ -90,7 +91,7 @@ void AddIdentifyModelOptions(CLI::App& cmd, IdentifyOptions& options) {
                  "--online: IDZ direct outflow gain p22, s/m2 (from the geometry, e.g. Litrico & "
                  "Fromion's tables): fits level + p22 q_out.  With a level-driven gate b cannot be "
                  "told from p22, so without it the area comes out as A (1 + p22 g)")
-      ->check(CLI::Range(0.0, 10.0))
+      ->check(FiniteIn(0.0, 10.0))
       ->capture_default_str();
   id->add_flag("--keep-outliers", options.keep_outliers,
                "Do not replace level spikes before fitting");
@@ -111,7 +112,7 @@ void AddIdentifyModelOptions(CLI::App& cmd, IdentifyOptions& options) {
   auto* frac = cmd.add_option_group("Fractional models (--model frac-foptd|frac-ss)");
   auto* alpha = frac->add_option("--alpha", options.alpha,
                                  "frac-foptd: hold alpha at this value (0 < A < 2), fit the rest")
-                    ->check(CLI::Range(1e-6, 2.0 - 1e-6));
+                    ->check(FiniteIn(1e-6, 2.0 - 1e-6));
   auto* q = frac->add_option("--q", options.q, "frac-ss: commensurate order alpha = 1/q (1, 2, 4)")
                 ->check(CLI::IsMember({1, 2, 4}));
   alpha->excludes(q);

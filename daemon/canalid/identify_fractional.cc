@@ -33,12 +33,13 @@ nlohmann::json FitFractionalFoptd(const IdentifyOptions& options, const Eigen::V
   return json;
 }
 
+// max_delay_samples < 0: the default min(record / 10, 100 samples).
 nlohmann::json FitCommensurate(const IdentifyOptions& options, const Eigen::VectorXd& u,
-                               const Eigen::VectorXd& y, double ts) {
+                               const Eigen::VectorXd& y, double ts, int max_delay_samples) {
   const int q = options.q > 0 ? options.q : 2;
   const Eigen::Index n = u.size();
-  const int max_delay = options.max_delay_s > 0.0
-                            ? static_cast<int>(std::lround(options.max_delay_s / ts))
+  const int max_delay = max_delay_samples >= 0
+                            ? max_delay_samples
                             : static_cast<int>(std::min<Eigen::Index>(n / 10, 100));
   core::CommensurateFitOptions fit;
   const core::CommensurateFitResult result =
@@ -57,9 +58,14 @@ nlohmann::json IdentifyFractional(const IdentifyOptions& options, const drivers:
   }
   const Eigen::VectorXd u = RequireMovingColumn(table, options.u);
   const Eigen::VectorXd y = RequireColumn(table, options.y);
+  const int max_delay_samples =
+      options.model == "frac-ss" && options.max_delay_s > 0.0
+          ? OptionSamples(options.max_delay_s, table, "--max-delay-s", true)
+          : -1;
   try {
-    return options.model == "frac-foptd" ? FitFractionalFoptd(options, u, y, table.sample_time_s())
-                                         : FitCommensurate(options, u, y, table.sample_time_s());
+    return options.model == "frac-foptd"
+               ? FitFractionalFoptd(options, u, y, table.sample_time_s())
+               : FitCommensurate(options, u, y, table.sample_time_s(), max_delay_samples);
   } catch (const std::invalid_argument& e) {
     throw InputError(table.source() + ": " + e.what());
   }

@@ -15,7 +15,9 @@ nlohmann::json IdentifyId(const IdentifyOptions& options, const drivers::CsvTabl
   const double ts = table.sample_time_s();
   core::IdPipelineOptions pipeline;
   pipeline.remove_level_outliers = !options.keep_outliers;
-  if (options.max_delay_s > 0.0) pipeline.fit.max_nk = static_cast<int>(options.max_delay_s / ts);
+  if (options.max_delay_s > 0.0) {
+    pipeline.fit.max_nk = OptionSamples(options.max_delay_s, table, "--max-delay-s", false);
+  }
   // The batch's closed-loop method is the three-step one: "on" and "three-step" are the same.
   pipeline.fit.closed_loop = options.closed_loop == "on" || options.closed_loop == "three-step"
                                  ? core::ClosedLoopMode::kOn

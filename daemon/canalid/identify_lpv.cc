@@ -78,10 +78,11 @@ std::vector<double> Edges(const IdentifyOptions& options) {
   return ParseEdges(text.str(), options.bands_file);
 }
 
-core::LocalModelKind LocalKind(const IdentifyOptions& options, double ts) {
-  const int max_delay = options.max_delay_s > 0.0
-                            ? std::max(1, static_cast<int>(std::lround(options.max_delay_s / ts)))
-                            : kDefaultLocalMaxDelaySamples;
+core::LocalModelKind LocalKind(const IdentifyOptions& options, const drivers::CsvTable& table) {
+  const int max_delay =
+      options.max_delay_s > 0.0
+          ? std::max(1, OptionSamples(options.max_delay_s, table, "--max-delay-s", true))
+          : kDefaultLocalMaxDelaySamples;
   if (options.local == "arx") return core::FirstOrderArxKind(max_delay);
   if (options.local == "frac-foptd") return core::FractionalFoptdKind();
   if (options.local == "frac-ss")
@@ -97,7 +98,7 @@ nlohmann::json IdentifyLpv(const IdentifyOptions& options, const drivers::CsvTab
   if (options.local.empty()) throw InputError("--model lpv needs --local KIND");
   if (options.schedule.empty()) throw InputError("--model lpv needs --schedule COLUMN");
   const double ts = table.sample_time_s();
-  const core::LocalModelKind kind = LocalKind(options, ts);
+  const core::LocalModelKind kind = LocalKind(options, table);
   const std::vector<double> edges = Edges(options);
   const Eigen::VectorXd u = RequireMovingColumn(table, options.u);
   const Eigen::VectorXd y = RequireColumn(table, options.y);

@@ -129,8 +129,9 @@ nlohmann::json OnlineId(const IdentifyOptions& options, const drivers::CsvTable&
   core::OnlineIdOptions id;
   id.sample_time_s = ts;
   id.min_delay_samples = 0;
-  id.max_delay_samples = options.max_delay_s > 0.0 ? static_cast<int>(options.max_delay_s / ts)
-                                                   : static_cast<int>(n / 3);
+  id.max_delay_samples = options.max_delay_s > 0.0
+                             ? OptionSamples(options.max_delay_s, table, "--max-delay-s", false)
+                             : static_cast<int>(n / 3);
   id.wave_front_term = true;
   id.rls = ParseRlsOptions(options, 4);
   // The batch flag: on = instrumental-variable RLS, off = least squares, auto = both over the

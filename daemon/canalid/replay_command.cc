@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <iostream>
+#include <limits>
 #include <sstream>
 
 #include "daemon/canalid/cli.h"
@@ -141,8 +142,10 @@ void AddReplayCommand(CLI::App& app, ReplayOptions& options, int& exit_code) {
   cmd->add_option("--prefix", options.prefix,
                   "LCM channel prefix of the daemon (default: of the first configuration in the "
                   "log, or of --config)");
-  cmd->add_option("--from", options.from_s, "Start, seconds after the log's first sample");
-  cmd->add_option("--to", options.to_s, "End, seconds after the log's first sample");
+  cmd->add_option("--from", options.from_s, "Start, seconds after the log's first sample")
+      ->check(FiniteIn(std::numeric_limits<double>::lowest(), std::numeric_limits<double>::max()));
+  cmd->add_option("--to", options.to_s, "End, seconds after the log's first sample")
+      ->check(FiniteIn(std::numeric_limits<double>::lowest(), std::numeric_limits<double>::max()));
   cmd->add_option("--snapshot-every", options.snapshot_every,
                   "Print the online estimate every N samples (0: only batch models and the end)")
       ->check(CLI::NonNegativeNumber)

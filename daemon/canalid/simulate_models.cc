@@ -184,15 +184,23 @@ SimulatedOutput SimulateModel(const nlohmann::json& model, const std::string& so
                               const drivers::CsvTable& table, const SimulateOptions& options) {
   try {
     const std::string kind = drivers::ModelKind(model, source);
-    if (kind == "id") return SimulateId(model, source, table, options);
-    if (kind == "arx") return SimulateArxModel(model, source, table, options);
-    if (kind == "foptd" || kind == "soptd" || kind == "frac-foptd") {
-      return SimulateContinuous(kind, model, source, table, options);
+    SimulatedOutput out;
+    if (kind == "id") {
+      out = SimulateId(model, source, table, options);
+    } else if (kind == "arx") {
+      out = SimulateArxModel(model, source, table, options);
+    } else if (kind == "foptd" || kind == "soptd" || kind == "frac-foptd") {
+      out = SimulateContinuous(kind, model, source, table, options);
+    } else if (kind == "frac-ss") {
+      out = SimulateFracSs(model, source, table, options);
+    } else if (kind == "lpv") {
+      out = SimulateLpv(model, source, table, options);
+    } else {
+      throw InputError(source + ": key 'model': unknown kind '" + kind +
+                       "' (id, arx, foptd, soptd, frac-foptd, frac-ss, lpv)");
     }
-    if (kind == "frac-ss") return SimulateFracSs(model, source, table, options);
-    if (kind == "lpv") return SimulateLpv(model, source, table, options);
-    throw InputError(source + ": key 'model': unknown kind '" + kind +
-                     "' (id, arx, foptd, soptd, frac-foptd, frac-ss, lpv)");
+    RequireFiniteOutput(out.y, out.first_row, table, source + " (model '" + kind + "')");
+    return out;
   } catch (const drivers::ModelJsonError& e) {
     throw InputError(e.what());
   } catch (const std::invalid_argument& e) {

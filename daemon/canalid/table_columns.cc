@@ -1,6 +1,7 @@
 #include "daemon/canalid/table_columns.h"
 
 #include <charconv>
+#include <cmath>
 
 #include "daemon/canalid/input_error.h"
 
@@ -50,6 +51,32 @@ std::vector<int> ParseIntList(const std::string& text, const std::string& option
     values.push_back(v);
   }
   return values;
+}
+
+void RequireFiniteOutput(const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Index first_row,
+                         const drivers::CsvTable& table, const std::string& what) {
+  for (Eigen::Index k = 0; k < y.size(); ++k) {
+    if (std::isfinite(y(k))) continue;
+    const Eigen::Index row = first_row + k;
+    const std::string time =
+        row < table.rows() ? " (time_s " + std::to_string(table.time_s()(row)) + ")" : "";
+    throw InputError(what + ": the simulated output is " + std::to_string(y(k)) + " from row " +
+                     std::to_string(row) + time + " of " + table.source() +
+                     " (an unstable or overflowing model on this record); nothing written");
+  }
+}
+
+int OptionSamples(double seconds, const drivers::CsvTable& table, const std::string& option,
+                  bool nearest) {
+  const double samples = seconds / table.sample_time_s();
+  const double whole = nearest ? std::round(samples) : std::floor(samples);
+  if (!(whole >= 0.0 && whole < static_cast<double>(table.rows()))) {
+    throw InputError(option + " " + std::to_string(seconds) + " s is " + std::to_string(samples) +
+                     " samples of " + std::to_string(table.sample_time_s()) + " s; " +
+                     table.source() + " has " + std::to_string(table.rows()) +
+                     " rows (allowed: fewer samples than rows)");
+  }
+  return static_cast<int>(whole);
 }
 
 }  // namespace canalid::cli

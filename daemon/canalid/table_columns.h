@@ -16,4 +16,17 @@ Eigen::VectorXd RequireMovingColumn(const drivers::CsvTable& table, const std::s
 std::vector<std::string> SplitList(const std::string& text, const std::string& option);
 std::vector<int> ParseIntList(const std::string& text, const std::string& option);
 
+/// A simulated output must be finite before anything is written from it: @throws InputError
+/// naming `what` (file and model), the first row (of the table: first_row + index) where a
+/// non-finite value appeared, its time and the value.
+void RequireFiniteOutput(const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Index first_row,
+                         const drivers::CsvTable& table, const std::string& what);
+
+/// A duration option in whole samples of the table (seconds / Ts, rounded to the nearest with
+/// `nearest`, else down): checked before the conversion to be less than the record's rows, so
+/// that no int overflows and no delay outruns the data.  @throws InputError naming the option,
+/// the value in seconds and samples, and the record.
+int OptionSamples(double seconds, const drivers::CsvTable& table, const std::string& option,
+                  bool nearest);
+
 }  // namespace canalid::cli

@@ -4,6 +4,7 @@
 #include <optional>
 
 #include "core/fractional_foptd_fit.h"
+#include "core/oustaloup.h"
 
 namespace canalid::drivers {
 namespace {
@@ -162,6 +163,11 @@ core::ArxModel ArxModelFromJson(const json& j, const std::string& source) {
   m.orders.nk = IntList(j, "nk", source);
   const std::size_t inputs = m.orders.nb.size();
   if (m.orders.nk.size() != inputs) Fail(source, "nk", "needs one value per input (as nb)");
+  try {
+    m.orders.Validate(static_cast<Eigen::Index>(inputs));
+  } catch (const std::invalid_argument& e) {
+    Fail(source, "na/nb/nk", e.what());
+  }
   const std::vector<double> a = NumberList(Get(j, "a", source), "a", source);
   if (a.size() != static_cast<std::size_t>(m.orders.na)) {
     Fail(source, "a", std::to_string(a.size()) + " values but na = " + std::to_string(m.orders.na));
@@ -227,6 +233,10 @@ FractionalFoptdRecord FractionalFoptdFromJson(const json& j, const std::string& 
   r.low_frequency_rad_s = OptionalPositive(band, "low_frequency_rad_s", where);
   r.high_frequency_rad_s = OptionalPositive(band, "high_frequency_rad_s", where);
   r.sections_per_decade = OptionalPositive(band, "sections_per_decade", where);
+  if (r.sections_per_decade && !(*r.sections_per_decade <= core::kMaxOustaloupSectionsPerDecade)) {
+    Fail(where, "sections_per_decade",
+         std::to_string(*r.sections_per_decade) + " is out of range (allowed: > 0 and <= 20)");
+  }
   if (r.low_frequency_rad_s && r.high_frequency_rad_s &&
       !(*r.high_frequency_rad_s > *r.low_frequency_rad_s)) {
     Fail(source, "oustaloup", "high_frequency_rad_s must exceed low_frequency_rad_s");
@@ -292,24 +302,36 @@ LpvRecord LpvFromJson(const json& j, const std::string& source) {
   r.local_model = local.get<std::string>();
   r.schedule = schedule.get<std::string>();
   r.model.degree = Integer(j, "degree", source, 0);
+  if (r.model.degree > kMaxLpvDegree) {
+    Fail(source, "degree",
+         std::to_string(r.model.degree) + " is out of range (allowed: 0.." +
+             std::to_string(kMaxLpvDegree) + ")");
+  }
   const json& names = Get(j, "parameters", source);
-  if (!names.is_array() || names.empty()) Fail(source, "parameters", "needs a list of names");
+  if (!names.is_array() || names.empty() || names.size() > kMaxLpvParameters) {
+    Fail(source, "parameters",
+         "needs a list of 1.." + std::to_string(kMaxLpvParameters) + " names");
+  }
   const json& coefficients = Get(j, "coefficients", source);
   if (!coefficients.is_object()) {
     Fail(source, "coefficients", "not an object (parameter name -> list): " + coefficients.dump());
   }
-  r.model.coefficients.resize(static_cast<Eigen::Index>(names.size()), r.model.degree + 1);
+  // Every list is read and checked before the matrix is sized from them.
+  std::vector<std::vector<double>> rows;
   for (std::size_t i = 0; i < names.size(); ++i) {
     if (!names[i].is_string()) Fail(source, "parameters", "not a list of names");
     const std::string name = names[i].get<std::string>();
     r.model.parameter_names.push_back(name);
     const std::string key = "coefficients." + name;
     if (!coefficients.contains(name)) Fail(source, key, "missing");
-    const std::vector<double> p = NumberList(coefficients.at(name), key, source);
-    if (p.size() != static_cast<std::size_t>(r.model.degree + 1)) {
+    rows.push_back(NumberList(coefficients.at(name), key, source));
+    if (rows.back().size() != static_cast<std::size_t>(r.model.degree + 1)) {
       Fail(source, key, "needs degree + 1 = " + std::to_string(r.model.degree + 1) + " values");
     }
-    r.model.coefficients.row(static_cast<Eigen::Index>(i)) = Vector(p).transpose();
+  }
+  r.model.coefficients.resize(static_cast<Eigen::Index>(rows.size()), r.model.degree + 1);
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    r.model.coefficients.row(static_cast<Eigen::Index>(i)) = Vector(rows[i]).transpose();
   }
   r.input_offset = NumberOr(j, "input_offset", source, 0.0);
   r.output_offset = NumberOr(j, "output_offset", source, 0.0);

@@ -15,6 +15,11 @@
 
 namespace canalid::drivers {
 
+/// Largest "lpv" model read: polynomial degree and number of scheduled parameters (the CLI fits
+/// degree 0..6; a first-order ARX local has 3 parameters, the largest local kind 2 q + 2).
+inline constexpr int kMaxLpvDegree = 20;
+inline constexpr std::size_t kMaxLpvParameters = 64;
+
 /// A model JSON that cannot be read back: the message names the source (file) and the key,
 /// e.g. "m.json: key 'gain': missing".
 class ModelJsonError : public std::runtime_error {

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <random>
+#include <string>
 #include <vector>
 
 namespace canalid::core {
@@ -219,6 +220,51 @@ TEST(Arx, RejectsBadArguments) {
   const ArxModel m = FitArx(d.y, d.u, o);
   EXPECT_THROW(SimulateArx(m, d.u.leftCols(1)), std::invalid_argument);
   EXPECT_THROW(PredictArx(m, d.y.head(50), d.u), std::invalid_argument);
+}
+
+// The message of the std::invalid_argument `f` throws ("" when it throws none).
+template <class F>
+std::string ThrownMessage(F f) {
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// Regression: `--nk 2147483647` made min_first_sample() = nb + nk - 1 overflow to a negative
+// first sample and FitArx read before the record (SIGSEGV); --nb 2147483647 made na + sum(nb)
+// wrap to 0 ("needs a parameter", the wrong reason).  Each order is now range-checked by name.
+TEST(Arx, RejectsOrdersBeyondTheirBoundsNamingThem) {
+  const Data d = Generate(100, 0.01, 9);
+  ArxOrders o = TruthOrders();
+  o.nk = {1, 2147483647};
+  EXPECT_NE(ThrownMessage([&] {
+              FitArx(d.y, d.u, o);
+            }).find("ArxOrders.nk[1] = 2147483647 is out of range (allowed: 0..10000000)"),
+            std::string::npos);
+  o = TruthOrders();
+  o.nb = {2147483647, 3};
+  EXPECT_NE(ThrownMessage([&] {
+              FitArx(d.y, d.u, o);
+            }).find("ArxOrders.nb[0] = 2147483647 is out of range (allowed: 0..1000)"),
+            std::string::npos);
+  o = TruthOrders();
+  o.na = 2147483647;
+  EXPECT_NE(ThrownMessage([&] { FitArx(d.y, d.u, o); }).find("ArxOrders.na = 2147483647"),
+            std::string::npos);
+  o = TruthOrders();
+  o.na = 1000;
+  o.nb = {1000, 3};
+  EXPECT_NE(ThrownMessage([&] {
+              FitArx(d.y, d.u, o);
+            }).find("na + sum(nb) = 2003 is out of range (allowed: 1..1000)"),
+            std::string::npos);
+  // At the bound the orders are valid; the record is then too short, said as such.
+  o = TruthOrders();
+  o.nk = {1, kMaxArxDelaySamples};
+  EXPECT_NE(ThrownMessage([&] { FitArx(d.y, d.u, o); }).find("equations for"), std::string::npos);
 }
 
 }  // namespace

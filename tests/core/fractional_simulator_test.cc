@@ -179,5 +179,17 @@ TEST(FractionalSimulatorTest, RejectsBadArguments) {
   EXPECT_THROW(GlFoptdSimulator({1.0, 1.0, 0.5, 0.0}, 0.1, 0, 10), std::invalid_argument);
 }
 
+// Regression: a model JSON's "oustaloup": {"sections_per_decade": 1000} built a ~8000-state
+// simulator (the CLI ran for minutes) and 1e9 overflowed the section count to 1 (a wrong
+// simulation with exit 0).  The band of `canalid identify` on asce2-pool2-step.csv.
+TEST(FractionalSimulatorTest, RejectsAnOustaloupDensityBeyondTheBound) {
+  const FractionalFoptdParams p{5.987, 123660.0, 0.9427, 303.3};
+  for (const double density : {1000.0, 1e9}) {
+    const OustaloupOptions band{3.966679888932964e-08, 5.0, density};
+    EXPECT_THROW(OustaloupFoptdSimulator(p, 10.0, band), std::invalid_argument) << density;
+  }
+  EXPECT_NO_THROW(OustaloupFoptdSimulator(p, 10.0, {3.966679888932964e-08, 5.0, 20.0}));
+}
+
 }  // namespace
 }  // namespace canalid::core

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <random>
 #include <stdexcept>
+#include <string>
 
 #include "core/fractional_foptd.h"
 
@@ -198,6 +199,30 @@ TEST(LpvModelTest, ArxDelayPolynomialBelowOneSampleMeansOneSample) {
   for (Eigen::Index k = 0; k < 20; ++k) {
     EXPECT_NEAR(y(k), 2.0 * (1.0 - std::pow(0.5, static_cast<double>(k))), 1e-15) << k;
   }
+}
+
+// Regression: a hand-written "coefficients": {"nk": [1e19]} went through std::lround unchecked
+// (undefined beyond long: x86 gives LONG_MIN, clamped to 1), so a model with an absurd delay
+// simulated as a one-sample delay with exit 0.  Now an error naming the delay and the bound.
+TEST(LpvModelTest, ArxDelayPolynomialBeyondTheBoundIsAnError) {
+  LpvModel model;
+  model.kind = "first_order_arx";
+  model.degree = 0;
+  model.coefficients.resize(3, 1);
+  const Eigen::VectorXd du = Eigen::VectorXd::Ones(20);
+  const Eigen::VectorXd theta = Eigen::VectorXd::Ones(20);
+  for (const double nk : {1e19, -1e19, std::nan("")}) {
+    model.coefficients << -0.5, 1.0, nk;
+    try {
+      SimulateLpvArx(model, du, theta);
+      ADD_FAILURE() << "nk = " << nk << " accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("SimulateLpvArx: delay nk = "), std::string::npos)
+          << e.what();
+    }
+  }
+  model.coefficients << -0.5, 1.0, 1e7;  // the bound: a delay longer than the record
+  EXPECT_EQ(SimulateLpvArx(model, du, theta), Eigen::VectorXd::Zero(20));
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include <complex>
 #include <numbers>
 #include <stdexcept>
+#include <string>
 
 #include "core/fractional_delay.h"
 
@@ -45,6 +46,33 @@ TEST(OustaloupTest, RejectsBadArguments) {
   EXPECT_THROW(OustaloupApproximation(1.0, 1e-3, 1e3, 5), std::invalid_argument);
   EXPECT_THROW(OustaloupApproximation(0.5, 1e3, 1e-3, 5), std::invalid_argument);
   EXPECT_THROW(OustaloupApproximation(0.5, 1e-3, 1e3, 0), std::invalid_argument);
+  EXPECT_THROW(OustaloupApproximation(0.5, 1e-3, 1e3, kMaxOustaloupSections + 1),
+               std::invalid_argument);
+}
+
+TEST(OustaloupTest, SectionsAreBoundedInDensityAndCount) {
+  EXPECT_EQ(OustaloupSections(1e-3, 1e3, 2.0), 12);
+  EXPECT_EQ(OustaloupSections(1.0, 1.5, 0.1), 1);  // at least one
+  EXPECT_EQ(OustaloupSections(1e-5, 1e5, 20.0), 200);
+  const auto message = [](double low, double high, double density) {
+    try {
+      OustaloupSections(low, high, density);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no exception");
+  };
+  // 1e9 per decade overflowed the int count (one section came out); 1000 made ~8000 sections.
+  EXPECT_NE(message(3.97e-8, 5.0, 1e9)
+                .find("sections_per_decade = 1000000000.000000 is out of "
+                      "range (allowed: > 0 and <= 20)"),
+            std::string::npos);
+  EXPECT_NE(message(3.97e-8, 5.0, 1000.0).find("out of range"), std::string::npos);
+  EXPECT_NE(message(1e-100, 1e100, 3.0).find("is out of range (allowed: 1..200)"),
+            std::string::npos);
+  EXPECT_NE(message(1e-300, 1e300, 3.0).find("Oustaloup sections = inf"), std::string::npos);
+  EXPECT_NE(message(1e-3, 1e3, std::nan("")).find("sections_per_decade = nan"), std::string::npos);
+  EXPECT_NE(message(1e3, 1e-3, 2.0).find("0 < low < high"), std::string::npos);
 }
 
 TEST(ZohDelaySplitTest, SplitsWholeAndFractionalSamples) {

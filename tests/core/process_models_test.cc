@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
+#include <utility>
 
 namespace canalid::core {
 namespace {
@@ -68,6 +70,26 @@ TEST(ProcessModels, RejectsNonPhysicalParameters) {
   EXPECT_THROW(Simulate(FoptdModel{1.0, 1.0, -1.0}, u, 1.0), std::invalid_argument);
   EXPECT_THROW(Simulate(SoptdModel{1.0, {1.0, -2.0}, 0.0}, u, 1.0), std::invalid_argument);
   EXPECT_THROW(Simulate(FoptdModel{1.0, 1.0, 0.0}, u, 0.0), std::invalid_argument);
+}
+
+// Regression: the delay in samples was cast to int unchecked, so a delay of 1e12 s at Ts = 10 s
+// (1e11 samples) or 150 s at Ts = 6e-8 s (2.5e9 samples) wrapped to a negative count and the
+// simulation read far outside u (SIGSEGV in `canalid simulate`).
+TEST(ProcessModels, RejectsDelaysBeyondTheSampleBoundNamingIt) {
+  const Eigen::VectorXd u = Eigen::VectorXd::Ones(5);
+  for (const auto& [delay_s, ts] : {std::pair{1e12, 10.0}, std::pair{150.0, 6e-8}}) {
+    try {
+      Simulate(FoptdModel{1.0, 100.0, delay_s}, u, ts);
+      ADD_FAILURE() << "foptd delay " << delay_s << " s at Ts " << ts << " s was accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("samples must be in [0, 1e7]"), std::string::npos)
+          << e.what();
+    }
+    EXPECT_THROW(Simulate(SoptdModel{1.0, {100.0, 50.0}, delay_s}, u, ts), std::invalid_argument);
+  }
+  // The bound itself is accepted: the output stays at rest over a record shorter than the delay.
+  const Eigen::VectorXd y = Simulate(FoptdModel{1.0, 100.0, 1e7}, u, 1.0);
+  EXPECT_EQ(y, Eigen::VectorXd::Zero(5));
 }
 
 }  // namespace

@@ -276,5 +276,28 @@ TEST(ModelJsonReadTest, MinimalFormsNameEveryMissingOrMistypedKey) {
   ExpectError([&] { Read(id, "id"); }, "key 'fit_from_sample': 5 must be > nk = 11");
 }
 
+// Regression: the readers sized arrays from integers in the file before checking them (an "lpv"
+// "degree": 100000000 with 8 parameter names reserved 6.4 GB before the coefficient lists were
+// looked at), and "arx" orders or an Oustaloup density far beyond what can run went through.
+TEST(ModelJsonReadTest, OrdersAndSizesAreCheckedAgainstStatedBoundsBeforeUse) {
+  nlohmann::json lpv = Minimal("lpv");
+  lpv["degree"] = 100000000;
+  ExpectError([&] { Read(lpv, "lpv"); },
+              "m.json: key 'degree': 100000000 is out of range (allowed: 0..20)");
+  lpv = Minimal("lpv");
+  lpv["parameters"] = std::vector<std::string>(65, "a1");
+  ExpectError([&] { Read(lpv, "lpv"); }, "key 'parameters': needs a list of 1..64 names");
+  nlohmann::json arx = Minimal("arx");
+  arx["nk"] = {2147483647, 2};
+  ExpectError([&] { Read(arx, "arx"); }, "key 'nk'");
+  arx["nk"] = {100000000, 2};  // within the reader's integer range, beyond the ARX bound
+  ExpectError([&] { Read(arx, "arx"); },
+              "key 'na/nb/nk': ArxOrders.nk[0] = 100000000 is out of range (allowed: 0..10000000)");
+  nlohmann::json band = Minimal("frac-foptd");
+  band["oustaloup"] = {{"sections_per_decade", 1000.0}};
+  ExpectError([&] { Read(band, "frac-foptd"); },
+              "m.json: oustaloup: key 'sections_per_decade': 1000.000000 is out of range");
+}
+
 }  // namespace
 }  // namespace canalid::drivers

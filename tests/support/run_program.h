@@ -49,6 +49,13 @@ inline ProgramRun RunProgram(const std::string& command, const std::filesystem::
   return run;
 }
 
+/// RunProgram with a time limit of the test's own: the child is killed after `seconds` (coreutils
+/// timeout, exit code 124), so a regression that hangs fails instead of stalling the suite.
+inline ProgramRun RunProgramWithin(const std::string& command, const std::filesystem::path& dir,
+                                   int seconds) {
+  return RunProgram("timeout --kill-after=5 " + std::to_string(seconds) + " " + command, dir);
+}
+
 /// The canalid program of this build.
 inline std::string CanalidProgram() {
   return std::string(CANALID_BINARY_DIR) + "/daemon/canalid/canalid";
