@@ -121,8 +121,10 @@ void ReadOfftake(ConfigReader& reader, const toml::table& t, const std::string& 
   o->outlet_m = reader.Number(t, "outlet_m", where, o->outlet_m, 0.0, 100.0);
 }
 
-Canal LoadCanal(const std::string& path) {
-  ConfigReader reader(path);
+namespace {
+
+Canal ReadCanal(ConfigReader& reader) {
+  const std::string& path = reader.path();
   const toml::table& root = reader.root();
   Canal canal;
   reader.CheckKeys(root, "", {"name", "max_dx_m", "theta", "upstream", "pool", "level_control"});
@@ -198,6 +200,18 @@ Canal LoadCanal(const std::string& path) {
     throw ConfigError({path + ": " + e.what()});
   }
   return canal;
+}
+
+}  // namespace
+
+Canal LoadCanal(const std::string& path) {
+  ConfigReader reader(path);
+  return ReadCanal(reader);
+}
+
+Canal ParseCanal(std::string_view text, const std::string& name) {
+  ConfigReader reader = ConfigReader::FromText(text, name);
+  return ReadCanal(reader);
 }
 
 }  // namespace canalid::sim

@@ -1,5 +1,6 @@
 #pragma once
 #include <string>
+#include <string_view>
 
 #include "sim/canal.h"
 #include "sim/config_reader.h"
@@ -9,6 +10,9 @@ namespace canalid::sim {
 /// Loads a canal description from TOML (format and every key: docs/canalsim.md and
 /// config/sim/asce-canal2.toml).  @throws ConfigError listing every problem with file:line:column.
 Canal LoadCanal(const std::string& path);
+/// Parses `text` as LoadCanal parses a file's contents; messages name the file `name`.
+/// @throws ConfigError listing every problem with name:line:column.
+Canal ParseCanal(std::string_view text, const std::string& name);
 
 /// Reads the keys of a `structure` table into `structure` (keys absent keep their value).
 void ReadStructure(ConfigReader& reader, const toml::table& table, const std::string& where,

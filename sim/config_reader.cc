@@ -25,11 +25,26 @@ ConfigReader::ConfigReader(const std::string& path) : path_(path) {
   try {
     root_ = toml::parse_file(path);
   } catch (const toml::parse_error& e) {
-    std::ostringstream os;
-    os << path << ":" << e.source().begin.line << ":" << e.source().begin.column << ": "
-       << e.description();
-    throw ConfigError({os.str()});
+    throw SyntaxError(e);
   }
+}
+
+ConfigReader ConfigReader::FromText(std::string_view text, const std::string& name) {
+  ConfigReader reader;
+  reader.path_ = name;
+  try {
+    reader.root_ = toml::parse(text, name);
+  } catch (const toml::parse_error& e) {
+    throw reader.SyntaxError(e);
+  }
+  return reader;
+}
+
+ConfigError ConfigReader::SyntaxError(const toml::parse_error& e) const {
+  std::ostringstream os;
+  os << path_ << ":" << e.source().begin.line << ":" << e.source().begin.column << ": "
+     << e.description();
+  return ConfigError({os.str()});
 }
 
 void ConfigReader::Problem(const toml::source_region& region, const std::string& message) {

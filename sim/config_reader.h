@@ -27,6 +27,9 @@ class ConfigReader final {
  public:
   /// Parses the file.  @throws ConfigError with the parser's location on a syntax error.
   explicit ConfigReader(const std::string& path);
+  /// Parses `text` as if it were the contents of the file `name` (messages name `name`).
+  /// @throws ConfigError with the parser's location on a syntax error.
+  static ConfigReader FromText(std::string_view text, const std::string& name);
   const toml::table& root() const { return root_; }
   const std::string& path() const { return path_; }
 
@@ -51,6 +54,9 @@ class ConfigReader final {
   void Finish() const;
 
  private:
+  ConfigReader() = default;
+  ConfigError SyntaxError(const toml::parse_error& e) const;
+
   std::string path_;
   toml::table root_;
   std::vector<std::pair<toml::source_position, std::string>> problems_;

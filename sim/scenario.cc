@@ -98,8 +98,10 @@ SensorConfig ReadSensor(ConfigReader& reader, const toml::table& t, const std::s
 
 }  // namespace
 
-Scenario LoadScenario(const std::string& path, const Canal& full) {
-  ConfigReader reader(path);
+namespace {
+
+Scenario ReadScenario(ConfigReader& reader, const Canal& full) {
+  const std::string& path = reader.path();
   const toml::table& root = reader.root();
   reader.CheckKeys(
       root, "",
@@ -296,6 +298,18 @@ Scenario LoadScenario(const std::string& path, const Canal& full) {
     throw ConfigError({path + ": " + e.what()});
   }
   return sc;
+}
+
+}  // namespace
+
+Scenario LoadScenario(const std::string& path, const Canal& canal) {
+  ConfigReader reader(path);
+  return ReadScenario(reader, canal);
+}
+
+Scenario ParseScenario(std::string_view text, const std::string& name, const Canal& canal) {
+  ConfigReader reader = ConfigReader::FromText(text, name);
+  return ReadScenario(reader, canal);
 }
 
 }  // namespace canalid::sim

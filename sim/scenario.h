@@ -1,6 +1,7 @@
 #pragma once
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "sim/canal.h"
@@ -68,5 +69,8 @@ struct Scenario {
 /// Loads a scenario for the given canal.  @throws ConfigError listing every problem with
 /// file:line:column.
 Scenario LoadScenario(const std::string& path, const Canal& canal);
+/// Parses `text` as LoadScenario parses a file's contents; messages name the file `name`.
+/// @throws ConfigError listing every problem with name:line:column.
+Scenario ParseScenario(std::string_view text, const std::string& name, const Canal& canal);
 
 }  // namespace canalid::sim

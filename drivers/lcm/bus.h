@@ -1,5 +1,6 @@
 #pragma once
 #include <cstdint>
+#include <exception>
 #include <functional>
 #include <span>
 #include <string>
@@ -60,6 +61,21 @@ bool PublishMessage(Bus& bus, const std::string& channel, const Message& message
   }
 }
 
+/// Decodes `data` as one lcm-gen Message: true when the bytes are exactly one message.  lcm-gen's
+/// decoders throw on some malformed lengths (std::length_error for a string field of length 0 or
+/// less, or a negative array count; std::bad_alloc for a huge array count): those bytes are
+/// malformed too, so they return false here instead of escaping as exceptions.
+template <class Message>
+bool DecodeMessage(std::span<const uint8_t> data, Message& message) noexcept {
+  if (data.size() > static_cast<std::size_t>(INT32_MAX)) return false;
+  const int size = static_cast<int>(data.size());
+  try {
+    return message.decode(data.data(), 0, size) == size;
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
 /// Subscribes `handler(const std::string& channel, const Message&)` to `channel_regex`; messages
 /// that do not decode as Message are rejected (counted in handler_failures) and not passed on.
 template <class Message, class F>
@@ -70,8 +86,7 @@ int SubscribeMessage(Bus& bus, const std::string& channel_regex, F handler,
       [handler = std::move(handler)](const std::string& channel,
                                      std::span<const uint8_t> data) mutable -> bool {
         Message message;
-        const int size = static_cast<int>(data.size());
-        if (message.decode(data.data(), 0, size) != size) return false;
+        if (!DecodeMessage(data, message)) return false;
         handler(channel, message);
         return true;
       },

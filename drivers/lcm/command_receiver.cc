@@ -36,8 +36,7 @@ void CommandReceiver::Receive(std::span<const uint8_t> data) noexcept {
   auto verdict = core::CommandVerdict::kMalformed;
   try {
     canalid::command_t message;
-    const int size = static_cast<int>(data.size());
-    if (message.decode(data.data(), 0, size) == size && message.hmac_size >= 0 &&
+    if (DecodeMessage(data, message) && message.hmac_size >= 0 &&
         static_cast<std::size_t>(message.hmac_size) == message.hmac.size()) {
       core::CommandFields fields;
       fields.utime_us = message.utime;

@@ -2,6 +2,8 @@
 
 #include <string_view>
 
+#include "drivers/lcm/bus.h"
+
 namespace canalid::drivers {
 namespace {
 
@@ -12,8 +14,7 @@ constexpr std::string_view kModel = "MODEL_";
 
 template <class Message>
 bool Decode(const LogEvent& event, Message* message) {
-  const auto size = static_cast<int>(event.data.size());
-  return message->decode(event.data.data(), 0, size) == size;
+  return DecodeMessage(event.data, *message);
 }
 
 }  // namespace

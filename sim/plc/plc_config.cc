@@ -117,8 +117,10 @@ void ValidatePlcConfig(const PlcConfig& c) {
                {"holding_float_base", c.holding_float_base, 2 * n * kPoolHoldingFields}});
 }
 
-PlcConfig LoadPlcConfig(const std::string& path, const Canal& canal) {
-  ConfigReader reader(path);
+namespace {
+
+PlcConfig ReadPlcConfig(ConfigReader& reader, const Canal& canal) {
+  const std::string& path = reader.path();
   const toml::table& root = reader.root();
   PlcConfig c = DefaultPlcConfig(canal);
   c.pools.clear();
@@ -213,6 +215,18 @@ PlcConfig LoadPlcConfig(const std::string& path, const Canal& canal) {
     throw ConfigError({path + ": " + e.what()});
   }
   return c;
+}
+
+}  // namespace
+
+PlcConfig LoadPlcConfig(const std::string& path, const Canal& canal) {
+  ConfigReader reader(path);
+  return ReadPlcConfig(reader, canal);
+}
+
+PlcConfig ParsePlcConfig(std::string_view text, const std::string& name, const Canal& canal) {
+  ConfigReader reader = ConfigReader::FromText(text, name);
+  return ReadPlcConfig(reader, canal);
 }
 
 }  // namespace canalid::sim::plc

@@ -1,5 +1,6 @@
 #pragma once
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "sim/canal.h"
@@ -51,6 +52,9 @@ PlcConfig DefaultPlcConfig(const Canal& canal);
 /// Loads a PLC file for `canal` (pool names must exist in it).  Unknown keys are errors.
 /// @throws ConfigError listing every problem with file:line:column.
 PlcConfig LoadPlcConfig(const std::string& path, const Canal& canal);
+/// Parses `text` as LoadPlcConfig parses a file's contents; messages name the file `name`.
+/// @throws ConfigError listing every problem with name:line:column.
+PlcConfig ParsePlcConfig(std::string_view text, const std::string& name, const Canal& canal);
 
 /// Checks ranges and that no two register blocks overlap.
 /// @throws std::invalid_argument naming the field and the value.

@@ -76,6 +76,8 @@ EXCEPTIONS = [
     ("docs/deployment.md", "scripts/setup", "installs Debian packages with apt-get (root)"),
     ("docs/deployment.md", "scripts/build", "builds the whole tree (minutes); this test runs from "
      "a build"),
+    ("docs/reliability.md", "scripts/fuzz", "builds a second tree with clang and sanitizers "
+     "(tens of minutes) and fuzzes for minutes per target; ctest -L fuzz replays what it keeps"),
 ]
 
 # First words of ```sh lines that are not programs of the project, and why they are not run.

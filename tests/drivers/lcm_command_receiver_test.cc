@@ -104,6 +104,28 @@ TEST_F(ReceiverTest, InconsistentHmacSizeIsMalformed) {
   EXPECT_TRUE(accepted_.empty());
 }
 
+// lcm-gen's decoder throws on a string of length 0 and on a negative array size (found by
+// tests/fuzz lcm_command): such bytes are malformed, not a callback failure.
+TEST_F(ReceiverTest, StringOfLengthZeroAndNegativeHmacSizeAreMalformed) {
+  auto message = BuildSignedCommand(key_, Fields(1));
+  std::vector<uint8_t> bytes(static_cast<std::size_t>(message.getEncodedSize()));
+  message.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  // hash (8), utime (8), counter (8), then the sender's length prefix (includes the terminator).
+  std::vector<uint8_t> zero_string = bytes;
+  ASSERT_EQ(zero_string[24 + 3], message.sender.size() + 1);
+  zero_string[24 + 3] = 0;
+  SendRaw(zero_string);
+  // The hmac_size field is the 4 bytes before the 32 MAC bytes at the end.
+  std::vector<uint8_t> negative_size = bytes;
+  const std::size_t at = negative_size.size() - 32 - 4;
+  for (std::size_t i = 0; i < 4; ++i) negative_size[at + i] = 0xFF;  // -1
+  SendRaw(negative_size);
+  EXPECT_EQ(HandleAll(), 2);
+  EXPECT_EQ(receiver_.count(CommandVerdict::kMalformed), 2);
+  EXPECT_EQ(receiver_.callback_failures(), 0);
+  EXPECT_TRUE(accepted_.empty());
+}
+
 TEST(CommandReceiver, DisabledCountsEveryCommand) {
   FakeBus bus;
   const auto key = Key("0123456789abcdef");

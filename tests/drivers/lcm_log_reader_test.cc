@@ -230,5 +230,27 @@ TEST(LcmLogReader, ScanStopsAtAMessageThatDoesNotDecode) {
   EXPECT_EQ(result.bytes, events[3].offset);
 }
 
+// lcm-gen's decoder throws std::length_error on a string of length 0 (found by tests/fuzz
+// lcm_log): such a message is corrupt like any other that does not decode, not an exception.
+TEST(LcmLogReader, ScanReportsAStringOfLengthZeroAsCorrupt) {
+  const fs::path path = TestPath("zero-string.lcmlog");
+  std::vector<Written> events = SomeEvents();
+  canalid::sample_t sample = testing::MakeSample(2);
+  sample.source = "";  // encoded as length 1 (the terminator); patched to 0 below
+  std::vector<uint8_t> bytes = Encode(sample);
+  // utime, sequence (8 bytes each) after the 8-byte hash: the source's length prefix.
+  ASSERT_EQ(bytes[24 + 3], 1);
+  bytes[24 + 3] = 0;
+  events[3].data = bytes;
+  WriteWithLcm(path, events);
+  Recorder recorder;
+  LogScanResult result;
+  ASSERT_NO_THROW(result = ScanCanalidLog(path.string(), {}, recorder));
+  EXPECT_EQ(result.end, LogEnd::kCorrupt);
+  EXPECT_NE(result.problem.find("does not decode as canalid.sample_t"), std::string::npos)
+      << result.problem;
+  EXPECT_EQ(result.bytes, events[3].offset);
+}
+
 }  // namespace
 }  // namespace canalid::drivers

@@ -4,6 +4,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <sstream>
 #include <string>
 
 #include "sim/canal_config.h"
@@ -151,6 +153,28 @@ TEST(PlcConfig, LoadsTheAsce2Example) {
   EXPECT_DOUBLE_EQ(c.heartbeat_timeout_s, 300.0);
   EXPECT_EQ(c.word_order, WordOrder::kAbcd);
   EXPECT_EQ(c.input_float_base, 300);
+}
+
+// ParsePlcConfig (the text entry point of tests/fuzz) reads what LoadPlcConfig reads and names
+// the given name.
+TEST(PlcConfig, ParsesTextAsTheFileIsLoaded) {
+  const Canal canal = LoadCanal(kCanal);
+  const std::string path = std::string(CANALID_SOURCE_DIR) + "/config/sim/plc/asce2.toml";
+  std::ifstream in(path);
+  std::ostringstream text;
+  text << in.rdbuf();
+  const PlcConfig loaded = LoadPlcConfig(path, canal);
+  const PlcConfig parsed = ParsePlcConfig(text.str(), "plc.toml", canal);
+  ASSERT_EQ(parsed.pools.size(), loaded.pools.size());
+  EXPECT_DOUBLE_EQ(parsed.pools[7].setpoint_max, loaded.pools[7].setpoint_max);
+  EXPECT_DOUBLE_EQ(parsed.heartbeat_timeout_s, loaded.heartbeat_timeout_s);
+  EXPECT_EQ(parsed.input_float_base, loaded.input_float_base);
+  try {
+    ParsePlcConfig("plant_step_s = 10.0\nbogus = 1\n", "plc.toml", canal);
+    FAIL() << "no error";
+  } catch (const ConfigError& e) {
+    EXPECT_THAT(std::string(e.what()), ::testing::ContainsRegex("plc.toml:2:[0-9]+: unknown key"));
+  }
 }
 
 TEST(PlcConfig, ReportsEveryProblemWithItsLocation) {

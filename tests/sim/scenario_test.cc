@@ -235,6 +235,42 @@ TEST(Scenario, ConfigErrorsNameFileLineAndColumn) {
   }
 }
 
+// The text entry points (used by the fuzz targets of tests/fuzz) read what the file readers read
+// and name the given name in messages.
+TEST(Scenario, ParseFromTextMatchesLoadFromFile) {
+  const auto text = [](const std::string& path) {
+    std::ifstream in(path);
+    std::ostringstream s;
+    s << in.rdbuf();
+    return s.str();
+  };
+  const std::string canal_path = kSource + "/config/sim/asce-canal2.toml";
+  const std::string scenario_path = kSource + "/config/sim/scenarios/asce2-pool2-step.toml";
+  const Canal canal = LoadCanal(canal_path);
+  const Canal parsed = ParseCanal(text(canal_path), canal_path);
+  ASSERT_EQ(parsed.pools.size(), canal.pools.size());
+  EXPECT_EQ(parsed.name, canal.name);
+  EXPECT_EQ(parsed.pools.back().length_m, canal.pools.back().length_m);
+  const Scenario loaded = LoadScenario(scenario_path, canal);
+  const Scenario from_text = ParseScenario(text(scenario_path), "s.toml", canal);
+  EXPECT_EQ(from_text.duration_s, loaded.duration_s);
+  EXPECT_EQ(from_text.events.size(), loaded.events.size());
+  EXPECT_EQ(from_text.columns.size(), loaded.columns.size());
+  try {
+    ParseCanal("name = \"x\"\nmax_dx_m = = 3\n", "given-name.toml");
+    FAIL() << "expected ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("given-name.toml:2:", 0), 0u) << e.what();
+  }
+  try {
+    ParseScenario("duration_s = 100.0\noutput_period_s = 10.0\ndurration = 3\n", "s.toml", canal);
+    FAIL() << "expected ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("s.toml:3:1: unknown key 'durration'"), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(Scenario, CanalsimExitCodes) {
   const std::string exe = kBinary + "/sim/canalsim";
   ASSERT_TRUE(std::filesystem::exists(exe)) << exe << " is not built (target canalsim)";
