@@ -488,12 +488,19 @@ void Daemon::StartCommands() {
   core::CommandAuthOptions options;
   options.enabled = true;
   options.max_clock_skew_s = plan_.command_max_clock_skew_s;
-  authenticator_ =
-      std::make_unique<core::CommandAuthenticator>(options, ReadKeyFile(plan_.command_key_file));
+  {
+    const core::SecretBytes key = ReadKeyFile(plan_.command_key_file);  // wiped at the brace
+    authenticator_ = std::make_unique<core::CommandAuthenticator>(options, key.span());
+  }
   if (store_) {
     std::string problem;
+    const int64_t now_us = ToUtime(WallNowS());
     for (const auto& [sender, counter] : store_->LoadCommandCounters(&problem)) {
-      authenticator_->RestoreCounter(sender, counter);
+      if (!authenticator_->RestoreCounter(sender, counter, now_us)) {
+        LogWarning("state: command counter " + std::to_string(counter) + " of sender '" + sender +
+                   "' is out of range (<= 0, or ahead of the clock by more than "
+                   "max_clock_skew_s); ignored");
+      }
     }
     if (!problem.empty()) LogWarning("state: " + problem);
   }
