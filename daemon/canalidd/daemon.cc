@@ -9,6 +9,7 @@
 
 #include "daemon/canalidd/key_file.h"
 #include "daemon/canalidd/log.h"
+#include "daemon/canalidd/startup_check.h"
 #include "daemon/canalidd/systemd_notify.h"
 #include "drivers/json/model_json.h"
 #include "drivers/lcm/lcm_bus.h"
@@ -123,15 +124,19 @@ std::unique_ptr<drivers::PlcPort> Daemon::MakeModbusPort(const PlcWiring& wiring
 DaemonExit Daemon::Run() {
   start_steady_s_ = SteadyNowS();
   watchdog_period_s_ = WatchdogPeriodS();
-  publisher_.PublishConfig(plan_.config_path, plan_.config_text, WallNowS());
-  LoadState();
-  ResumeInterruptedExperiments();
-  StartCommands();
-  StartSignals();
-  StartBusWatch();
-  StartHealthTimer();
-  StartPollers();
-  for (std::size_t i = 0; i < plcs_.size(); ++i) StartHeartbeat(static_cast<int>(i));
+  try {
+    publisher_.PublishConfig(plan_.config_path, plan_.config_text, WallNowS());
+    LoadState();
+    ResumeInterruptedExperiments();
+    StartCommands();
+    StartSignals();
+    StartBusWatch();
+    StartHealthTimer();
+    StartPollers();
+    for (std::size_t i = 0; i < plcs_.size(); ++i) StartHeartbeat(static_cast<int>(i));
+  } catch (const std::exception& e) {
+    throw StartupError(e.what());  // canalidd exits 78: nothing has run yet
+  }
   LogInfo("running: " + std::to_string(plcs_.size()) + " PLC(s), " +
           std::to_string(reaches_.size()) + " reach(es), LCM prefix " + plan_.channel_prefix);
   io_.run();
