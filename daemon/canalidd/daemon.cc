@@ -1,10 +1,14 @@
 #include "daemon/canalidd/daemon.h"
 
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <csignal>
+#include <cstring>
 #include <sstream>
 
 #include "daemon/canalidd/key_file.h"
@@ -85,6 +89,7 @@ Daemon::Daemon(DaemonPlan plan, drivers::Bus& bus, PortFactory make_port, Reload
       signals_(io_, SIGINT, SIGTERM, SIGHUP),
       health_timer_(io_),
       stop_timer_(io_),
+      bus_retry_timer_(io_),
       publisher_(bus_, plan_.channel_prefix) {
   for (std::size_t i = 0; i < plan_.plcs.size(); ++i) {
     auto plc = std::make_unique<Plc>(plan_.plcs[i], io_);
@@ -176,20 +181,72 @@ void Daemon::StartSignals() {
 }
 
 void Daemon::StartBusWatch() {
-  auto* lcm = dynamic_cast<drivers::LcmBus*>(&bus_);
-  if (lcm == nullptr) return;  // a fake bus in tests is pumped by the test
-  bus_fd_ = std::make_unique<boost::asio::posix::stream_descriptor>(io_, ::dup(lcm->fileno()));
-  auto watch = std::make_shared<std::function<void()>>();
-  *watch = [this, watch] {
-    bus_fd_->async_wait(boost::asio::posix::stream_descriptor::wait_read,
-                        [this, watch](const boost::system::error_code& error) {
-                          if (error) return;
-                          bus_.Handle(0.0);
-                          LogRejectedCommands();
-                          if (!stopping_) (*watch)();
-                        });
-  };
-  (*watch)();
+  lcm_bus_ = dynamic_cast<drivers::LcmBus*>(&bus_);
+  if (lcm_bus_ == nullptr) return;  // a fake bus in tests is pumped by the test
+  WatchBus();
+}
+
+// Watches a duplicate of LCM's descriptor, so Asio never closes LCM's own. LCM's tcpq provider
+// may close its socket (hub gone, an unreadable message) and leave fileno -1, or reconnect on its
+// own onto another socket: the watched duplicate then no longer names LCM's socket (SameSocket),
+// and Handle() with fileno -1 would make liblcm select() on fd -1 and abort (LcmBus::Handle
+// refuses that instead).
+void Daemon::WatchBus() {
+  const int fd = lcm_bus_->fileno();
+  const int copy = fd < 0 ? -1 : ::dup(fd);
+  if (copy < 0) {
+    OnBusLost(fd < 0 ? "no connection (fileno -1)" : std::string("dup: ") + std::strerror(errno));
+    return;
+  }
+  bus_fd_ = std::make_unique<boost::asio::posix::stream_descriptor>(io_, copy);
+  WaitForBus();
+}
+
+void Daemon::WaitForBus() {
+  bus_fd_->async_wait(boost::asio::posix::stream_descriptor::wait_read,
+                      [this](const boost::system::error_code& error) {
+                        if (error) return;
+                        const int handled = bus_.Handle(0.0);
+                        LogRejectedCommands();
+                        if (stopping_) return;
+                        if (lcm_bus_->reconnectable()) {
+                          const int fd = lcm_bus_->fileno();
+                          if (handled < 0 || fd < 0 || !SameSocket(bus_fd_->native_handle(), fd)) {
+                            OnBusLost(handled < 0 ? "receive failed" : "connection closed");
+                            return;
+                          }
+                        }
+                        WaitForBus();
+                      });
+}
+
+bool Daemon::SameSocket(int a, int b) {
+  struct stat sa {
+  }, sb{};
+  return ::fstat(a, &sa) == 0 && ::fstat(b, &sb) == 0 && sa.st_dev == sb.st_dev &&
+         sa.st_ino == sb.st_ino;
+}
+
+void Daemon::OnBusLost(const std::string& why) {
+  bus_fd_.reset();
+  ++bus_losses_;
+  const double delay_s = bus_backoff_s_;
+  bus_backoff_s_ = std::min(bus_backoff_s_ * 2.0, kBusBackoffMaxS);
+  LogError("LCM bus " + lcm_bus_->url() + " lost (" + why + "); reconnecting in " +
+           std::to_string(delay_s) + " s");
+  bus_retry_timer_.expires_after(Seconds(delay_s));
+  bus_retry_timer_.async_wait([this](const boost::system::error_code& error) {
+    if (error || stopping_) return;
+    std::string problem;
+    if (!lcm_bus_->Reconnect(&problem) || lcm_bus_->fileno() < 0) {
+      OnBusLost(problem.empty() ? "no connection (fileno -1)" : problem);
+      return;
+    }
+    ++bus_reconnects_;
+    bus_backoff_s_ = kBusBackoffMinS;
+    LogInfo("LCM bus " + lcm_bus_->url() + " reconnected");
+    WatchBus();
+  });
 }
 
 void Daemon::StartHealthTimer() {
@@ -606,7 +663,9 @@ void Daemon::PublishHealth() {
   HealthReport bus;
   bus.component = "lcm";
   bus.counters = {{"handler_failures", bus_.handler_failures()},
-                  {"publish_failures", publisher_.failures()}};
+                  {"publish_failures", publisher_.failures()},
+                  {"losses", bus_losses_},
+                  {"reconnects", bus_reconnects_}};
   publisher_.PublishHealth(bus, uptime, wall);
   if (command_receiver_) {
     HealthReport commands;
@@ -668,6 +727,7 @@ void Daemon::FinishStopWhenSafe() {
   PublishHealth();
   signals_.cancel();
   if (bus_fd_) bus_fd_->cancel();
+  bus_retry_timer_.cancel();
   stop_timer_.cancel();
   io_.stop();
 }

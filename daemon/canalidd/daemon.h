@@ -16,6 +16,7 @@
 #include "daemon/canalidd/state_store.h"
 #include "drivers/lcm/bus.h"
 #include "drivers/lcm/command_receiver.h"
+#include "drivers/lcm/lcm_bus.h"
 #include "drivers/modbus/plc_poller.h"
 
 namespace canalid::daemon {
@@ -72,6 +73,12 @@ class Daemon final {
   void StartHeartbeat(int plc);
   void StartHealthTimer();
   void StartBusWatch();
+  void WatchBus();
+  void WaitForBus();
+  // The LCM connection is gone (tcpq hub lost): counts it and retries with a doubling backoff.
+  void OnBusLost(const std::string& why);
+  // True when descriptors a and b name the same open socket (file).
+  static bool SameSocket(int a, int b);
   void StartSignals();
   void PublishHealth();
   void LoadState();
@@ -98,7 +105,14 @@ class Daemon final {
   boost::asio::signal_set signals_;
   boost::asio::steady_timer health_timer_;
   boost::asio::steady_timer stop_timer_;
+  boost::asio::steady_timer bus_retry_timer_;
   std::unique_ptr<boost::asio::posix::stream_descriptor> bus_fd_;
+  drivers::LcmBus* lcm_bus_ = nullptr;  ///< bus_ when it is an LcmBus (else pumped by a test)
+  static constexpr double kBusBackoffMinS = 0.1;
+  static constexpr double kBusBackoffMaxS = 5.0;
+  double bus_backoff_s_ = kBusBackoffMinS;
+  int64_t bus_losses_ = 0;
+  int64_t bus_reconnects_ = 0;
   LcmPublisher publisher_;
   std::vector<std::unique_ptr<Plc>> plcs_;
   std::vector<std::unique_ptr<Reach>> reaches_;
