@@ -207,7 +207,7 @@ void Daemon::WaitForBus() {
                       [this](const boost::system::error_code& error) {
                         if (error) return;
                         const int handled = bus_.Handle(0.0);
-                        LogRejectedCommands();
+                        LogRejectedCommands(false);
                         if (stopping_) return;
                         if (lcm_bus_->reconnectable()) {
                           const int fd = lcm_bus_->fileno();
@@ -253,6 +253,7 @@ void Daemon::StartHealthTimer() {
   health_timer_.expires_after(Seconds(plan_.health_period_s));
   health_timer_.async_wait([this](const boost::system::error_code& error) {
     if (error || stopping_) return;
+    LogRejectedCommands(true);
     PublishHealth();
     // The watchdog is fed from the sample loop; with every link down there are no samples, so the
     // health timer keeps systemd informed that the loop itself is alive.
@@ -624,14 +625,22 @@ void Daemon::OnCommand(const drivers::AcceptedCommand& command) {
   LogWarning("command from " + command.sender + " names an unknown reach '" + command.reach + "'");
 }
 
-void Daemon::LogRejectedCommands() {
+void Daemon::LogRejectedCommands(bool flush) {
   if (!command_receiver_) return;
+  const double now = SteadyNowS();
   for (int v = 1; v < core::kNumCommandVerdicts; ++v) {
     const auto verdict = static_cast<core::CommandVerdict>(v);
-    auto& logged = verdicts_logged_[static_cast<std::size_t>(v)];
-    for (; logged < command_receiver_->count(verdict); ++logged) {
-      LogWarning(std::string("command rejected (") + core::CommandVerdictName(verdict) + ")");
-    }
+    const auto index = static_cast<std::size_t>(v);
+    const int64_t count = command_receiver_->count(verdict);
+    const int64_t unlogged = count - verdicts_logged_[index];
+    if (unlogged == 0) continue;
+    // At most one line a second per verdict (the first at once), with the count: a flood of bad
+    // messages must not flood the journal or block the loop on a slow log.
+    if (!flush && now - verdict_logged_at_s_[index] < 1.0) continue;
+    LogWarning(std::string("command rejected (") + core::CommandVerdictName(verdict) + ")" +
+               (unlogged > 1 ? " x" + std::to_string(unlogged) : std::string()));
+    verdicts_logged_[index] = count;
+    verdict_logged_at_s_[index] = now;
   }
 }
 
@@ -724,6 +733,7 @@ void Daemon::FinishStopWhenSafe() {
     return;
   }
   if (pending) LogError("stopping with a nominal setpoint not confirmed by the PLC");
+  LogRejectedCommands(true);
   PublishHealth();
   signals_.cancel();
   if (bus_fd_) bus_fd_->cancel();

@@ -91,8 +91,10 @@ class Daemon final {
   void SaveModel(const Reach& reach, const core::IdPipelineResult& result);
   void StartCommands();
   void OnCommand(const drivers::AcceptedCommand& command);
-  // Logs one warning per command rejected since the last call (an operator's audit trail).
-  void LogRejectedCommands();
+  // Logs the commands rejected since the last line, per verdict: at once for the first, then at
+  // most once a second with a count (" xN"), every pending count when `flush` (an operator's
+  // audit trail that a flood cannot turn into a journal flood).
+  void LogRejectedCommands(bool flush);
   void BeginStop(DaemonExit exit);
   void FinishStopWhenSafe();
   std::string Status() const;
@@ -121,6 +123,7 @@ class Daemon final {
   std::unique_ptr<core::CommandAuthenticator> authenticator_;
   std::unique_ptr<drivers::CommandReceiver> command_receiver_;
   std::array<int64_t, core::kNumCommandVerdicts> verdicts_logged_{};
+  std::array<double, core::kNumCommandVerdicts> verdict_logged_at_s_{};  ///< steady s, 0: never
   DaemonExit exit_ = DaemonExit::kStopped;
   bool stopping_ = false;
   bool ready_ = false;

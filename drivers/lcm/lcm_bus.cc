@@ -1,5 +1,6 @@
 #include "drivers/lcm/lcm_bus.h"
 
+#include <fcntl.h>
 #include <sys/socket.h>
 #include <sys/time.h>
 
@@ -85,6 +86,12 @@ int LcmBus::fileno() noexcept { return lcm_->getFileno(); }
 int LcmBus::UsableFileno() noexcept {
   const int fd = lcm_->getFileno();
   if (fd >= 0 && reconnectable_) {
+    // liblcm's tcpq reads a frame with blocking recv() calls until it is whole; on a non-blocking
+    // socket a frame not yet fully arrived fails with EAGAIN and liblcm drops the connection.
+    // A watcher of a dup() of this descriptor shares its file status flags (Boost.Asio's
+    // async_wait sets O_NONBLOCK on the descriptor it waits on), so make it blocking again.
+    const int flags = ::fcntl(fd, F_GETFL);
+    if (flags >= 0 && (flags & O_NONBLOCK) != 0) ::fcntl(fd, F_SETFL, flags & ~O_NONBLOCK);
     // liblcm may have replaced the socket (it connects again on its own): set the timeout on the
     // socket in use each time (one setsockopt per call).
     timeval timeout{};

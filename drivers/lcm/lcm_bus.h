@@ -25,7 +25,9 @@ namespace canalid::drivers {
 /// (they return -1 / false: the connection is lost), and Reconnect() has liblcm connect again
 /// (the owner retries with a backoff). A receive timeout (kTcpqReceiveTimeoutS) is set on
 /// the tcpq socket, so a hub that stops in the middle of a message cannot block the caller's loop
-/// in liblcm's blocking recv() for longer; the connection is then dropped.
+/// in liblcm's blocking recv() for longer; the connection is then dropped. The socket is kept in
+/// blocking mode (a watcher's O_NONBLOCK on a dup made liblcm drop the connection on any frame that
+/// had not fully arrived, e.g. a large message).
 class LcmBus final : public Bus {
  public:
   /// @throws std::runtime_error naming the URL when LCM cannot be created (bad URL, no multicast

@@ -120,16 +120,19 @@ void PutI32(std::vector<uint8_t>& bytes, std::size_t at, int32_t value) {
   for (int i = 0; i < 4; ++i) bytes[at + static_cast<std::size_t>(i)] = bits >> (24 - 8 * i);
 }
 
-// The 60-byte message of the issue: a command_t with empty strings, no MAC bytes and
+// A 60-byte message as in the issue: a command_t with short strings, no MAC bytes and
 // hmac_size = 0x7fffffff (lcm-gen's decoder resized hmac to 2 GiB before checking the length).
 std::vector<uint8_t> OversizeHmacMessage() {
   canalid::command_t m;
   m.utime = kNowUs;
   m.counter = 1;
+  m.sender = "operator";
   m.kind = 1;
+  m.reach = "pool2";
+  m.argument = "abc";
   m.hmac_size = 0;
   std::vector<uint8_t> bytes = Encode(m);
-  EXPECT_EQ(bytes.size(), 8u + 8 + 8 + 5 + 1 + 5 + 5 + 4);
+  EXPECT_EQ(bytes.size(), 60u);
   PutI32(bytes, bytes.size() - 4, 0x7fffffff);
   return bytes;
 }

@@ -115,6 +115,20 @@ class TcpqTestHub {
     }
     return "";
   }
+  // The next frame from the client: its type, channel and (for PUBLISH) data. False on a read
+  // error or timeout, or a frame larger than 16 MB.
+  static bool ReadFrame(int fd, uint32_t& type, std::string& channel, std::vector<uint8_t>& data) {
+    uint32_t length = 0;
+    if (!RecvU32(fd, type) || !RecvU32(fd, length) || length > 1000) return false;
+    channel.assign(length, '\0');
+    if (!RecvAll(fd, channel.data(), length)) return false;
+    data.clear();
+    if (type != kPublish) return true;
+    uint32_t data_length = 0;
+    if (!RecvU32(fd, data_length) || data_length > (16u << 20)) return false;
+    data.resize(data_length);
+    return RecvAll(fd, data.data(), data_length);
+  }
   static bool Publish(int fd, const std::string& channel, const std::vector<uint8_t>& data) {
     return SendU32(fd, kPublish) && SendU32(fd, static_cast<uint32_t>(channel.size())) &&
            SendAll(fd, channel.data(), channel.size()) &&
