@@ -133,8 +133,21 @@ int main(int argc, char** argv) {
           bus = std::make_unique<canalid::drivers::LcmBus>(plan->lcm_url);
           bus_url = plan->lcm_url;
         }
+        // SIGHUP: a configuration whose key file or state directory is bad is refused like an
+        // invalid one, and the running daemon carries on.
         daemon.emplace(std::move(*plan), *bus, canalid::daemon::Daemon::MakeModbusPort,
-                       [&config_path] { return LoadPlan(config_path, nullptr); });
+                       [&config_path]() -> std::optional<canalid::daemon::DaemonPlan> {
+                         std::optional<canalid::daemon::DaemonPlan> next =
+                             LoadPlan(config_path, nullptr);
+                         if (!next) return std::nullopt;
+                         try {
+                           canalid::daemon::CheckStartup(*next, true);
+                         } catch (const canalid::daemon::StartupError& e) {
+                           canalid::daemon::LogError(config_path + ": " + e.what());
+                           return std::nullopt;
+                         }
+                         return next;
+                       });
       } catch (const std::exception& e) {
         throw canalid::daemon::StartupError(e.what());
       }
