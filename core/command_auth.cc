@@ -9,7 +9,7 @@
 namespace canalid::core {
 namespace {
 
-constexpr std::string_view kDomain = "canalid-command-v1";
+constexpr std::string_view kDomain = "canalid-command-v2";
 
 // Writes into a buffer sized up front: GCC 12 reports a false stringop-overflow for
 // vector::insert after clear() at -O2.
@@ -44,11 +44,12 @@ bool IsKnownKind(int8_t kind) {
 }  // namespace
 
 void CanonicalCommandBytes(const CommandFields& fields, std::vector<uint8_t>& out) {
-  const std::size_t size = kDomain.size() + 1 + 3 * 4 + 2 * 8 + fields.reach.size() +
-                           fields.sender.size() + fields.argument.size();
+  const std::size_t size = kDomain.size() + 1 + 4 * 4 + 2 * 8 + fields.channel.size() +
+                           fields.reach.size() + fields.sender.size() + fields.argument.size();
   out.resize(size);
   ByteWriter w(out.data());
   w.Raw(kDomain);
+  w.String(fields.channel);
   w.Byte(static_cast<uint8_t>(fields.kind));
   w.String(fields.reach);
   w.String(fields.sender);
@@ -79,6 +80,8 @@ const char* CommandVerdictName(CommandVerdict verdict) {
       return "unknown_kind";
     case CommandVerdict::kDisabled:
       return "disabled";
+    case CommandVerdict::kCounterAhead:
+      return "counter_ahead";
   }
   return "unknown";
 }
@@ -91,8 +94,8 @@ void CommandAuthOptions::Validate() const {
 }
 
 CommandAuthenticator::CommandAuthenticator(const CommandAuthOptions& options,
-                                           std::vector<uint8_t> key)
-    : options_(options), key_(std::move(key)) {
+                                           std::span<const uint8_t> key)
+    : options_(options), key_(key) {
   options_.Validate();
   if (options_.enabled && key_.empty()) {
     throw std::invalid_argument("command key is empty: commands need a key of at least 1 byte");
@@ -109,12 +112,13 @@ CommandVerdict CommandAuthenticator::Verify(const CommandFields& fields, int64_t
     return CommandVerdict::kMalformed;
   }
   CanonicalCommandBytes(fields, scratch_);
-  const Sha256Digest expected = HmacSha256::Mac(key_, scratch_);
+  const Sha256Digest expected = HmacSha256::Mac(key_.span(), scratch_);
   if (!ConstantTimeEqual(expected, fields.mac)) return CommandVerdict::kBadMac;
   if (!IsKnownKind(fields.kind)) return CommandVerdict::kUnknownKind;
   // Compare in double seconds: the difference of two int64 us values could overflow.
   const double skew_s = (static_cast<double>(fields.utime_us) - static_cast<double>(now_us)) * 1e-6;
   if (std::abs(skew_s) > options_.max_clock_skew_s) return CommandVerdict::kStale;
+  if (CounterAhead(fields.counter, now_us)) return CommandVerdict::kCounterAhead;
   const auto it = counters_.find(fields.sender);
   if (it != counters_.end() && fields.counter <= it->second) return CommandVerdict::kReplayed;
   if (it == counters_.end()) {
@@ -125,9 +129,22 @@ CommandVerdict CommandAuthenticator::Verify(const CommandFields& fields, int64_t
   return CommandVerdict::kAccepted;
 }
 
-void CommandAuthenticator::RestoreCounter(const std::string& sender, int64_t counter) {
+bool CommandAuthenticator::CounterAhead(int64_t counter, int64_t now_us) const {
+  // In double: now_us + the window could overflow int64. Doubles are exact for integers up to
+  // 2^53 (285 years in us), so the bound is exact for any realistic clock.
+  return static_cast<double>(counter) >
+         static_cast<double>(now_us) + options_.max_clock_skew_s * 1e6;
+}
+
+bool CommandAuthenticator::RestoreCounter(const std::string& sender, int64_t counter,
+                                          int64_t now_us) {
+  if (sender.empty() || sender.size() > kMaxCommandSenderBytes || counter <= 0 ||
+      CounterAhead(counter, now_us)) {
+    return false;
+  }
   auto [it, inserted] = counters_.emplace(sender, counter);
   if (!inserted && counter > it->second) it->second = counter;
+  return true;
 }
 
 }  // namespace canalid::core

@@ -1,14 +1,19 @@
 #include "daemon/canalidd/daemon.h"
 
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <csignal>
+#include <cstring>
 #include <sstream>
 
 #include "daemon/canalidd/key_file.h"
 #include "daemon/canalidd/log.h"
+#include "daemon/canalidd/startup_check.h"
 #include "daemon/canalidd/systemd_notify.h"
 #include "drivers/json/model_json.h"
 #include "drivers/lcm/lcm_bus.h"
@@ -84,6 +89,7 @@ Daemon::Daemon(DaemonPlan plan, drivers::Bus& bus, PortFactory make_port, Reload
       signals_(io_, SIGINT, SIGTERM, SIGHUP),
       health_timer_(io_),
       stop_timer_(io_),
+      bus_retry_timer_(io_),
       publisher_(bus_, plan_.channel_prefix) {
   for (std::size_t i = 0; i < plan_.plcs.size(); ++i) {
     auto plc = std::make_unique<Plc>(plan_.plcs[i], io_);
@@ -123,15 +129,19 @@ std::unique_ptr<drivers::PlcPort> Daemon::MakeModbusPort(const PlcWiring& wiring
 DaemonExit Daemon::Run() {
   start_steady_s_ = SteadyNowS();
   watchdog_period_s_ = WatchdogPeriodS();
-  publisher_.PublishConfig(plan_.config_path, plan_.config_text, WallNowS());
-  LoadState();
-  ResumeInterruptedExperiments();
-  StartCommands();
-  StartSignals();
-  StartBusWatch();
-  StartHealthTimer();
-  StartPollers();
-  for (std::size_t i = 0; i < plcs_.size(); ++i) StartHeartbeat(static_cast<int>(i));
+  try {
+    publisher_.PublishConfig(plan_.config_path, plan_.config_text, WallNowS());
+    LoadState();
+    ResumeInterruptedExperiments();
+    StartCommands();
+    StartSignals();
+    StartBusWatch();
+    StartHealthTimer();
+    StartPollers();
+    for (std::size_t i = 0; i < plcs_.size(); ++i) StartHeartbeat(static_cast<int>(i));
+  } catch (const std::exception& e) {
+    throw StartupError(e.what());  // canalidd exits 78: nothing has run yet
+  }
   LogInfo("running: " + std::to_string(plcs_.size()) + " PLC(s), " +
           std::to_string(reaches_.size()) + " reach(es), LCM prefix " + plan_.channel_prefix);
   io_.run();
@@ -171,26 +181,79 @@ void Daemon::StartSignals() {
 }
 
 void Daemon::StartBusWatch() {
-  auto* lcm = dynamic_cast<drivers::LcmBus*>(&bus_);
-  if (lcm == nullptr) return;  // a fake bus in tests is pumped by the test
-  bus_fd_ = std::make_unique<boost::asio::posix::stream_descriptor>(io_, ::dup(lcm->fileno()));
-  auto watch = std::make_shared<std::function<void()>>();
-  *watch = [this, watch] {
-    bus_fd_->async_wait(boost::asio::posix::stream_descriptor::wait_read,
-                        [this, watch](const boost::system::error_code& error) {
-                          if (error) return;
-                          bus_.Handle(0.0);
-                          LogRejectedCommands();
-                          if (!stopping_) (*watch)();
-                        });
-  };
-  (*watch)();
+  lcm_bus_ = dynamic_cast<drivers::LcmBus*>(&bus_);
+  if (lcm_bus_ == nullptr) return;  // a fake bus in tests is pumped by the test
+  WatchBus();
+}
+
+// Watches a duplicate of LCM's descriptor, so Asio never closes LCM's own. LCM's tcpq provider
+// may close its socket (hub gone, an unreadable message) and leave fileno -1, or reconnect on its
+// own onto another socket: the watched duplicate then no longer names LCM's socket (SameSocket),
+// and Handle() with fileno -1 would make liblcm select() on fd -1 and abort (LcmBus::Handle
+// refuses that instead).
+void Daemon::WatchBus() {
+  const int fd = lcm_bus_->fileno();
+  const int copy = fd < 0 ? -1 : ::dup(fd);
+  if (copy < 0) {
+    OnBusLost(fd < 0 ? "no connection (fileno -1)" : std::string("dup: ") + std::strerror(errno));
+    return;
+  }
+  bus_fd_ = std::make_unique<boost::asio::posix::stream_descriptor>(io_, copy);
+  WaitForBus();
+}
+
+void Daemon::WaitForBus() {
+  bus_fd_->async_wait(boost::asio::posix::stream_descriptor::wait_read,
+                      [this](const boost::system::error_code& error) {
+                        if (error) return;
+                        const int handled = bus_.Handle(0.0);
+                        LogRejectedCommands(false);
+                        if (stopping_) return;
+                        if (lcm_bus_->reconnectable()) {
+                          const int fd = lcm_bus_->fileno();
+                          if (handled < 0 || fd < 0 || !SameSocket(bus_fd_->native_handle(), fd)) {
+                            OnBusLost(handled < 0 ? "receive failed" : "connection closed");
+                            return;
+                          }
+                        }
+                        WaitForBus();
+                      });
+}
+
+bool Daemon::SameSocket(int a, int b) {
+  struct stat sa {
+  }, sb{};
+  return ::fstat(a, &sa) == 0 && ::fstat(b, &sb) == 0 && sa.st_dev == sb.st_dev &&
+         sa.st_ino == sb.st_ino;
+}
+
+void Daemon::OnBusLost(const std::string& why) {
+  bus_fd_.reset();
+  ++bus_losses_;
+  const double delay_s = bus_backoff_s_;
+  bus_backoff_s_ = std::min(bus_backoff_s_ * 2.0, kBusBackoffMaxS);
+  LogError("LCM bus " + lcm_bus_->url() + " lost (" + why + "); reconnecting in " +
+           std::to_string(delay_s) + " s");
+  bus_retry_timer_.expires_after(Seconds(delay_s));
+  bus_retry_timer_.async_wait([this](const boost::system::error_code& error) {
+    if (error || stopping_) return;
+    std::string problem;
+    if (!lcm_bus_->Reconnect(&problem) || lcm_bus_->fileno() < 0) {
+      OnBusLost(problem.empty() ? "no connection (fileno -1)" : problem);
+      return;
+    }
+    ++bus_reconnects_;
+    bus_backoff_s_ = kBusBackoffMinS;
+    LogInfo("LCM bus " + lcm_bus_->url() + " reconnected");
+    WatchBus();
+  });
 }
 
 void Daemon::StartHealthTimer() {
   health_timer_.expires_after(Seconds(plan_.health_period_s));
   health_timer_.async_wait([this](const boost::system::error_code& error) {
     if (error || stopping_) return;
+    LogRejectedCommands(true);
     PublishHealth();
     // The watchdog is fed from the sample loop; with every link down there are no samples, so the
     // health timer keeps systemd informed that the loop itself is alive.
@@ -488,12 +551,19 @@ void Daemon::StartCommands() {
   core::CommandAuthOptions options;
   options.enabled = true;
   options.max_clock_skew_s = plan_.command_max_clock_skew_s;
-  authenticator_ =
-      std::make_unique<core::CommandAuthenticator>(options, ReadKeyFile(plan_.command_key_file));
+  {
+    const core::SecretBytes key = ReadKeyFile(plan_.command_key_file);  // wiped at the brace
+    authenticator_ = std::make_unique<core::CommandAuthenticator>(options, key.span());
+  }
   if (store_) {
     std::string problem;
+    const int64_t now_us = ToUtime(WallNowS());
     for (const auto& [sender, counter] : store_->LoadCommandCounters(&problem)) {
-      authenticator_->RestoreCounter(sender, counter);
+      if (!authenticator_->RestoreCounter(sender, counter, now_us)) {
+        LogWarning("state: command counter " + std::to_string(counter) + " of sender '" + sender +
+                   "' is out of range (<= 0, or ahead of the clock by more than "
+                   "max_clock_skew_s); ignored");
+      }
     }
     if (!problem.empty()) LogWarning("state: " + problem);
   }
@@ -555,14 +625,22 @@ void Daemon::OnCommand(const drivers::AcceptedCommand& command) {
   LogWarning("command from " + command.sender + " names an unknown reach '" + command.reach + "'");
 }
 
-void Daemon::LogRejectedCommands() {
+void Daemon::LogRejectedCommands(bool flush) {
   if (!command_receiver_) return;
+  const double now = SteadyNowS();
   for (int v = 1; v < core::kNumCommandVerdicts; ++v) {
     const auto verdict = static_cast<core::CommandVerdict>(v);
-    auto& logged = verdicts_logged_[static_cast<std::size_t>(v)];
-    for (; logged < command_receiver_->count(verdict); ++logged) {
-      LogWarning(std::string("command rejected (") + core::CommandVerdictName(verdict) + ")");
-    }
+    const auto index = static_cast<std::size_t>(v);
+    const int64_t count = command_receiver_->count(verdict);
+    const int64_t unlogged = count - verdicts_logged_[index];
+    if (unlogged == 0) continue;
+    // At most one line a second per verdict (the first at once), with the count: a flood of bad
+    // messages must not flood the journal or block the loop on a slow log.
+    if (!flush && now - verdict_logged_at_s_[index] < 1.0) continue;
+    LogWarning(std::string("command rejected (") + core::CommandVerdictName(verdict) + ")" +
+               (unlogged > 1 ? " x" + std::to_string(unlogged) : std::string()));
+    verdicts_logged_[index] = count;
+    verdict_logged_at_s_[index] = now;
   }
 }
 
@@ -594,7 +672,9 @@ void Daemon::PublishHealth() {
   HealthReport bus;
   bus.component = "lcm";
   bus.counters = {{"handler_failures", bus_.handler_failures()},
-                  {"publish_failures", publisher_.failures()}};
+                  {"publish_failures", publisher_.failures()},
+                  {"losses", bus_losses_},
+                  {"reconnects", bus_reconnects_}};
   publisher_.PublishHealth(bus, uptime, wall);
   if (command_receiver_) {
     HealthReport commands;
@@ -653,9 +733,11 @@ void Daemon::FinishStopWhenSafe() {
     return;
   }
   if (pending) LogError("stopping with a nominal setpoint not confirmed by the PLC");
+  LogRejectedCommands(true);
   PublishHealth();
   signals_.cancel();
   if (bus_fd_) bus_fd_->cancel();
+  bus_retry_timer_.cancel();
   stop_timer_.cancel();
   io_.stop();
 }

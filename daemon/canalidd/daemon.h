@@ -16,6 +16,7 @@
 #include "daemon/canalidd/state_store.h"
 #include "drivers/lcm/bus.h"
 #include "drivers/lcm/command_receiver.h"
+#include "drivers/lcm/lcm_bus.h"
 #include "drivers/modbus/plc_poller.h"
 
 namespace canalid::daemon {
@@ -72,6 +73,12 @@ class Daemon final {
   void StartHeartbeat(int plc);
   void StartHealthTimer();
   void StartBusWatch();
+  void WatchBus();
+  void WaitForBus();
+  // The LCM connection is gone (tcpq hub lost): counts it and retries with a doubling backoff.
+  void OnBusLost(const std::string& why);
+  // True when descriptors a and b name the same open socket (file).
+  static bool SameSocket(int a, int b);
   void StartSignals();
   void PublishHealth();
   void LoadState();
@@ -84,8 +91,10 @@ class Daemon final {
   void SaveModel(const Reach& reach, const core::IdPipelineResult& result);
   void StartCommands();
   void OnCommand(const drivers::AcceptedCommand& command);
-  // Logs one warning per command rejected since the last call (an operator's audit trail).
-  void LogRejectedCommands();
+  // Logs the commands rejected since the last line, per verdict: at once for the first, then at
+  // most once a second with a count (" xN"), every pending count when `flush` (an operator's
+  // audit trail that a flood cannot turn into a journal flood).
+  void LogRejectedCommands(bool flush);
   void BeginStop(DaemonExit exit);
   void FinishStopWhenSafe();
   std::string Status() const;
@@ -98,7 +107,14 @@ class Daemon final {
   boost::asio::signal_set signals_;
   boost::asio::steady_timer health_timer_;
   boost::asio::steady_timer stop_timer_;
+  boost::asio::steady_timer bus_retry_timer_;
   std::unique_ptr<boost::asio::posix::stream_descriptor> bus_fd_;
+  drivers::LcmBus* lcm_bus_ = nullptr;  ///< bus_ when it is an LcmBus (else pumped by a test)
+  static constexpr double kBusBackoffMinS = 0.1;
+  static constexpr double kBusBackoffMaxS = 5.0;
+  double bus_backoff_s_ = kBusBackoffMinS;
+  int64_t bus_losses_ = 0;
+  int64_t bus_reconnects_ = 0;
   LcmPublisher publisher_;
   std::vector<std::unique_ptr<Plc>> plcs_;
   std::vector<std::unique_ptr<Reach>> reaches_;
@@ -107,6 +123,7 @@ class Daemon final {
   std::unique_ptr<core::CommandAuthenticator> authenticator_;
   std::unique_ptr<drivers::CommandReceiver> command_receiver_;
   std::array<int64_t, core::kNumCommandVerdicts> verdicts_logged_{};
+  std::array<double, core::kNumCommandVerdicts> verdict_logged_at_s_{};  ///< steady s, 0: never
   DaemonExit exit_ = DaemonExit::kStopped;
   bool stopping_ = false;
   bool ready_ = false;

@@ -4,6 +4,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <array>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -14,7 +15,9 @@ namespace canalid::daemon {
 namespace {
 
 [[noreturn]] void Fail(const std::filesystem::path& path, const std::string& why) {
-  throw std::runtime_error("command key file " + path.string() + ": " + why);
+  throw std::runtime_error("command key file " + path.string() + ": " + why +
+                           "; the file must hold " + kKeyFileFormat +
+                           ", e.g. (umask 077; openssl rand -hex 32 > " + path.string() + ")");
 }
 
 int HexValue(uint8_t c) {
@@ -24,11 +27,19 @@ int HexValue(uint8_t c) {
   return -1;
 }
 
+// The file's bytes, wiped when it goes out of scope (also when a refusal throws).
+struct FileBuffer {
+  static constexpr std::size_t kHexDigits = 2 * kCommandKeyBytes;
+  std::array<uint8_t, kHexDigits + 2> bytes{};  // one more than the longest accepted file
+  std::size_t size = 0;
+  ~FileBuffer() { core::WipeBytes(bytes); }
+};
+
 }  // namespace
 
-std::vector<uint8_t> ReadKeyFile(const std::filesystem::path& path) {
+core::SecretBytes ReadKeyFile(const std::filesystem::path& path) {
   // Open first and check the opened file (fstat), so the checked file is the one read.
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NOCTTY);
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NOCTTY | O_NONBLOCK);
   if (fd < 0) Fail(path, std::string("cannot open: ") + std::strerror(errno));
   struct FdCloser {
     int fd;
@@ -45,39 +56,37 @@ std::vector<uint8_t> ReadKeyFile(const std::filesystem::path& path) {
                    " lets group or others read or write it; run chmod 600 " + path.string() +
                    " (owner: the service user)");
   }
-  std::vector<uint8_t> bytes;
-  uint8_t chunk[4096];
-  for (;;) {
-    const ssize_t n = ::read(fd, chunk, sizeof chunk);
+  // Read at most one byte more than the longest valid file, so a long file is refused unread.
+  FileBuffer file;
+  while (file.size < file.bytes.size()) {
+    const ssize_t n = ::read(fd, file.bytes.data() + file.size, file.bytes.size() - file.size);
     if (n < 0) {
       if (errno == EINTR) continue;
       Fail(path, std::string("cannot read: ") + std::strerror(errno));
     }
     if (n == 0) break;
-    bytes.insert(bytes.end(), chunk, chunk + n);
+    file.size += static_cast<std::size_t>(n);
   }
-  if (bytes.empty())
-    Fail(path, "is empty; write a key, e.g. openssl rand -hex 32 > " + path.string());
-
-  std::size_t end = bytes.size();
-  while (end > 0 && (bytes[end - 1] == '\n' || bytes[end - 1] == '\r' || bytes[end - 1] == ' ' ||
-                     bytes[end - 1] == '\t')) {
-    --end;
-  }
-  bool hex = end > 0 && end % 2 == 0;
-  for (std::size_t i = 0; hex && i < end; ++i) hex = HexValue(bytes[i]) >= 0;
-  std::vector<uint8_t> key;
-  if (hex) {
-    key.reserve(end / 2);
-    for (std::size_t i = 0; i < end; i += 2) {
-      key.push_back(static_cast<uint8_t>(HexValue(bytes[i]) * 16 + HexValue(bytes[i + 1])));
+  if (file.size == 0) Fail(path, "is empty");
+  std::size_t digits = file.size;
+  if (file.bytes[digits - 1] == '\n') --digits;
+  for (std::size_t i = 0; i < digits; ++i) {
+    if (HexValue(file.bytes[i]) < 0) {
+      // The position only: the content is secret.
+      Fail(path, "byte " + std::to_string(i + 1) + " is not a hex digit");
     }
-  } else {
-    key = std::move(bytes);
   }
-  if (key.size() < kMinCommandKeyBytes) {
-    Fail(path, "key is " + std::to_string(key.size()) + " bytes; at least " +
-                   std::to_string(kMinCommandKeyBytes) + " are needed (32 advised)");
+  if (digits != FileBuffer::kHexDigits) {
+    Fail(path, file.size == file.bytes.size()
+                   ? std::string("is longer than a key (more than 64 hex digits)")
+                   : std::to_string(digits) + " hex digits instead of " +
+                         std::to_string(FileBuffer::kHexDigits));
+  }
+  core::SecretBytes key(kCommandKeyBytes);
+  const std::span<uint8_t> out = key.mutable_span();
+  for (std::size_t i = 0; i < kCommandKeyBytes; ++i) {
+    out[i] =
+        static_cast<uint8_t>(HexValue(file.bytes[2 * i]) * 16 + HexValue(file.bytes[2 * i + 1]));
   }
   return key;
 }

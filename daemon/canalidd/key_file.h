@@ -1,22 +1,30 @@
 #pragma once
 #include <cstdint>
 #include <filesystem>
-#include <vector>
+#include <string>
+
+#include "core/secret_bytes.h"
 
 namespace canalid::daemon {
 
-/// Smallest key ReadKeyFile accepts (bytes). RFC 2104 advises at least the hash length (32);
-/// 16 is the floor below which a key is refused as a mistake.
-inline constexpr std::size_t kMinCommandKeyBytes = 16;
+/// Size of the command key (bytes): HMAC-SHA256's hash length, as RFC 2104 advises.
+inline constexpr std::size_t kCommandKeyBytes = 32;
 
-/// Reads the shared command key from `path`.
-/// Format: if the whole file, without trailing whitespace, is an even number of hex digits
-/// (0-9, a-f, A-F), it is decoded as hex (e.g. the output of `openssl rand -hex 32`); otherwise
-/// the file's bytes are the key as they are (raw).
-/// Refused, with a std::runtime_error that names the path and the fix, when: the file cannot be
-/// opened or is not a regular file; its mode lets group or others read or write it (it must be
-/// like 0600 or 0400, owned by the service user); it is empty; the key is shorter than
-/// kMinCommandKeyBytes.
-std::vector<uint8_t> ReadKeyFile(const std::filesystem::path& path);
+/// The key file format, for messages and docs.
+inline constexpr const char* kKeyFileFormat =
+    "exactly 64 hex digits (0-9, a-f, A-F: a 32-byte key), optionally followed by one newline";
+
+/// Reads the shared command key from `path` (canalidd at start and --check-config, and
+/// canalid-command: one function, so a file the check accepts is one the daemon accepts).
+/// Format: kKeyFileFormat, i.e. what `openssl rand -hex 32 > FILE` writes. Nothing else is taken
+/// (no raw keys, no other lengths: a 16-character password is refused, not read as 8 bytes).
+/// Refused, with a std::runtime_error that names the path, the format and the fix, when: the file
+/// cannot be opened or is not a regular file (a directory; a symlink is followed to its target,
+/// which must pass the same checks); its mode lets group or others read or write it (it must be
+/// like 0600 or 0400, owned by the service user); it is empty, too short or too long, holds a
+/// character that is not a hex digit, or anything after the key but one newline.
+/// The file's bytes and the key are wiped (OPENSSL_cleanse) from every buffer this used; the
+/// returned key is wiped when it is destroyed.
+core::SecretBytes ReadKeyFile(const std::filesystem::path& path);
 
 }  // namespace canalid::daemon

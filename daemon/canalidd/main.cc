@@ -10,6 +10,7 @@
 #include "daemon/canalidd/daemon.h"
 #include "daemon/canalidd/log.h"
 #include "daemon/canalidd/plan_builder.h"
+#include "daemon/canalidd/startup_check.h"
 #include "daemon/config/config_loader.h"
 #include "drivers/lcm/lcm_bus.h"
 
@@ -79,7 +80,8 @@ int main(int argc, char** argv) {
       "Run: canalidd --config FILE.  Validate only: canalidd --check-config FILE.\n"
       "Signals: SIGTERM/SIGINT stop experiments, restore nominal setpoints and exit 0; SIGHUP "
       "reloads\n"
-      "the configuration when it is valid. Exit 78: configuration error. Docs: "
+      "the configuration when it is valid. Exit 78: configuration or start-up error (bad key "
+      "file,\nunusable state directory, bus or PLC settings that cannot be opened). Docs: "
       "docs/configuration.md.");
   try {
     app.parse(argc, argv);
@@ -105,6 +107,14 @@ int main(int argc, char** argv) {
   std::optional<canalid::daemon::DaemonPlan> plan = LoadPlan(config_path, &level);
   if (!plan) return kExitConfig;
   if (check_only) {
+    // The files the configuration names (key file, state directory), with the code the start uses.
+    try {
+      for (const std::string& note : canalid::daemon::CheckStartup(*plan, false).notes)
+        std::cerr << config_path << ": " << note << "\n";
+    } catch (const canalid::daemon::StartupError& e) {
+      std::cerr << config_path << ": " << e.what() << "\n";
+      return kExitConfig;
+    }
     std::cout << config_path << ": valid\n";
     return 0;
   }
@@ -113,19 +123,41 @@ int main(int argc, char** argv) {
     std::unique_ptr<canalid::drivers::LcmBus> bus;
     std::string bus_url;
     while (true) {
-      // A reload keeps the bus unless its URL changed: reopening a file:// log would truncate it.
-      if (!bus || plan->lcm_url != bus_url) {
-        bus.reset();
-        bus = std::make_unique<canalid::drivers::LcmBus>(plan->lcm_url);
-        bus_url = plan->lcm_url;
+      // Every problem before the loop runs is a configuration error (exit 78), also after SIGHUP.
+      std::optional<canalid::daemon::Daemon> daemon;
+      try {
+        canalid::daemon::CheckStartup(*plan, true);
+        // A reload keeps the bus unless its URL changed: reopening a file:// log would truncate it.
+        if (!bus || plan->lcm_url != bus_url) {
+          bus.reset();
+          bus = std::make_unique<canalid::drivers::LcmBus>(plan->lcm_url);
+          bus_url = plan->lcm_url;
+        }
+        // SIGHUP: a configuration whose key file or state directory is bad is refused like an
+        // invalid one, and the running daemon carries on.
+        daemon.emplace(std::move(*plan), *bus, canalid::daemon::Daemon::MakeModbusPort,
+                       [&config_path]() -> std::optional<canalid::daemon::DaemonPlan> {
+                         std::optional<canalid::daemon::DaemonPlan> next =
+                             LoadPlan(config_path, nullptr);
+                         if (!next) return std::nullopt;
+                         try {
+                           canalid::daemon::CheckStartup(*next, true);
+                         } catch (const canalid::daemon::StartupError& e) {
+                           canalid::daemon::LogError(config_path + ": " + e.what());
+                           return std::nullopt;
+                         }
+                         return next;
+                       });
+      } catch (const std::exception& e) {
+        throw canalid::daemon::StartupError(e.what());
       }
-      canalid::daemon::Daemon daemon(std::move(*plan), *bus,
-                                     canalid::daemon::Daemon::MakeModbusPort,
-                                     [&config_path] { return LoadPlan(config_path, nullptr); });
-      if (daemon.Run() != canalid::daemon::DaemonExit::kReload) return 0;
-      plan = daemon.TakeReloadedPlan();
+      if (daemon->Run() != canalid::daemon::DaemonExit::kReload) return 0;
+      plan = daemon->TakeReloadedPlan();
       if (!plan) return 0;
     }
+  } catch (const canalid::daemon::StartupError& e) {
+    canalid::daemon::LogError(std::string("cannot start: ") + e.what());
+    return kExitConfig;
   } catch (const std::exception& e) {
     canalid::daemon::LogError(std::string("fatal: ") + e.what());
     return kExitSoftware;

@@ -47,9 +47,14 @@ int main(int argc, char** argv) {
       {"stop", CommandKind::kAbortExperiment},
       {"reset", CommandKind::kResetEstimator},
       {"publish-config", CommandKind::kPublishConfig}};
-  app.add_option("--key", key_path, "key file (mode 0600; hex or raw, >= 16 bytes)")->required();
+  app.add_option("--key", key_path,
+                 "key file (mode 0600; 64 hex digits and an optional newline: openssl rand -hex "
+                 "32)")
+      ->required();
   app.add_option("--url", url, "LCM URL; empty = LCM's default ($LCM_DEFAULT_URL)");
-  app.add_option("--channel", channel, "command channel (the daemon's prefix + CANALID_COMMAND)")
+  app.add_option("--channel", channel,
+                 "command channel (the daemon's prefix + CANALID_COMMAND); signed, so it must be "
+                 "the daemon's")
       ->capture_default_str();
   app.add_option("--reach", reach, "target reach")->required();
   app.add_option("--sender", sender, "sender id (its counter is tracked separately)")
@@ -65,16 +70,18 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   try {
-    const std::vector<uint8_t> key = canalid::daemon::ReadKeyFile(key_path);
+    canalid::core::SecretBytes key = canalid::daemon::ReadKeyFile(key_path);
     const int64_t now_us = NowUs();
     canalid::core::CommandFields fields;
+    fields.channel = channel;
     fields.utime_us = utime_us != 0 ? utime_us : now_us;
     fields.counter = counter != 0 ? counter : now_us;
     fields.sender = sender;
     fields.kind = static_cast<int8_t>(kinds.at(action));
     fields.reach = reach;
     fields.argument = argument;
-    const canalid::command_t message = canalid::drivers::BuildSignedCommand(key, fields);
+    const canalid::command_t message = canalid::drivers::BuildSignedCommand(key.span(), fields);
+    key.Wipe();  // not needed for publishing
     canalid::drivers::LcmBus bus(url);
     std::vector<uint8_t> buffer;
     if (!canalid::drivers::PublishMessage(bus, channel, message, buffer)) {

@@ -3,6 +3,7 @@
 #include <regex>
 
 #include "canalid/command_t.hpp"
+#include "drivers/lcm/command_wire.h"
 
 namespace canalid::drivers {
 
@@ -10,16 +11,20 @@ CommandReceiver::CommandReceiver(Bus& bus, const std::string& channel,
                                  core::CommandAuthenticator& authenticator, Clock now_us,
                                  Callback on_accepted)
     : bus_(bus),
+      channel_(channel),
       authenticator_(authenticator),
       now_us_(std::move(now_us)),
       on_accepted_(std::move(on_accepted)) {
   // The bus matches a regex; escape the channel so names with '.' match only themselves.
   static const std::regex kSpecial(R"([.^$|()\[\]{}*+?\\])");
   const std::string pattern = std::regex_replace(channel, kSpecial, R"(\$&)");
-  subscription_ = bus_.Subscribe(pattern, [this](const std::string&, std::span<const uint8_t> d) {
-    Receive(d);
-    return true;  // rejected commands are counted here, not as bus handler failures
-  });
+  subscription_ = bus_.Subscribe(
+      pattern,
+      [this](const std::string&, std::span<const uint8_t> d) {
+        Receive(d);
+        return true;  // rejected commands are counted here, not as bus handler failures
+      },
+      kCommandQueueCapacity);
 }
 
 CommandReceiver::~CommandReceiver() { bus_.Unsubscribe(subscription_); }
@@ -34,11 +39,17 @@ int64_t CommandReceiver::rejected() const {
 
 void CommandReceiver::Receive(std::span<const uint8_t> data) noexcept {
   auto verdict = core::CommandVerdict::kMalformed;
+  // Before lcm-gen's decode, which would allocate what hmac_size says (CommandWireIsBounded).
+  if (!CommandWireIsBounded(data)) {
+    ++counts_[static_cast<std::size_t>(verdict)];
+    return;
+  }
   try {
     canalid::command_t message;
     if (DecodeMessage(data, message) && message.hmac_size >= 0 &&
         static_cast<std::size_t>(message.hmac_size) == message.hmac.size()) {
       core::CommandFields fields;
+      fields.channel = channel_;
       fields.utime_us = message.utime;
       fields.counter = message.counter;
       fields.sender = message.sender;

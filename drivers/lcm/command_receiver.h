@@ -19,9 +19,16 @@ struct AcceptedCommand {
   std::string argument;
 };
 
+/// Messages of the command channel that may wait for the loop; more are dropped by the bus. Each
+/// is at most kMaxCommandMessageBytes once checked, but the transport may queue larger ones.
+inline constexpr int kCommandQueueCapacity = 64;
+
 /// Receives canalid.command_t on one channel of a Bus, verifies each message with a
-/// core::CommandAuthenticator against the daemon clock `now_us()`, counts every verdict (bytes
-/// that do not decode as command_t count as malformed) and calls `on_accepted` for accepted ones.
+/// core::CommandAuthenticator against the daemon clock `now_us()`, counts every verdict and calls
+/// `on_accepted` for accepted ones. Bytes are checked with CommandWireIsBounded before lcm-gen's
+/// decoder sees them (no allocation from a length field of an unauthenticated message); those
+/// that fail it, or do not decode as command_t, count as malformed. The channel name is part of
+/// the signed bytes (core::CommandFields::channel).
 /// Never throws from the bus handler: an exception from `on_accepted`, the clock or the MAC
 /// computation (an OpenSSL failure) is caught and counted in callback_failures(). Runs on the
 /// Bus's thread; not thread-safe.
@@ -49,6 +56,7 @@ class CommandReceiver final {
   void Receive(std::span<const uint8_t> data) noexcept;
 
   Bus& bus_;
+  std::string channel_;
   core::CommandAuthenticator& authenticator_;
   Clock now_us_;
   Callback on_accepted_;

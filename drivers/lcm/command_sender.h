@@ -8,7 +8,8 @@
 namespace canalid::drivers {
 
 /// A canalid.command_t carrying `fields` (fields.mac is ignored) and their HMAC-SHA256 under
-/// `key` (core::SignCommand), ready to publish on the command channel.
+/// `key` (core::SignCommand), ready to publish on fields.channel (which the MAC covers; the
+/// channel itself is not a field of the message).
 canalid::command_t BuildSignedCommand(std::span<const uint8_t> key,
                                       const core::CommandFields& fields);
 

@@ -1,5 +1,9 @@
 #include "drivers/lcm/lcm_bus.h"
 
+#include <fcntl.h>
+#include <sys/socket.h>
+#include <sys/time.h>
+
 #include <lcm/lcm-cpp.hpp>
 
 #include <algorithm>
@@ -8,7 +12,8 @@
 
 namespace canalid::drivers {
 
-LcmBus::LcmBus(const std::string& url) : url_(url), lcm_(std::make_unique<lcm::LCM>(url)) {
+LcmBus::LcmBus(const std::string& url)
+    : url_(url), reconnectable_(url.starts_with("tcpq:")), lcm_(std::make_unique<lcm::LCM>(url)) {
   if (!lcm_->good()) {
     throw std::runtime_error("lcm: cannot open url '" + url +
                              "' (empty means $LCM_DEFAULT_URL or udpm default; udpm needs a "
@@ -19,6 +24,9 @@ LcmBus::LcmBus(const std::string& url) : url_(url), lcm_(std::make_unique<lcm::L
 LcmBus::~LcmBus() = default;
 
 bool LcmBus::Publish(const std::string& channel, std::span<const uint8_t> data) noexcept {
+  // A lost tcpq connection: liblcm would try to connect again on every publish, blocking for a
+  // TCP connect each time; reconnecting is Reconnect()'s job.
+  if (UsableFileno() < 0) return false;
   return lcm_->publish(channel, data.data(), static_cast<unsigned int>(data.size())) == 0;
 }
 
@@ -58,11 +66,13 @@ void LcmBus::Dispatch(const lcm::ReceiveBuffer* buffer, const std::string& chann
 int LcmBus::Handle(double timeout_s) noexcept {
   const int timeout_ms =
       static_cast<int>(std::clamp(std::ceil(std::max(timeout_s, 0.0) * 1e3), 0.0, 2e9));
+  if (UsableFileno() < 0) return -1;
   const int first = lcm_->handleTimeout(timeout_ms);
   if (first < 0) return -1;
   if (first == 0) return 0;
   int handled = 1;
   while (handled < 10000) {
+    if (UsableFileno() < 0) return -1;
     const int rc = lcm_->handleTimeout(0);
     if (rc < 0) return -1;
     if (rc == 0) break;
@@ -72,5 +82,51 @@ int LcmBus::Handle(double timeout_s) noexcept {
 }
 
 int LcmBus::fileno() noexcept { return lcm_->getFileno(); }
+
+int LcmBus::UsableFileno() noexcept {
+  const int fd = lcm_->getFileno();
+  if (fd >= 0 && reconnectable_) {
+    // liblcm's tcpq reads a frame with blocking recv() calls until it is whole; on a non-blocking
+    // socket a frame not yet fully arrived fails with EAGAIN and liblcm drops the connection.
+    // A watcher of a dup() of this descriptor shares its file status flags (Boost.Asio's
+    // async_wait sets O_NONBLOCK on the descriptor it waits on), so make it blocking again.
+    const int flags = ::fcntl(fd, F_GETFL);
+    if (flags >= 0 && (flags & O_NONBLOCK) != 0) ::fcntl(fd, F_SETFL, flags & ~O_NONBLOCK);
+    // liblcm may have replaced the socket (it connects again on its own): set the timeout on the
+    // socket in use each time (one setsockopt per call).
+    timeval timeout{};
+    timeout.tv_sec = static_cast<time_t>(kTcpqReceiveTimeoutS);
+    timeout.tv_usec = static_cast<suseconds_t>((kTcpqReceiveTimeoutS - timeout.tv_sec) * 1e6);
+    ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof timeout);
+  }
+  return fd;
+}
+
+bool LcmBus::Reconnect(std::string* problem) noexcept {
+  if (!reconnectable_) {
+    if (problem != nullptr) *problem = "lcm: '" + url_ + "' is not a connection to reconnect";
+    return false;
+  }
+  if (lcm_->getFileno() >= 0) return true;
+  // liblcm's tcpq provider connects again, and subscribes every channel of this instance again,
+  // when a subscription changes while it is disconnected; a probe subscription, removed at once,
+  // does that with the public API. (Replacing the instance instead does not work: destroying one
+  // whose connection is lost makes lcm_destroy connect again for each unsubscribe.) Blocking for
+  // the TCP connect and the hub's 8-byte answer.
+  try {
+    lcm::Subscription* probe = lcm_->subscribeFunction(
+        "CANALID_LCM_RECONNECT_PROBE",
+        +[](const lcm::ReceiveBuffer*, const std::string&, LcmBus*) {}, this);
+    if (probe == nullptr) {
+      if (problem != nullptr) *problem = "lcm: cannot subscribe on '" + url_ + "'";
+      return false;
+    }
+    lcm_->unsubscribe(probe);
+    return true;
+  } catch (const std::exception& e) {
+    if (problem != nullptr) *problem = e.what();
+    return false;
+  }
+}
 
 }  // namespace canalid::drivers

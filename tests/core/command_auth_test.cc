@@ -29,8 +29,9 @@ struct SignedCommand {
 
 SignedCommand Make(const std::vector<uint8_t>& key, int64_t counter, int64_t utime_us = kNowUs,
                    int8_t kind = 1, std::string_view sender = "ops1",
-                   std::string_view reach = "pool2") {
+                   std::string_view reach = "pool2", std::string_view channel = "SITE1.COMMAND") {
   SignedCommand c;
+  c.fields.channel = channel;
   c.fields.utime_us = utime_us;
   c.fields.counter = counter;
   c.fields.sender = sender;
@@ -43,6 +44,7 @@ SignedCommand Make(const std::vector<uint8_t>& key, int64_t counter, int64_t uti
 
 TEST(CanonicalCommandBytes, MatchesTheDocumentedLayout) {
   CommandFields f;
+  f.channel = "S1.C";
   f.kind = 3;
   f.reach = "p2";
   f.sender = "op";
@@ -50,8 +52,9 @@ TEST(CanonicalCommandBytes, MatchesTheDocumentedLayout) {
   f.utime_us = -2;  // two's complement, big-endian
   f.argument = "";
   std::vector<uint8_t> expected = {'c', 'a', 'n', 'a', 'l', 'i', 'd', '-', 'c',
-                                   'o', 'm', 'm', 'a', 'n', 'd', '-', 'v', '1'};
-  const std::vector<uint8_t> rest = {3,                                               // kind
+                                   'o', 'm', 'm', 'a', 'n', 'd', '-', 'v', '2'};
+  const std::vector<uint8_t> rest = {0,    0,    0,    4,    'S',  '1',  '.',  'C',   // channel
+                                     3,                                               // kind
                                      0,    0,    0,    2,    'p',  '2',               // reach
                                      0,    0,    0,    2,    'o',  'p',               // sender
                                      1,    2,    3,    4,    5,    6,    7,    8,     // counter
@@ -62,13 +65,16 @@ TEST(CanonicalCommandBytes, MatchesTheDocumentedLayout) {
   CanonicalCommandBytes(f, out);
   EXPECT_EQ(out, expected);
   EXPECT_EQ(SignCommand(Key("k"), f), HmacSha256::Mac(Key("k"), expected));
-  // The tag itself, as Python's hmac.new(b"k", expected, hashlib.sha256) and the hand-written
-  // HMAC this project had before OpenSSL both give it: the wire format does not depend on the
-  // library that computes the MAC.
+  // The tag itself, computed independently of this code with Python's hmac module:
+  //   m = b"canalid-command-v2" + struct.pack(">I", 4) + b"S1.C" + bytes([3]) +
+  //       struct.pack(">I", 2) + b"p2" + struct.pack(">I", 2) + b"op" +
+  //       struct.pack(">q", 0x0102030405060708) + struct.pack(">q", -2) + struct.pack(">I", 0)
+  //   hmac.new(b"k", m, hashlib.sha256).digest()
+  // so the wire format does not depend on the library that computes the MAC.
   const Sha256Digest tag = SignCommand(Key("k"), f);
-  const Sha256Digest known = {0x4a, 0x4b, 0x1b, 0x98, 0x2f, 0x33, 0xc7, 0x77, 0x8e, 0xaa, 0x5e,
-                              0x27, 0x89, 0x4e, 0x47, 0x68, 0x97, 0x00, 0x73, 0x4a, 0x0a, 0xb7,
-                              0x32, 0x4a, 0xf3, 0xaf, 0x44, 0xea, 0xe3, 0x14, 0xd0, 0xd5};
+  const Sha256Digest known = {0xf4, 0xd3, 0xf7, 0x01, 0x33, 0x15, 0x2e, 0xfd, 0x08, 0xfa, 0xef,
+                              0x11, 0x3f, 0x95, 0x58, 0x3c, 0xec, 0x5a, 0x43, 0x53, 0x23, 0x6a,
+                              0x90, 0x86, 0x9d, 0xb6, 0x4a, 0x79, 0x7b, 0x4a, 0x9e, 0xb2};
   EXPECT_EQ(tag, known);
 }
 
@@ -175,9 +181,52 @@ TEST_F(CommandAuthenticatorTest, ReplaysAreRejectedPerSender) {
 
 TEST_F(CommandAuthenticatorTest, RestoredCountersRejectReplaysAfterARestart) {
   auto c = Make(key_, 41);
-  auth_.RestoreCounter("ops1", 41);
-  auth_.RestoreCounter("ops1", 3);  // lower: ignored
+  EXPECT_TRUE(auth_.RestoreCounter("ops1", 41, kNowUs));
+  EXPECT_TRUE(auth_.RestoreCounter("ops1", 3, kNowUs));  // lower: ignored
   EXPECT_EQ(auth_.Verify(c.Get(), kNowUs), CommandVerdict::kReplayed);
+}
+
+TEST_F(CommandAuthenticatorTest, ASignatureForAnotherChannelIsRefused) {
+  // Same key, same fields, signed for site 2's channel: site 1's daemon refuses it.
+  auto site2 = Make(key_, 1, kNowUs, 1, "ops1", "pool2", "SITE2.COMMAND");
+  CommandFields f = site2.Get();
+  f.channel = "SITE1.COMMAND";  // the receiver fills in its own channel
+  EXPECT_EQ(auth_.Verify(f, kNowUs), CommandVerdict::kBadMac);
+  f.channel = "SITE2.COMMAND";
+  EXPECT_EQ(auth_.Verify(f, kNowUs), CommandVerdict::kAccepted);
+}
+
+// A key holder signs a command as another operator's `sender` with counter INT64_MAX; on main it
+// was accepted and that sender could never send again (the counter was persisted too).
+TEST_F(CommandAuthenticatorTest, ALockoutAttemptIsRefusedAndTheGenuineSenderCarriesOn) {
+  auto genuine1 = Make(key_, kNowUs - 1'000'000);  // canalid-command's default: its clock in us
+  EXPECT_EQ(auth_.Verify(genuine1.Get(), kNowUs), CommandVerdict::kAccepted);
+  for (int64_t counter : {INT64_MAX, INT64_MAX / 2, kNowUs + 30'000'001}) {
+    auto lockout = Make(key_, counter);
+    EXPECT_EQ(auth_.Verify(lockout.Get(), kNowUs), CommandVerdict::kCounterAhead) << counter;
+  }
+  EXPECT_EQ(auth_.last_counters().at("ops1"), kNowUs - 1'000'000);
+  auto genuine2 = Make(key_, kNowUs);
+  EXPECT_EQ(auth_.Verify(genuine2.Get(), kNowUs), CommandVerdict::kAccepted);
+  // The most a key holder can do: push the counter to the edge of the window, which the
+  // genuine sender's clock-based counter passes once the window has gone by.
+  auto edge = Make(key_, kNowUs + 30'000'000);
+  EXPECT_EQ(auth_.Verify(edge.Get(), kNowUs), CommandVerdict::kAccepted);
+  auto later = Make(key_, kNowUs + 30'000'001, kNowUs + 30'000'001);
+  EXPECT_EQ(auth_.Verify(later.Get(), kNowUs + 30'000'001), CommandVerdict::kAccepted);
+  // Explicit small counters stay usable.
+  auto other = Make(key_, 1, kNowUs, 1, "ops2");
+  EXPECT_EQ(auth_.Verify(other.Get(), kNowUs), CommandVerdict::kAccepted);
+}
+
+TEST_F(CommandAuthenticatorTest, RestoredCountersOutOfReachAreRefused) {
+  EXPECT_FALSE(auth_.RestoreCounter("ops1", INT64_MAX, kNowUs));
+  EXPECT_FALSE(auth_.RestoreCounter("ops1", kNowUs + 30'000'001, kNowUs));
+  EXPECT_FALSE(auth_.RestoreCounter("ops1", 0, kNowUs));
+  EXPECT_FALSE(auth_.RestoreCounter("", 5, kNowUs));
+  EXPECT_FALSE(auth_.RestoreCounter(std::string(kMaxCommandSenderBytes + 1, 's'), 5, kNowUs));
+  EXPECT_TRUE(auth_.last_counters().empty());
+  EXPECT_TRUE(auth_.RestoreCounter("ops1", kNowUs + 30'000'000, kNowUs));
 }
 
 TEST_F(CommandAuthenticatorTest, MalformedCommands) {
@@ -217,6 +266,7 @@ TEST(CommandAuthenticator, RejectsBadOptions) {
       CommandAuthenticator(CommandAuthOptions{.enabled = true, .max_clock_skew_s = 0.0}, Key("k")),
       std::invalid_argument);
   EXPECT_STREQ(CommandVerdictName(CommandVerdict::kUnknownKind), "unknown_kind");
+  EXPECT_STREQ(CommandVerdictName(CommandVerdict::kCounterAhead), "counter_ahead");
 }
 
 }  // namespace

@@ -4,6 +4,8 @@
 // files is refused.  The truths: the exit codes (0 valid, 78 EX_CONFIG) and the file:line:column
 // positions of the problems in the broken file.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -135,6 +137,94 @@ TEST_F(CheckConfigCli, NoFileAndHelp) {
   EXPECT_EQ(Run({"--help"}, output), 0) << output;
   EXPECT_NE(output.find("--check-config"), std::string::npos) << output;
   EXPECT_NE(output.find("canalidd --check-config FILE"), std::string::npos) << output;
+}
+
+// The key file is checked by --check-config with the same function as at start (ReadKeyFile), and
+// each bad one makes both exit 78 (main said "valid" for these, then the daemon exited 70, so
+// systemd's RestartPreventExitStatus=78 did not stop a restart loop).
+TEST_F(CheckConfigCli, EveryBadKeyFileExits78InTheCheckAndAtStart) {
+  const std::string hex(64, 'a');
+  struct Variant {
+    std::string name;
+    std::string text;  // empty with mode 0: not made
+    mode_t mode;
+    std::string reason;
+  };
+  const std::vector<Variant> variants = {
+      {"missing", "", 0, "cannot open"},
+      {"empty", "", 0600, "is empty"},
+      {"short", "0011223344\n", 0600, "10 hex digits"},
+      {"mode-0644", hex + "\n", 0644, "chmod 600"},
+      {"group-readable", hex + "\n", 0640, "chmod 600"},
+      {"non-hex", std::string(63, 'a') + "z\n", 0600, "not a hex digit"},
+      {"odd-length", hex.substr(0, 63) + "\n", 0600, "63 hex digits"},
+      {"password-16", "Passw0rdPassw0rd\n", 0600, "not a hex digit"},
+      {"hex-16", "0123456789abcdef\n", 0600, "16 hex digits"},
+      {"trailing-garbage", hex + "\n# key\n", 0600, "not a hex digit"},
+      {"too-long", hex + hex + "\n", 0600, "longer than a key"},
+      {"directory", "", 0700, "not a regular file"},
+      {"symlink-to-open", "", 0, "chmod 600"},
+  };
+  const fs::path keys = dir_ / "keys";
+  fs::create_directories(keys);
+  std::ofstream(keys / "open-target") << hex << "\n";
+  ::chmod((keys / "open-target").c_str(), 0644);
+  for (const Variant& v : variants) {
+    const fs::path key = keys / v.name;
+    if (v.name == "directory") {
+      fs::create_directory(key);
+    } else if (v.name == "symlink-to-open") {
+      fs::create_symlink(keys / "open-target", key);
+    } else if (v.mode != 0) {
+      std::ofstream(key) << v.text;
+      ::chmod(key.c_str(), v.mode);
+    }
+    const fs::path config =
+        WriteConfig(v.name + ".toml", {{"enabled", "true\nkey_file = \"" + key.string() + "\""}});
+    std::string output;
+    EXPECT_EQ(Run({"--check-config", config.string()}, output), kExitConfig) << v.name << output;
+    EXPECT_NE(output.find(key.string()), std::string::npos) << v.name << output;
+    EXPECT_NE(output.find(v.reason), std::string::npos) << v.name << output;
+    EXPECT_EQ(output.find(": valid"), std::string::npos) << v.name << output;
+    EXPECT_EQ(Run({"--config", config.string()}, output), kExitConfig) << v.name << output;
+    EXPECT_NE(output.find(v.reason), std::string::npos) << v.name << output;
+  }
+  // The same configuration with a good key is valid.
+  const fs::path good_key = keys / "good";
+  std::ofstream(good_key) << hex << "\n";
+  ::chmod(good_key.c_str(), 0600);
+  const fs::path good =
+      WriteConfig("good.toml", {{"enabled", "true\nkey_file = \"" + good_key.string() + "\""}});
+  std::string output;
+  EXPECT_EQ(Run({"--check-config", good.string()}, output), 0) << output;
+}
+
+TEST_F(CheckConfigCli, StateDirectoryIsCheckedBeforeStart) {
+  std::string output;
+  // Missing: the check notes it (systemd's StateDirectory= makes it at start), the start refuses.
+  fs::remove_all(dir_ / "state");
+  const fs::path config = WriteConfig("missing-state.toml", {});
+  EXPECT_EQ(Run({"--check-config", config.string()}, output), 0) << output;
+  EXPECT_NE(output.find("does not exist"), std::string::npos) << output;
+  EXPECT_EQ(Run({"--config", config.string()}, output), kExitConfig) << output;
+  EXPECT_NE(output.find("state directory " + (dir_ / "state").string() + " does not exist"),
+            std::string::npos)
+      << output;
+  // A file where the directory should be: refused by both.
+  std::ofstream(dir_ / "state") << "not a directory\n";
+  EXPECT_EQ(Run({"--check-config", config.string()}, output), kExitConfig) << output;
+  EXPECT_NE(output.find("is not a directory"), std::string::npos) << output;
+  EXPECT_EQ(Run({"--config", config.string()}, output), kExitConfig) << output;
+  // Not writable (root can write anywhere: only checked for other users).
+  fs::remove(dir_ / "state");
+  fs::create_directory(dir_ / "state");
+  if (::geteuid() != 0) {
+    ::chmod((dir_ / "state").c_str(), 0500);
+    EXPECT_EQ(Run({"--check-config", config.string()}, output), kExitConfig) << output;
+    EXPECT_NE(output.find("not writable"), std::string::npos) << output;
+    ::chmod((dir_ / "state").c_str(), 0700);
+  }
+  EXPECT_EQ(Run({"--check-config", config.string()}, output), 0) << output;
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 // CommandReceiver: every verdict through FakeBus, the same over memq:// LCM, and end to end with
 // the canalid-command program writing an LCM log that the receiver reads back.
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 
 #include <chrono>
@@ -13,6 +14,7 @@
 #include "core/command_auth.h"
 #include "drivers/lcm/command_receiver.h"
 #include "drivers/lcm/command_sender.h"
+#include "drivers/lcm/command_wire.h"
 #include "drivers/lcm/fake_bus.h"
 #include "drivers/lcm/lcm_bus.h"
 #include "support/run_program.h"
@@ -28,6 +30,7 @@ std::vector<uint8_t> Key(const std::string& s) { return {s.begin(), s.end()}; }
 
 core::CommandFields Fields(int64_t counter, int64_t utime_us = kNowUs, int8_t kind = 1) {
   core::CommandFields f;
+  f.channel = kChannel;
   f.utime_us = utime_us;
   f.counter = counter;
   f.sender = "ops1";
@@ -57,7 +60,7 @@ class ReceiverTest : public ::testing::Test {
 TEST_F(ReceiverTest, EveryVerdictIsCountedAndOnlyAcceptedOnesArePassedOn) {
   Send(BuildSignedCommand(key_, Fields(1)));                        // accepted
   Send(BuildSignedCommand(Key("wrong key wrong key"), Fields(2)));  // forged
-  Send(BuildSignedCommand(key_, Fields(3, kNowUs - 31'000'000)));   // stale (31 s > 30 s)
+  Send(BuildSignedCommand(key_, Fields(3, kNowUs - 31'000'000)));   // stale (31 s > 5 s)
   Send(BuildSignedCommand(key_, Fields(1)));                        // replayed
   auto short_mac = BuildSignedCommand(key_, Fields(4));
   short_mac.hmac.resize(16);
@@ -124,6 +127,165 @@ TEST_F(ReceiverTest, StringOfLengthZeroAndNegativeHmacSizeAreMalformed) {
   EXPECT_EQ(receiver_.count(CommandVerdict::kMalformed), 2);
   EXPECT_EQ(receiver_.callback_failures(), 0);
   EXPECT_TRUE(accepted_.empty());
+}
+
+// The LCM bytes of `message` (encoded as they are, hmac_size included, whatever hmac holds).
+std::vector<uint8_t> Encode(const canalid::command_t& message) {
+  std::vector<uint8_t> bytes(static_cast<std::size_t>(message.getEncodedSize()));
+  EXPECT_EQ(message.encode(bytes.data(), 0, static_cast<int>(bytes.size())),
+            static_cast<int>(bytes.size()));
+  return bytes;
+}
+
+void PutI32(std::vector<uint8_t>& bytes, std::size_t at, int32_t value) {
+  const auto bits = static_cast<uint32_t>(value);
+  for (int i = 0; i < 4; ++i) bytes[at + static_cast<std::size_t>(i)] = bits >> (24 - 8 * i);
+}
+
+// A 60-byte message as in the issue: a command_t with short strings, no MAC bytes and
+// hmac_size = 0x7fffffff (lcm-gen's decoder resized hmac to 2 GiB before checking the length).
+std::vector<uint8_t> OversizeHmacMessage() {
+  canalid::command_t m;
+  m.utime = kNowUs;
+  m.counter = 1;
+  m.sender = "operator";
+  m.kind = 1;
+  m.reach = "pool2";
+  m.argument = "abc";
+  m.hmac_size = 0;
+  std::vector<uint8_t> bytes = Encode(m);
+  EXPECT_EQ(bytes.size(), 60u);
+  PutI32(bytes, bytes.size() - 4, 0x7fffffff);
+  return bytes;
+}
+
+// Peak resident set of this process (KiB).
+long PeakRssKib() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_maxrss;
+}
+
+TEST(CommandWire, AcceptsGenuineMessagesAndRefusesEveryOversizeOrInconsistentLength) {
+  const auto key = Key("0123456789abcdef0123456789abcdef");
+  core::CommandFields longest = Fields(1);
+  const std::string sender(core::kMaxCommandSenderBytes, 's');
+  const std::string reach(core::kMaxCommandReachBytes, 'r');
+  const std::string argument(core::kMaxCommandArgumentBytes, 'a');
+  longest.sender = sender;
+  longest.reach = reach;
+  longest.argument = argument;
+  const std::vector<uint8_t> largest = Encode(BuildSignedCommand(key, longest));
+  EXPECT_EQ(largest.size(), kMaxCommandMessageBytes);
+  EXPECT_TRUE(CommandWireIsBounded(largest));
+  const std::vector<uint8_t> good = Encode(BuildSignedCommand(key, Fields(1)));
+  ASSERT_TRUE(CommandWireIsBounded(good));
+
+  EXPECT_FALSE(CommandWireIsBounded(OversizeHmacMessage()));
+  EXPECT_FALSE(CommandWireIsBounded({}));
+  // The sender's length field sits right after fingerprint, utime and counter (byte 24).
+  for (int32_t length : {0, -1, INT32_MIN, 0x7fffffff, 66, 1000}) {
+    std::vector<uint8_t> bad = good;
+    PutI32(bad, 24, length);
+    EXPECT_FALSE(CommandWireIsBounded(bad)) << "sender length " << length;
+  }
+  // hmac_size other than 32 (the array bytes left as they are).
+  for (int32_t size : {0, -1, 16, 31, 33, 0x7fffffff}) {
+    std::vector<uint8_t> bad = good;
+    PutI32(bad, bad.size() - 36, size);
+    EXPECT_FALSE(CommandWireIsBounded(bad)) << "hmac_size " << size;
+  }
+  std::vector<uint8_t> wrong_fingerprint = good;
+  wrong_fingerprint[0] ^= 1;
+  EXPECT_FALSE(CommandWireIsBounded(wrong_fingerprint));
+  std::vector<uint8_t> trailing = good;
+  trailing.push_back(0);
+  EXPECT_FALSE(CommandWireIsBounded(trailing));
+  std::vector<uint8_t> no_terminator = good;
+  no_terminator[24 + 4 + 4] = 'x';  // "ops1" + its NUL: the NUL replaced
+  EXPECT_FALSE(CommandWireIsBounded(no_terminator));
+  std::vector<uint8_t> too_long(kMaxCommandMessageBytes + 1, 0);
+  std::copy(good.begin(), good.begin() + 8, too_long.begin());
+  EXPECT_FALSE(CommandWireIsBounded(too_long));
+  for (std::size_t cut = 0; cut < good.size(); ++cut) {
+    EXPECT_FALSE(CommandWireIsBounded(std::span<const uint8_t>(good.data(), cut))) << cut;
+  }
+}
+
+TEST_F(ReceiverTest, OversizeArraysAreMalformedWithoutDecoding) {
+  SendRaw(OversizeHmacMessage());
+  std::vector<uint8_t> huge_string = Encode(BuildSignedCommand(key_, Fields(1)));
+  PutI32(huge_string, 24, 0x7fffffff);
+  SendRaw(huge_string);
+  std::vector<uint8_t> empty_string = Encode(BuildSignedCommand(key_, Fields(1)));
+  PutI32(empty_string, 24, 0);  // lcm-gen's decode threw on this (a string of length -1)
+  SendRaw(empty_string);
+  Send(BuildSignedCommand(key_, Fields(1)));  // then a genuine one is still accepted
+  HandleAll();
+  EXPECT_EQ(receiver_.count(CommandVerdict::kMalformed), 3);
+  EXPECT_EQ(receiver_.count(CommandVerdict::kAccepted), 1);
+  EXPECT_EQ(receiver_.callback_failures(), 0);
+}
+
+// The flood of the issue, over real LCM (memq): on main each message allocated and zeroed 2 GiB
+// (about 1 s each). Now none may allocate (the process's peak RSS grows by far less than one such
+// message) and the loop gets through them quickly. The bounds are generous on purpose (a loaded
+// 2-core box, sanitizer builds): 64 MiB of RSS and 10 s for 2000 messages, where one message of
+// main alone exceeded the first and a handful the second; the measured numbers are printed.
+TEST(CommandReceiver, AFloodOfOversizeMessagesNeitherAllocatesNorStallsTheLoop) {
+  LcmBus bus("memq://");
+  const auto key = Key("0123456789abcdef0123456789abcdef");
+  core::CommandAuthenticator auth(core::CommandAuthOptions{.enabled = true}, key);
+  int accepted = 0;
+  CommandReceiver receiver(
+      bus, kChannel, auth, [] { return kNowUs; }, [&](const AcceptedCommand&) { ++accepted; });
+  const std::vector<uint8_t> flood = OversizeHmacMessage();
+  constexpr int kMessages = 2000;
+  constexpr int kBatch = 50;  // below the command subscription's queue capacity
+  const long rss_before = PeakRssKib();
+  const auto start = std::chrono::steady_clock::now();
+  double longest_handle_s = 0.0;
+  int handled = 0;
+  for (int sent = 0; sent < kMessages; sent += kBatch) {
+    for (int i = 0; i < kBatch; ++i) ASSERT_TRUE(bus.Publish(kChannel, flood));
+    const auto t0 = std::chrono::steady_clock::now();
+    for (int tries = 0; tries < 10 && handled < sent + kBatch; ++tries)
+      handled += std::max(0, bus.Handle(1.0));
+    longest_handle_s =
+        std::max(longest_handle_s,
+                 std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  }
+  const double elapsed_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const long rss_growth_kib = PeakRssKib() - rss_before;
+  std::vector<uint8_t> buffer;
+  ASSERT_TRUE(PublishMessage(bus, kChannel, BuildSignedCommand(key, Fields(1)), buffer));
+  for (int tries = 0; tries < 10 && accepted == 0; ++tries) bus.Handle(1.0);
+  std::printf(
+      "flood: %d messages in %.4f s (%.2f us each), longest Handle of %d: %.4f s, "
+      "peak RSS growth %ld KiB\n",
+      kMessages, elapsed_s, elapsed_s * 1e6 / kMessages, kBatch, longest_handle_s, rss_growth_kib);
+  EXPECT_EQ(handled, kMessages);
+  EXPECT_EQ(receiver.count(CommandVerdict::kMalformed), kMessages);
+  EXPECT_EQ(accepted, 1);
+  EXPECT_LT(rss_growth_kib, 64 * 1024);
+  EXPECT_LT(elapsed_s, 10.0);
+}
+
+TEST(CommandReceiver, ACommandSignedForAnotherSiteIsRefused) {
+  FakeBus bus;
+  const auto key = Key("0123456789abcdef0123456789abcdef");
+  core::CommandAuthenticator auth(core::CommandAuthOptions{.enabled = true}, key);
+  CommandReceiver receiver(
+      bus, kChannel, auth, [] { return kNowUs; }, [](const AcceptedCommand&) {});
+  core::CommandFields site2 = Fields(1);
+  site2.channel = "SITE2.CANALID_COMMAND";
+  std::vector<uint8_t> buffer;
+  // Signed for site 2 but delivered on site 1's channel (e.g. re-published by a listener).
+  ASSERT_TRUE(PublishMessage(bus, kChannel, BuildSignedCommand(key, site2), buffer));
+  bus.Handle(0.0);
+  EXPECT_EQ(receiver.count(CommandVerdict::kBadMac), 1);
+  EXPECT_EQ(receiver.count(CommandVerdict::kAccepted), 0);
 }
 
 TEST(CommandReceiver, DisabledCountsEveryCommand) {
@@ -236,7 +398,8 @@ class CommandProgram : public ::testing::Test {
 TEST_F(CommandProgram, SignedCommandsEndToEnd) {
   const std::string hex_key = "00112233445566778899aabbccddeeff00112233445566778899aabbccddeeff\n";
   const auto key = KeyFile("key", hex_key, 0600);
-  const auto wrong = KeyFile("wrong", "ffeeddccbbaa99887766554433221100\n", 0600);
+  const auto wrong =
+      KeyFile("wrong", "ffeeddccbbaa99887766554433221100ffeeddccbbaa99887766554433221100\n", 0600);
   auto run = Send(key, "genuine.lcmlog", "start --counter 5 --argument prbs");
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_NE(run.out.find("sent start"), std::string::npos) << run.out;
