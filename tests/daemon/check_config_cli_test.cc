@@ -63,8 +63,13 @@ class CheckConfigCli : public ::testing::Test {
   }
 
   // Runs canalidd with `args` to completion; returns the exit code, output in `output`.
-  int Run(const std::vector<std::string>& args, std::string& output) {
-    std::vector<std::string> argv = {DaemonProgram()};
+  // `as_nobody`: as user and group 65534 (setpriv, from util-linux), for checks that root passes.
+  int Run(const std::vector<std::string>& args, std::string& output, bool as_nobody = false) {
+    std::vector<std::string> argv;
+    if (as_nobody) {
+      argv = {"/usr/bin/setpriv", "--reuid=65534", "--regid=65534", "--clear-groups"};
+    }
+    argv.push_back(DaemonProgram());
     argv.insert(argv.end(), args.begin(), args.end());
     ChildProcess child(argv, {}, dir_ / "canalidd.log");
     const int code = child.WaitExit(kTimeoutMs);
@@ -215,15 +220,15 @@ TEST_F(CheckConfigCli, StateDirectoryIsCheckedBeforeStart) {
   EXPECT_EQ(Run({"--check-config", config.string()}, output), kExitConfig) << output;
   EXPECT_NE(output.find("is not a directory"), std::string::npos) << output;
   EXPECT_EQ(Run({"--config", config.string()}, output), kExitConfig) << output;
-  // Not writable (root can write anywhere: only checked for other users).
+  // Not writable. Root writes anywhere, so as root the check runs as user nobody (the directory
+  // stays root's, mode 0755: readable, not writable by nobody; the test's folders are readable).
   fs::remove(dir_ / "state");
   fs::create_directory(dir_ / "state");
-  if (::geteuid() != 0) {
-    ::chmod((dir_ / "state").c_str(), 0500);
-    EXPECT_EQ(Run({"--check-config", config.string()}, output), kExitConfig) << output;
-    EXPECT_NE(output.find("not writable"), std::string::npos) << output;
-    ::chmod((dir_ / "state").c_str(), 0700);
-  }
+  const bool root = ::geteuid() == 0;
+  ::chmod((dir_ / "state").c_str(), root ? 0755 : 0500);
+  EXPECT_EQ(Run({"--check-config", config.string()}, output, root), kExitConfig) << output;
+  EXPECT_NE(output.find("not writable"), std::string::npos) << output;
+  ::chmod((dir_ / "state").c_str(), 0700);
   EXPECT_EQ(Run({"--check-config", config.string()}, output), 0) << output;
 }
 

@@ -83,6 +83,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   fields.kind = message.kind;
   fields.reach = message.reach;
   fields.argument = message.argument;
+  fields.channel = canalid::fuzz::kCommandChannel;
   const canalid::core::Sha256Digest mac =
       canalid::core::SignCommand(canalid::fuzz::kCommandKey, fields);
   message.hmac.assign(mac.begin(), mac.end());

@@ -44,6 +44,7 @@ canalid::command_t Signed(canalid::command_t m) {
   f.kind = m.kind;
   f.reach = m.reach;
   f.argument = m.argument;
+  f.channel = canalid::fuzz::kCommandChannel;
   const auto mac = canalid::core::SignCommand(canalid::fuzz::kCommandKey, f);
   m.hmac.assign(mac.begin(), mac.end());
   m.hmac_size = static_cast<int32_t>(m.hmac.size());
