@@ -367,9 +367,17 @@ void Daemon::LoadState() {
     LogWarning("state: " + temp.string() + ": left by an interrupted write; ignored");
   }
   for (const PersistedModel& model : report.models) {
-    const bool known = std::any_of(reaches_.begin(), reaches_.end(),
-                                   [&](const auto& r) { return r->name() == model.reach; });
-    if (!known) continue;
+    const auto reach = std::find_if(reaches_.begin(), reaches_.end(),
+                                    [&](const auto& r) { return r->name() == model.reach; });
+    if (reach == reaches_.end()) continue;
+    // Read back like any input: a file edited by hand or written by a build without these checks
+    // must not come back as the reach's model.
+    const std::string problem = PersistedIdModelProblem(model, (*reach)->pipeline().model_bounds());
+    if (!problem.empty()) {
+      LogWarning("state: " + store_->PathFor(model.reach, model.model_kind).string() + ": reach " +
+                 model.reach + ": " + problem + "; ignored");
+      continue;
+    }
     publisher_.PublishModelJson(model.reach, model.model, WallNowS());
     LogInfo("reach " + model.reach + ": resumed the persisted " + model.model_kind + " model " +
             model.model.dump());
