@@ -137,5 +137,33 @@ TEST(ReachPipeline, ASampleGapAbortsTheExperimentAndItsRecordIsNeverIdentified) 
   }
 }
 
+// The pool's delay is 11 samples; a bank (and batch scan) of 0..11 puts it on the bank's edge,
+// where the true delay may lie outside: the model is returned for the operator to see, but the
+// experiment ends "identification failed" and says why.
+TEST(ReachPipeline, ABatchModelAtTheEdgeOfTheBankIsNotTheReachsModel) {
+  ReachPipelineOptions options = Options();
+  options.online_id.max_delay_samples = 11;
+  options.batch.fit.max_nk = 11;
+  ReachPipeline pipeline(options);
+  IdPool pool;
+  ReachActions a = pipeline.StartExperiment();
+  double setpoint = *a.write_setpoint;
+  for (int k = 0; k < 700 && !a.experiment_record_complete; ++k) {
+    const double level = pool.Step(setpoint);
+    a = pipeline.OnSample({pool.inflow(), 10.0, level, true, true, true, true});
+    if (a.write_setpoint) setpoint = *a.write_setpoint;
+  }
+  ASSERT_TRUE(a.experiment_record_complete);
+  ReachActions done;
+  const auto result = pipeline.IdentifyRecord(&done);
+  ASSERT_TRUE(result.has_value());
+  EXPECT_EQ(result->fit.model.nk, 11);
+  EXPECT_EQ(pipeline.experiment_state().phase, ExperimentPhase::kAborted);
+  EXPECT_EQ(pipeline.experiment_state().abort_reason, AbortReason::kIdentificationFailed);
+  EXPECT_EQ(pipeline.identification_problem(),
+            "delay 11 samples is at the edge of the bank [0, 11]: the true delay may lie outside "
+            "it");
+}
+
 }  // namespace
 }  // namespace canalid::core
