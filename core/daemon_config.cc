@@ -431,6 +431,7 @@ void ValidateExperiments(const DaemonConfig& c, Collector& out) {
     }
     out.Range(at + "settle_s", e.settle_s, 0.0, 1e7);
     out.IntRange(at + "max_invalid_samples", e.max_invalid_samples, 0, 1000);
+    out.Range(at + "max_sample_gap_periods", e.max_sample_gap_periods, 1.1, 1000.0);
   }
 }
 

@@ -144,6 +144,9 @@ struct ExperimentConfig {
   double settle_s = 0.0;  ///< plant s at nominal before the PRBS, >= 0
   ExperimentStart start = ExperimentStart::kManual;
   int max_invalid_samples = 3;  ///< 0..1000
+  /// Largest time between two samples of a running experiment, in poll periods of the reach's
+  /// PLC, [1.1, 1000]; a longer gap (a stall, an overrun, a reconnect) aborts it.
+  double max_sample_gap_periods = 1.5;
   bool operator==(const ExperimentConfig&) const = default;
 };
 

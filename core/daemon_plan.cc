@@ -72,6 +72,8 @@ ExperimentPlan BuildExperimentPlan(const DaemonConfig& config, const ExperimentC
   plan.level_min_m = reach->level_min_m;
   plan.level_max_m = reach->level_max_m;
   plan.max_invalid_samples = experiment.max_invalid_samples;
+  // Samples carry the poll's wall time: the bound is in wall seconds (Ts / time_scale).
+  plan.max_sample_gap_s = experiment.max_sample_gap_periods * ts / config.daemon.time_scale;
   plan.Validate();
   return plan;
 }

@@ -26,7 +26,8 @@ ExperimentDesign DesignExperiment(const DaemonConfig& config, const ExperimentCo
 ///             clock, order and excitation length (periods * (2^order - 1) * clock) from the
 ///             design;
 ///   explicit: amplitude, clock = clock_period_s / Ts samples, order, periods as given;
-///   settle_samples = ceil(settle_s / Ts), the level band of the reach, max_invalid_samples.
+///   settle_samples = ceil(settle_s / Ts), the level band of the reach, max_invalid_samples,
+///   max_sample_gap_s = max_sample_gap_periods x the PLC's poll_period_s (wall s, as sample times).
 /// @param nominal_setpoint the actuator's nominal (reach.nominal_setpoint, or its reading at
 /// start).
 /// @throws std::invalid_argument naming the experiment when the reach does not resolve, the

@@ -1,5 +1,7 @@
 #include "core/experiment.h"
 
+#include <cmath>
+#include <cstdio>
 #include <stdexcept>
 #include <string>
 
@@ -34,6 +36,14 @@ ExperimentTransition OnSample(const ExperimentPlan& plan, ExperimentState state,
                               const ExperimentSample& s) {
   if (!Running(state.phase)) return {std::move(state), {}};
   if (!s.link_ok) return Abort(plan, std::move(state), AbortReason::kLinkLost);
+  if (std::isfinite(s.time_s)) {
+    const double gap = s.time_s - state.last_sample_time_s;
+    if (std::isfinite(state.last_sample_time_s) && (gap > plan.max_sample_gap_s || gap < 0.0)) {
+      state.sample_gap_s = gap;
+      return Abort(plan, std::move(state), AbortReason::kSampleGap);
+    }
+    state.last_sample_time_s = s.time_s;
+  }
   if (!s.level_valid) {
     if (++state.invalid_run > plan.max_invalid_samples) {
       return Abort(plan, std::move(state), AbortReason::kSensorInvalid);
@@ -107,8 +117,22 @@ const char* AbortReasonName(AbortReason reason) {
       return "identification failed";
     case AbortReason::kGuardNotPersisted:
       return "experiment guard not persisted";
+    case AbortReason::kSampleGap:
+      return "sample gap";
   }
   return "unknown";
+}
+
+std::string AbortReasonText(const ExperimentPlan& plan, const ExperimentState& state) {
+  if (state.abort_reason != AbortReason::kSampleGap) return AbortReasonName(state.abort_reason);
+  char text[96];
+  if (state.sample_gap_s < 0.0) {
+    std::snprintf(text, sizeof text, "sample time went back by %.3g s", -state.sample_gap_s);
+  } else {
+    std::snprintf(text, sizeof text, "sample gap of %.3g s (bound %.3g s)", state.sample_gap_s,
+                  plan.max_sample_gap_s);
+  }
+  return text;
 }
 
 void ExperimentPlan::Validate() const {
@@ -129,6 +153,10 @@ void ExperimentPlan::Validate() const {
   if (max_invalid_samples < 0) {
     throw std::invalid_argument("experiment max_invalid_samples must be >= 0");
   }
+  if (!(max_sample_gap_s > 0.0)) {
+    throw std::invalid_argument("experiment max_sample_gap_s must be > 0 (got " +
+                                std::to_string(max_sample_gap_s) + ")");
+  }
 }
 
 ExperimentTransition Step(const ExperimentPlan& plan, const ExperimentState& state,
@@ -138,6 +166,8 @@ ExperimentTransition Step(const ExperimentPlan& plan, const ExperimentState& sta
       if (Running(state.phase) || state.phase == ExperimentPhase::kIdentifying) return {state, {}};
       ExperimentState fresh;
       fresh.setpoint = plan.prbs.nominal;
+      // The run's first sample must follow the last one before the start within the bound.
+      fresh.last_sample_time_s = event.sample.time_s;
       ExperimentTransition t = Enter(std::move(fresh), ExperimentPhase::kSettling);
       // Settling starts from the nominal setpoint, whatever the actuator was doing.
       t.actions.write_setpoint = plan.prbs.nominal;

@@ -1,6 +1,8 @@
 #pragma once
 #include <cstdint>
+#include <limits>
 #include <optional>
+#include <string>
 
 #include "core/prbs.h"
 
@@ -29,6 +31,7 @@ enum class AbortReason : std::uint8_t {
   kOperatorStop,          ///< stop command, SIGTERM, config reload
   kIdentificationFailed,  ///< the batch identification found no usable model
   kGuardNotPersisted,     ///< the restart guard could not be written before an excitation write
+  kSampleGap,  ///< two samples further apart than max_sample_gap_s (stall, overrun, reconnect)
 };
 
 const char* ExperimentPhaseName(ExperimentPhase phase);
@@ -43,6 +46,10 @@ struct ExperimentPlan {
   double level_min_m = 0.0;         ///< the band the level must stay in while the actuator moves
   double level_max_m = 0.0;         ///< > level_min_m
   int max_invalid_samples = 0;      ///< consecutive invalid level samples tolerated, >= 0
+  /// Largest time between two consecutive samples while settling or exciting (s of the samples'
+  /// clock, > 0; infinity: not checked).  A longer gap, or time going back, means the record is
+  /// not uniformly sampled: the experiment aborts (kSampleGap).
+  double max_sample_gap_s = std::numeric_limits<double>::infinity();
   /// @throws std::invalid_argument naming the field, its value and the allowed range.
   void Validate() const;
 };
@@ -52,12 +59,14 @@ struct ExperimentSample {
   double level_m = 0.0;
   bool level_valid = false;  ///< read, in range, not stale
   bool link_ok = true;       ///< the PLC answered this poll
+  /// When the sample was taken (s, any origin; NaN: unknown, the gap is not checked).
+  double time_s = std::numeric_limits<double>::quiet_NaN();
 };
 
 enum class ExperimentEventKind : std::uint8_t {
-  kStart,              ///< begin (from idle, done or aborted)
-  kStop,               ///< operator stop: abort with kOperatorStop
-  kSample,             ///< a new sample
+  kStart,   ///< begin (from idle, done or aborted); sample.time_s: the last sample's time (or NaN)
+  kStop,    ///< operator stop: abort with kOperatorStop
+  kSample,  ///< a new sample
   kWriteFailed,        ///< a setpoint write failed
   kGuardNotPersisted,  ///< the restart guard (core/experiment_guard.h) could not be persisted
   kIdentificationSucceeded,
@@ -66,7 +75,7 @@ enum class ExperimentEventKind : std::uint8_t {
 
 struct ExperimentEvent {
   ExperimentEventKind kind = ExperimentEventKind::kSample;
-  ExperimentSample sample;  ///< for kSample
+  ExperimentSample sample;  ///< for kSample (and its time_s for kStart)
 };
 
 /// Mutable state: a value, copied in and out of Step (no allocation; the PRBS register is inside).
@@ -76,6 +85,10 @@ struct ExperimentState {
   std::int64_t samples_in_phase = 0;
   int invalid_run = 0;
   double setpoint = 0.0;  ///< the last setpoint asked for
+  /// Time of the last sample seen while settling or exciting (NaN: none yet).
+  double last_sample_time_s = std::numeric_limits<double>::quiet_NaN();
+  /// kSampleGap: the offending gap (s; negative when time went back).
+  double sample_gap_s = 0.0;
   std::optional<PrbsGenerator> prbs;
 };
 
@@ -93,9 +106,15 @@ struct ExperimentTransition {
   ExperimentActions actions;
 };
 
+/// Why the experiment was aborted, for logs and experiment_state_t.reason: AbortReasonName, and
+/// for kSampleGap "sample gap of X s (bound Y s)" (or "sample time went back by X s").
+std::string AbortReasonText(const ExperimentPlan& plan, const ExperimentState& state);
+
 /// The experiment's state machine as a pure function: (state, event) -> (state, actions).
 /// Safety rules, in this order, on every sample while settling or exciting:
 ///   link lost -> abort (kLinkLost) and restore nominal;
+///   time since the previous sample of this run > max_sample_gap_s, or < 0 -> abort (kSampleGap):
+///     the record would have a hole the identification cannot see;
 ///   invalid level for more than max_invalid_samples in a row -> abort (kSensorInvalid);
 ///   level outside the band -> abort (kLevelOutOfBand);
 /// and on a failed write -> abort (kWriteFailed); on a guard not persisted -> abort

@@ -1,6 +1,8 @@
 #include "core/online_id.h"
 
+#include <Eigen/Eigenvalues>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -17,6 +19,48 @@ namespace {
 bool Good(double v, double bound) { return std::isfinite(v) && std::abs(v) <= bound; }
 
 }  // namespace
+
+void IdHealthOptions::Validate() const {
+  if (!(condition_max > 1.0)) Fail("health.condition_max", condition_max, "> 1");
+  if (!(information_min_per_p0 >= 0.0 && std::isfinite(information_min_per_p0))) {
+    Fail("health.information_min_per_p0", information_min_per_p0, "finite, >= 0");
+  }
+}
+
+int IdSnapshotFlags(const IdSnapshot& s, const OnlineIdOptions& options) {
+  if (!s.valid) return 0;
+  int flags = 0;
+  if (!std::isfinite(s.b) || !std::isfinite(s.c_m) || !std::isfinite(s.d_m) ||
+      !std::isfinite(s.area_m2) || !std::isfinite(s.health.trace_p)) {
+    flags |= kFlagNan;
+  }
+  if (s.health.wound_up) flags |= kFlagWindup;
+  if (!(s.information_min >=
+        options.health.information_min_per_p0 / options.rls.initial_covariance)) {
+    flags |= kFlagLowExcitation;
+  }
+  if (!(s.condition_number <= options.health.condition_max)) flags |= kFlagIllConditioned;
+  if (s.health.frozen) flags |= kFlagFrozen;
+  if (!IdModelBoundsProblem(s.area_m2, s.delay_samples, options).empty()) {
+    flags |= kFlagOutOfBounds;
+  }
+  return flags;
+}
+
+std::string IdModelBoundsProblem(double area_m2, int delay_samples, const OnlineIdOptions& o) {
+  std::ostringstream m;
+  if (!(area_m2 > 0.0 && std::isfinite(area_m2))) {
+    m << "area_m2 " << area_m2 << " is not > 0 and finite";
+  } else if (delay_samples < o.min_delay_samples || delay_samples > o.max_delay_samples) {
+    m << "delay " << delay_samples << " samples is outside the bank [" << o.min_delay_samples
+      << ", " << o.max_delay_samples << "]";
+  } else if (delay_samples == o.max_delay_samples ||
+             (delay_samples == o.min_delay_samples && o.min_delay_samples > 0)) {
+    m << "delay " << delay_samples << " samples is at the edge of the bank [" << o.min_delay_samples
+      << ", " << o.max_delay_samples << "]: the true delay may lie outside it";
+  }
+  return m.str();
+}
 
 void OnlineIdOptions::Validate() const {
   if (!(sample_time_s > 0.0 && std::isfinite(sample_time_s))) {
@@ -36,6 +80,7 @@ void OnlineIdOptions::Validate() const {
   }
   rls.Validate(wave_front_term ? 4 : 3);
   selector.Validate();
+  health.Validate();
   if (closed_loop == ClosedLoopMode::kThreeStep) three_step.Validate();
 }
 
@@ -256,6 +301,7 @@ IdSnapshot OnlineIdBank::CandidateSnapshot(int delay_samples) const {
     FillSnapshot<3>(estimators_[ui], ui, s);
   }
   s.loss = reported_selector().loss(i);
+  s.flags = IdSnapshotFlags(s, options_);
   return s;
 }
 
@@ -272,6 +318,24 @@ void OnlineIdBank::FillThreeStepSnapshot(const OnlineThreeStep& t, IdSnapshot& s
   s.prediction_error_m = rls.last_prediction_error();
   s.innovation_std_m = std::sqrt(rls.innovation_variance());
   s.health = rls.health();
+  Eigen::Matrix<double, OnlineThreeStep::kParams, OnlineThreeStep::kParams> p;
+  rls.Covariance(p);
+  FillConditioning<OnlineThreeStep::kParams>(p, s);
+}
+
+template <int N>
+void OnlineIdBank::FillConditioning(const Eigen::Matrix<double, N, N>& p, IdSnapshot& s) {
+  // Fixed size: the solver lives on the stack, nothing is allocated.
+  if (!p.allFinite()) {
+    s.condition_number = std::numeric_limits<double>::infinity();
+    s.information_min = 0.0;
+    return;
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> eig(p, Eigen::EigenvaluesOnly);
+  const double lo = eig.eigenvalues()(0);
+  const double hi = eig.eigenvalues()(N - 1);
+  s.condition_number = lo > 0.0 ? hi / lo : std::numeric_limits<double>::infinity();
+  s.information_min = hi > 0.0 ? 1.0 / hi : 0.0;
 }
 
 template <int N, typename Estimator>
@@ -300,6 +364,7 @@ void OnlineIdBank::FillSnapshot(const Estimator& rls, std::size_t ui, IdSnapshot
   s.prediction_error_m = rls.last_prediction_error();
   s.innovation_std_m = std::sqrt(s2);
   s.health = rls.health();
+  FillConditioning<N>(p, s);
 }
 
 }  // namespace canalid::core

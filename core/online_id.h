@@ -1,5 +1,6 @@
 #pragma once
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "core/closed_loop_detector.h"
@@ -11,6 +12,28 @@
 #include "core/rls_iv.h"
 
 namespace canalid::core {
+
+/// Bits of IdSnapshot::flags, the same values as canalid.model_snapshot_t's FLAG_* (see
+/// docs/lcm-channels.md).
+inline constexpr int kFlagNan = 1;             ///< a parameter or P is NaN or infinite
+inline constexpr int kFlagWindup = 2;          ///< RlsHealth::wound_up: trace(P) above n p0
+inline constexpr int kFlagLowExcitation = 4;   ///< information_min < information_min_per_p0 / p0
+inline constexpr int kFlagIllConditioned = 8;  ///< condition_number > condition_max
+inline constexpr int kFlagFrozen = 16;         ///< the last sample carried no information
+inline constexpr int kFlagOutOfBounds = 32;    ///< A <= 0 or not finite, or nk at a bank edge
+
+/// Thresholds of the health flags of IdSnapshot (OnlineIdBank::Snapshot).
+struct IdHealthOptions {
+  /// kFlagIllConditioned above it: the 2-norm condition number of the estimator's P.
+  double condition_max = 1e12;
+  /// kFlagLowExcitation below information_min_per_p0 / p0: the smallest eigenvalue of P^-1 (the
+  /// information matrix of the data in the estimator's memory, plus the prior's 1 / p0 and what
+  /// forgetting leaves of it).  100: some direction of theta has gained less than ~99 times the
+  /// prior's information, i.e. the data has not identified all parameters.
+  double information_min_per_p0 = 100.0;
+  /// @throws std::invalid_argument naming the option out of range.
+  void Validate() const;
+};
 
 /// Options of OnlineIdBank.
 struct OnlineIdOptions {
@@ -65,6 +88,7 @@ struct OnlineIdOptions {
   /// and no estimator of this regression can do better from the data alone.  Snapshots' c is
   /// then the offset of y + p22 q_out.  0 = plain ID.
   double outflow_direct_gain_s_per_m2 = 0.0;
+  IdHealthOptions health;  ///< thresholds of IdSnapshot::flags
 
   /// @throws std::invalid_argument naming the option out of range.
   void Validate() const;
@@ -89,7 +113,27 @@ struct IdSnapshot {
   double innovation_std_m = 0.0;    ///< sqrt(sigma2)
   double loss = 0.0;                ///< the selector's weighted squared a-priori error
   RlsHealth health;
+  /// 2-norm condition number of the estimator's P (exact: a fixed-size eigen decomposition).
+  double condition_number = 1.0;
+  /// Smallest eigenvalue of P^-1, 1 / lambda_max(P): the information in the least excited
+  /// direction of theta (regressor units squared over sigma2).
+  double information_min = 0.0;
+  int flags = 0;  ///< kFlag* bits, IdSnapshotFlags of this snapshot
 };
+
+/// The health flags of a snapshot of a bank with these options (kFlag*):
+///   kFlagNan: b, c, d, A or trace(P) not finite;  kFlagWindup: health.wound_up;
+///   kFlagLowExcitation: information_min < options.health.information_min_per_p0 / p0;
+///   kFlagIllConditioned: condition_number > options.health.condition_max (or not finite);
+///   kFlagFrozen: health.frozen;
+///   kFlagOutOfBounds: A <= 0 or not finite, or nk = max_delay_samples, or nk = min_delay_samples
+///     > 0 (at an edge of the bank the true delay may lie outside it).
+/// An invalid snapshot (no update yet) has no flags.  Pure, no allocation.
+int IdSnapshotFlags(const IdSnapshot& snapshot, const OnlineIdOptions& options);
+/// Why an integrator-delay model is outside the physical bounds of a bank with these options
+/// (empty when inside): not finite, A <= 0, nk < 0, nk outside [min, max] or at an edge as in
+/// kFlagOutOfBounds.  The same rule flags published models and keeps models from the state.
+std::string IdModelBoundsProblem(double area_m2, int delay_samples, const OnlineIdOptions& options);
 
 /// Bank health beyond the per-estimator RlsHealth.
 struct IdBankHealth {
@@ -154,6 +198,8 @@ class OnlineIdBank final {
   void FillThreeStepSnapshot(const OnlineThreeStep& t, IdSnapshot& s) const;
   template <int N, typename Estimator>
   void FillSnapshot(const Estimator& rls, std::size_t ui, IdSnapshot& s) const;
+  template <int N>
+  static void FillConditioning(const Eigen::Matrix<double, N, N>& p, IdSnapshot& s);
   const BankSelector& reported_selector() const {
     return health_.closed_loop ? iv_selector_ : selector_;
   }

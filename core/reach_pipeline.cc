@@ -9,10 +9,8 @@ namespace canalid::core {
 ReachPipeline::ReachPipeline(const ReachPipelineOptions& options) : options_(options) {
   if (!(options_.sample_time_s > 0.0))
     throw std::invalid_argument("reach sample_time_s must be > 0");
-  if (options_.online_id_enabled) {
-    options_.online_id.sample_time_s = options_.sample_time_s;
-    online_id_.emplace(options_.online_id);
-  }
+  options_.online_id.sample_time_s = options_.sample_time_s;
+  if (options_.online_id_enabled) online_id_.emplace(options_.online_id);
   if (options_.experiment) SetExperimentPlan(*options_.experiment);
 }
 
@@ -33,6 +31,7 @@ ReachActions ReachPipeline::Apply(const ExperimentEvent& event) {
 
 ReachActions ReachPipeline::OnSample(const ReachSample& s) {
   ++samples_;
+  last_time_s_ = s.time_s;
   bool online_updated = false;
   if (online_id_) {
     // Invalid values go in as NaN: the bank holds the integrators on the last good flows and
@@ -45,7 +44,7 @@ ReachActions ReachPipeline::OnSample(const ReachSample& s) {
   ExperimentEvent event;
   event.kind = ExperimentEventKind::kSample;
   // Flows feed the record too, so the experiment needs them as much as the level.
-  event.sample = {s.level_m, s.level_valid && s.q_in_valid && s.q_out_valid, s.link_ok};
+  event.sample = {s.level_m, s.level_valid && s.q_in_valid && s.q_out_valid, s.link_ok, s.time_s};
   ReachActions actions = Apply(event);
   if (record_this_sample_) {
     // A tolerated invalid sample (max_invalid_samples) repeats the previous values.
@@ -62,6 +61,7 @@ ReachActions ReachPipeline::OnSample(const ReachSample& s) {
 ReachActions ReachPipeline::StartExperiment() {
   ExperimentEvent event;
   event.kind = ExperimentEventKind::kStart;
+  event.sample.time_s = last_time_s_;
   return Apply(event);
 }
 
@@ -116,11 +116,14 @@ std::optional<IdPipelineResult> ReachPipeline::IdentifyRecord(ReachActions* acti
   try {
     result = IdentifyPool(record_q_in_.head(recorded_), record_q_out_.head(recorded_),
                           record_level_.head(recorded_), options_.sample_time_s, options_.batch);
-    const bool usable = result->fit.model.b > 0.0 && std::isfinite(result->fit.model.b);
-    event.kind = usable ? ExperimentEventKind::kIdentificationSucceeded
-                        : ExperimentEventKind::kIdentificationFailed;
-  } catch (const std::invalid_argument&) {
+    const IdModel& m = result->fit.model;
+    identification_problem_ = IdModelBoundsProblem(m.area_m2(), m.nk, options_.online_id);
+    if (!std::isfinite(m.b)) identification_problem_ = "b is not finite";
+    event.kind = identification_problem_.empty() ? ExperimentEventKind::kIdentificationSucceeded
+                                                 : ExperimentEventKind::kIdentificationFailed;
+  } catch (const std::invalid_argument& e) {
     result.reset();
+    identification_problem_ = e.what();
     event.kind = ExperimentEventKind::kIdentificationFailed;
   }
   const ReachActions done = Apply(event);

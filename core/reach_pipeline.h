@@ -1,6 +1,8 @@
 #pragma once
 #include <Eigen/Core>
+#include <limits>
 #include <optional>
+#include <string>
 
 #include "core/experiment.h"
 #include "core/id_pipeline.h"
@@ -17,6 +19,9 @@ struct ReachSample {
   bool q_out_valid = false;
   bool level_valid = false;
   bool link_ok = true;  ///< the PLC answered this poll
+  /// When the poll was taken (s; the daemon's wall clock, replay's log time; NaN: unknown).
+  /// A running experiment aborts on a gap (ExperimentPlan::max_sample_gap_s).
+  double time_s = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct ReachPipelineOptions {
@@ -47,6 +52,7 @@ class ReachPipeline final {
   explicit ReachPipeline(const ReachPipelineOptions& options);
 
   ReachActions OnSample(const ReachSample& sample);
+  /// Starts at the time of the last sample: the next one must follow within the plan's gap bound.
   ReachActions StartExperiment();
   ReachActions StopExperiment();
   /// The PLC link is down and no samples come (the poller is reconnecting): abort if running.
@@ -66,8 +72,15 @@ class ReachPipeline final {
   void ResetOnlineEstimator();
 
   /// Batch identification of the completed record (ID model pipeline); then the experiment
-  /// ends done (a model) or aborted (kIdentificationFailed).  @pre a record is complete.
+  /// ends done (a model inside the bounds of the reach's delay bank, IdModelBoundsProblem) or
+  /// aborted (kIdentificationFailed; the result, if any, is still returned for the operator to
+  /// see, and identification_problem() says why it is not the reach's model).
+  /// @pre a record is complete.
   std::optional<IdPipelineResult> IdentifyRecord(ReachActions* actions);
+  /// Why the last IdentifyRecord gave no usable model (empty when it did).
+  const std::string& identification_problem() const { return identification_problem_; }
+  /// The bounds a model of this reach must satisfy (the online bank's delay range and Ts).
+  const OnlineIdOptions& model_bounds() const { return options_.online_id; }
 
   const ExperimentState& experiment_state() const { return experiment_state_; }
   const std::optional<ExperimentPlan>& experiment_plan() const { return options_.experiment; }
@@ -85,6 +98,8 @@ class ReachPipeline final {
   Eigen::Index recorded_ = 0;
   bool record_this_sample_ = false;
   std::int64_t samples_ = 0;
+  double last_time_s_ = std::numeric_limits<double>::quiet_NaN();  // of the last sample
+  std::string identification_problem_;
 };
 
 }  // namespace canalid::core

@@ -46,6 +46,7 @@ ReachPollOutcome ReachRunner::OnPoll(const ReachReadings& r) {
   sample.q_out_m3s = r.q_out_m3s;
   sample.level_m = r.level_m;
   sample.link_ok = r.link_ok;
+  sample.time_s = r.time_s;
   outcome.actions = pipeline_.OnSample(sample);
   return outcome;
 }

@@ -1,5 +1,6 @@
 #pragma once
 #include <functional>
+#include <limits>
 #include <optional>
 #include <string>
 
@@ -37,12 +38,13 @@ struct ReachReadings {
   bool q_in_valid = false, q_out_valid = false, level_valid = false, actuator_valid = false;
   bool link_ok = true;    ///< the PLC answered (a disconnected poll is not)
   bool status_ok = true;  ///< every block of the poll was read
+  double time_s = std::numeric_limits<double>::quiet_NaN();  ///< when the poll was taken (s)
 };
 
 /// The reach's readings from a poll's values and per-channel validity (`valid(i)` for channel i).
 template <class Values, class Valid>
 ReachReadings ReadReach(const ReachChannels& c, const Values& values, Valid valid, bool link_ok,
-                        bool status_ok) {
+                        bool status_ok, double time_s) {
   ReachReadings r;
   auto read = [&](int channel, double* value, bool* ok) {
     *ok = channel >= 0 && valid(static_cast<std::size_t>(channel));
@@ -54,6 +56,7 @@ ReachReadings ReadReach(const ReachChannels& c, const Values& values, Valid vali
   read(c.actuator, &r.actuator, &r.actuator_valid);
   r.link_ok = link_ok;
   r.status_ok = status_ok;
+  r.time_s = time_s;
   return r;
 }
 

@@ -129,7 +129,7 @@ void ReplaySession::OnSample(const std::string& plc_name, const canalid::sample_
     const core::ReachReadings readings = core::ReadReach(
         reach.runner->options().channels, sample.values,
         [&](std::size_t i) { return sample.quality[i] == canalid::sample_t::QUALITY_VALID; },
-        link_ok, status_ok);
+        link_ok, status_ok, t);
     const core::ReachPollOutcome outcome = reach.runner->OnPoll(readings);
     if (!outcome.plan_error.empty())
       on_warning_("reach " + reach.config.name + ": no experiment: " + outcome.plan_error);

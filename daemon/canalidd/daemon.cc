@@ -309,7 +309,7 @@ void Daemon::OnPoll(int index, const drivers::PollSample& s) {
     Reach& reach = *reaches_[static_cast<std::size_t>(r)];
     const core::ReachReadings readings = core::ReadReach(
         reach.wiring.runner.channels, s.values,
-        [&](std::size_t channel) { return s.valid(channel); }, link_ok, s.status.ok());
+        [&](std::size_t channel) { return s.valid(channel); }, link_ok, s.status.ok(), s.time_s);
     reach.last_time_s = s.time_s;
     const core::ReachPollOutcome outcome = reach.runner.OnPoll(readings);
     if (outcome.nominal_read) {
@@ -393,19 +393,27 @@ void Daemon::Handle(Reach& reach, const core::ReachActions& actions, double time
     std::string message =
         "reach " + name + ": experiment " + core::ExperimentPhaseName(state.phase);
     if (state.phase == core::ExperimentPhase::kAborted)
-      message += std::string(" (") + core::AbortReasonName(state.abort_reason) + ")";
+      message += " (" + core::AbortReasonText(*plan, state) + ")";
     (state.phase == core::ExperimentPhase::kAborted ? LogWarning(message) : LogInfo(message));
     NotifyStatus(Status());
   }
   if (actions.experiment_record_complete) {
     core::ReachActions after;
     const std::optional<core::IdPipelineResult> result = reach.pipeline().IdentifyRecord(&after);
+    const std::string& problem = reach.pipeline().identification_problem();
     if (result) {
-      publisher_.PublishBatchId(name, *result, time_s, reach.pipeline().recorded_samples());
+      publisher_.PublishBatchId(name, *result, time_s, reach.pipeline().recorded_samples(),
+                                !problem.empty());
       nlohmann::json json = drivers::ToJson(*result);
       json["reach"] = name;
-      LogInfo("reach " + name + ": identified " + json.dump());
-      SaveModel(reach, *result);
+      if (problem.empty()) {
+        LogInfo("reach " + name + ": identified " + json.dump());
+        SaveModel(reach, *result);
+      } else {
+        // Published (flagged) for the operator to see, never persisted as the reach's model.
+        LogWarning("reach " + name + ": identified a model outside the bounds (" + problem +
+                   "); not persisted: " + json.dump());
+      }
     } else {
       LogWarning("reach " + name + ": the experiment record could not be identified");
     }
@@ -422,9 +430,17 @@ void Daemon::LoadState() {
     LogWarning("state: " + temp.string() + ": left by an interrupted write; ignored");
   }
   for (const PersistedModel& model : report.models) {
-    const bool known = std::any_of(reaches_.begin(), reaches_.end(),
-                                   [&](const auto& r) { return r->name() == model.reach; });
-    if (!known) continue;
+    const auto reach = std::find_if(reaches_.begin(), reaches_.end(),
+                                    [&](const auto& r) { return r->name() == model.reach; });
+    if (reach == reaches_.end()) continue;
+    // Read back like any input: a file edited by hand or written by a build without these checks
+    // must not come back as the reach's model.
+    const std::string problem = PersistedIdModelProblem(model, (*reach)->pipeline().model_bounds());
+    if (!problem.empty()) {
+      LogWarning("state: " + store_->PathFor(model.reach, model.model_kind).string() + ": reach " +
+                 model.reach + ": " + problem + "; ignored");
+      continue;
+    }
     publisher_.PublishModelJson(model.reach, model.model, WallNowS());
     LogInfo("reach " + model.reach + ": resumed the persisted " + model.model_kind + " model " +
             model.model.dump());

@@ -8,6 +8,14 @@ namespace {
 
 constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
 
+// core's flag bits are the message's.
+static_assert(core::kFlagNan == canalid::model_snapshot_t::FLAG_NAN);
+static_assert(core::kFlagWindup == canalid::model_snapshot_t::FLAG_WINDUP);
+static_assert(core::kFlagLowExcitation == canalid::model_snapshot_t::FLAG_LOW_EXCITATION);
+static_assert(core::kFlagIllConditioned == canalid::model_snapshot_t::FLAG_ILL_CONDITIONED);
+static_assert(core::kFlagFrozen == canalid::model_snapshot_t::FLAG_FROZEN);
+static_assert(core::kFlagOutOfBounds == canalid::model_snapshot_t::FLAG_OUT_OF_BOUNDS);
+
 int8_t ExperimentStateCode(core::ExperimentPhase phase) {
   switch (phase) {
     case core::ExperimentPhase::kIdle:
@@ -91,19 +99,15 @@ void LcmPublisher::PublishOnlineId(const std::string& reach, const core::IdSnaps
                      {"offset_m", {snapshot.c_m, snapshot.c_std_m}},
                      {"drift_m_per_sample", {snapshot.d_m, snapshot.d_std_m}}});
   model_.trace_p = snapshot.health.trace_p;
-  model_.condition_number = snapshot.health.condition_estimate;
-  model_.excitation = snapshot.health.excitation;
+  model_.condition_number = snapshot.condition_number;
+  model_.excitation = snapshot.information_min;
   model_.prediction_error_rms = snapshot.innovation_std_m;
-  int32_t flags = 0;
-  if (!std::isfinite(snapshot.b)) flags |= canalid::model_snapshot_t::FLAG_NAN;
-  if (snapshot.health.wound_up) flags |= canalid::model_snapshot_t::FLAG_WINDUP;
-  if (snapshot.health.frozen) flags |= canalid::model_snapshot_t::FLAG_FROZEN;
-  model_.flags = flags;
+  model_.flags = snapshot.flags;
   Send(Channel(model_channels_, "MODEL_", reach), model_);
 }
 
 void LcmPublisher::PublishBatchId(const std::string& reach, const core::IdPipelineResult& result,
-                                  double time_s, std::int64_t samples) {
+                                  double time_s, std::int64_t samples, bool out_of_bounds) {
   const core::IdFitResult& fit = result.fit;
   model_.utime = ToUtime(time_s);
   model_.reach = reach;
@@ -120,7 +124,8 @@ void LcmPublisher::PublishBatchId(const std::string& reach, const core::IdPipeli
   model_.condition_number = kNan;
   model_.excitation = kNan;
   model_.prediction_error_rms = fit.metrics.rmse;
-  model_.flags = std::isfinite(fit.model.b) ? 0 : canalid::model_snapshot_t::FLAG_NAN;
+  model_.flags = (std::isfinite(fit.model.b) ? 0 : core::kFlagNan) |
+                 (out_of_bounds ? core::kFlagOutOfBounds : 0);
   Send(Channel(model_channels_, "MODEL_", reach), model_);
 }
 
@@ -163,7 +168,7 @@ void LcmPublisher::PublishExperiment(const std::string& reach, const core::Exper
   experiment_.setpoint_channel = actuator;
   experiment_.setpoint = state.setpoint;
   experiment_.reason = state.phase == core::ExperimentPhase::kAborted
-                           ? core::AbortReasonName(state.abort_reason)
+                           ? core::AbortReasonText(plan, state)
                            : core::ExperimentPhaseName(state.phase);
   Send(Channel(experiment_channels_, "EXPERIMENT_", reach), experiment_);
 }

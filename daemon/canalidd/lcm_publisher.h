@@ -38,8 +38,9 @@ class LcmPublisher final {
                      const drivers::PollSample& sample);
   void PublishOnlineId(const std::string& reach, const core::IdSnapshot& snapshot, double time_s,
                        const char* estimator);
+  /// `out_of_bounds`: the model failed the reach's bounds (FLAG_OUT_OF_BOUNDS; not persisted).
   void PublishBatchId(const std::string& reach, const core::IdPipelineResult& result, double time_s,
-                      std::int64_t samples);
+                      std::int64_t samples, bool out_of_bounds);
   /// A model from the state directory (estimator "persisted"): the numeric keys of its JSON.
   void PublishModelJson(const std::string& reach, const nlohmann::json& model, double time_s);
   void PublishExperiment(const std::string& reach, const core::ExperimentState& state,

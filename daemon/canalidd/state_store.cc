@@ -6,10 +6,13 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+
+#include "drivers/json/model_json_read.h"
 
 namespace canalid::daemon {
 namespace {
@@ -66,6 +69,40 @@ void WriteAll(int fd, const std::string& text, const std::filesystem::path& path
 }
 
 }  // namespace
+
+std::string PersistedIdModelProblem(const PersistedModel& persisted,
+                                    const core::OnlineIdOptions& bank) {
+  const nlohmann::json& j = persisted.model;
+  if (persisted.model_kind != "id") {
+    return "model kind '" + persisted.model_kind + "' is not one the daemon persists (id)";
+  }
+  drivers::IdModelRecord record;
+  try {
+    record = drivers::IdModelFromJson(j, "model");
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  const core::IdModel& m = record.model;
+  const double ts = bank.sample_time_s;
+  std::ostringstream why;
+  auto differs = [](double a, double b) { return !(std::abs(a - b) <= 1e-6 * std::abs(b)); };
+  if (!std::isfinite(m.b)) {
+    why << "b " << m.b << " is not finite";
+  } else if (!j.contains("sample_time_s") || differs(m.sample_time_s, ts)) {
+    why << "sample_time_s " << (j.contains("sample_time_s") ? j.at("sample_time_s").dump() : "none")
+        << " is not the reach's " << ts << " s";
+  } else if (j.contains("delay_s") &&
+             (!j.at("delay_s").is_number() || differs(j.at("delay_s").get<double>(), m.nk * ts))) {
+    why << "delay_s " << j.at("delay_s").dump() << " is not nk x sample_time_s = " << m.nk * ts;
+  } else if (std::string bounds = core::IdModelBoundsProblem(ts / m.b, m.nk, bank);
+             !bounds.empty()) {
+    return bounds;
+  } else if (j.contains("area_m2") &&
+             (!j.at("area_m2").is_number() || differs(j.at("area_m2").get<double>(), ts / m.b))) {
+    why << "area_m2 " << j.at("area_m2").dump() << " is not sample_time_s / b = " << ts / m.b;
+  }
+  return why.str();
+}
 
 StateStore::StateStore(std::filesystem::path directory) : directory_(std::move(directory)) {
   if (directory_.empty()) throw std::invalid_argument("state directory is empty: give a path");

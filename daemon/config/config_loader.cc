@@ -431,7 +431,7 @@ void ReadExperiment(Reader& r, const toml::table& t, const std::string& at, Expe
   if (design) {
     r.Keys(t, at,
            {"name", "reach", "mode", "amplitude_percent", "duration_factor", "seed", "settle_s",
-            "start", "max_invalid_samples"},
+            "start", "max_invalid_samples", "max_sample_gap_periods"},
            {{"amplitude", explicit_only},
             {"clock_period_s", explicit_only},
             {"order", explicit_only},
@@ -441,7 +441,7 @@ void ReadExperiment(Reader& r, const toml::table& t, const std::string& at, Expe
   } else {
     r.Keys(t, at,
            {"name", "reach", "mode", "amplitude", "clock_period_s", "order", "periods", "seed",
-            "settle_s", "start", "max_invalid_samples"},
+            "settle_s", "start", "max_invalid_samples", "max_sample_gap_periods"},
            {{"amplitude_percent", design_only}, {"duration_factor", design_only}});
     r.Double(t, at, "amplitude", e.amplitude, true);
     r.Double(t, at, "clock_period_s", e.clock_period_s, true);
@@ -454,6 +454,7 @@ void ReadExperiment(Reader& r, const toml::table& t, const std::string& at, Expe
   r.Double(t, at, "settle_s", e.settle_s);
   r.Enum(t, at, "start", e.start);
   r.Integer(t, at, "max_invalid_samples", e.max_invalid_samples);
+  r.Double(t, at, "max_sample_gap_periods", e.max_sample_gap_periods);
 }
 
 void ReadCommands(Reader& r, const toml::table& root, DaemonConfig& c) {

@@ -167,6 +167,7 @@ std::string RenderDaemonConfig(const core::DaemonConfig& c) {
     w.Key("settle_s", e.settle_s);
     w.Key("start", core::EnumName(e.start));
     w.Int("max_invalid_samples", e.max_invalid_samples);
+    w.Key("max_sample_gap_periods", e.max_sample_gap_periods);
   }
   w.Line("");
   w.Line("[commands]");

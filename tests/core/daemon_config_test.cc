@@ -234,6 +234,19 @@ TEST(DaemonPlanTest, DesignedExperimentInSamplesOfThePlc) {
   EXPECT_EQ(plan.prbs.seed, 1u);
 }
 
+// Samples carry the poll's wall time: the gap bound is in poll periods (0.2 wall s here), not in
+// plant seconds (Ts = 0.2 x 50 = 10 s).
+TEST(DaemonPlanTest, SampleGapBoundIsInPollPeriodsOfWallTime) {
+  DaemonConfig c = ValidConfig();
+  EXPECT_DOUBLE_EQ(c.experiments[0].max_sample_gap_periods, 1.5);
+  EXPECT_DOUBLE_EQ(BuildExperimentPlan(c, c.experiments[0], 0.8).max_sample_gap_s, 0.3);
+  c.experiments[0].max_sample_gap_periods = 4.0;
+  EXPECT_DOUBLE_EQ(BuildExperimentPlan(c, c.experiments[0], 0.8).max_sample_gap_s, 0.8);
+  c.experiments[0].max_sample_gap_periods = 1.0;
+  EXPECT_THAT(Problems(c), ElementsAre("experiment[0].max_sample_gap_periods: 1 is out of range "
+                                       "(allowed: [1.1, 1000])"));
+}
+
 TEST(DaemonPlanTest, DesignOfAnExperimentExplainsItself) {
   DaemonConfig c = ValidConfig();
   const ExperimentDesign design = DesignExperiment(c, c.experiments[0]);

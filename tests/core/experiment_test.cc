@@ -30,6 +30,12 @@ ExperimentEvent Sample(double level, bool valid = true, bool link = true) {
   return e;
 }
 
+ExperimentEvent TimedSample(double level, double time_s) {
+  ExperimentEvent e = Sample(level);
+  e.sample.time_s = time_s;
+  return e;
+}
+
 ExperimentEvent Event(ExperimentEventKind kind) {
   ExperimentEvent e;
   e.kind = kind;
@@ -158,6 +164,99 @@ TEST(Experiment, PlanValidationNamesTheField) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("level_max_m"), std::string::npos);
   }
+}
+
+// Samples every 1 s; the bound 1.5 s.  A stall (SIGSTOP, an overrun, a reconnect) shows as one
+// sample arriving late: the record would join two instants as if one period apart.
+TEST(ExperimentSampleGap, AGapLongerThanTheBoundAbortsWhileExcitingAndRestoresNominal) {
+  Driver run;
+  run.plan.max_sample_gap_s = 1.5;
+  run.Apply(Event(ExperimentEventKind::kStart));
+  double t = 100.0;
+  for (int k = 0; k < 10; ++k) run.Apply(TimedSample(2.1, t += 1.0));
+  ASSERT_EQ(run.state.phase, ExperimentPhase::kExciting);
+  // A late poll within the bound passes.
+  run.Apply(TimedSample(2.1, t += 1.49));
+  ASSERT_EQ(run.state.phase, ExperimentPhase::kExciting);
+  const ExperimentActions a = run.Apply(TimedSample(2.1, t += 3.0));
+  EXPECT_EQ(run.state.phase, ExperimentPhase::kAborted);
+  EXPECT_EQ(run.state.abort_reason, AbortReason::kSampleGap);
+  EXPECT_DOUBLE_EQ(run.state.sample_gap_s, 3.0);
+  ASSERT_TRUE(a.write_setpoint.has_value());
+  EXPECT_DOUBLE_EQ(*a.write_setpoint, 0.5);
+  EXPECT_TRUE(a.restore_nominal);
+  EXPECT_FALSE(a.record_sample);
+  EXPECT_FALSE(a.start_identification);
+  EXPECT_EQ(AbortReasonText(run.plan, run.state), "sample gap of 3 s (bound 1.5 s)");
+}
+
+TEST(ExperimentSampleGap, AGapWhileSettlingAbortsToo) {
+  Driver run;
+  run.plan.max_sample_gap_s = 1.5;
+  run.Apply(Event(ExperimentEventKind::kStart));
+  run.Apply(TimedSample(2.1, 10.0));
+  run.Apply(TimedSample(2.1, 11.0));
+  ASSERT_EQ(run.state.phase, ExperimentPhase::kSettling);
+  run.Apply(TimedSample(2.1, 12.6));
+  EXPECT_EQ(run.state.phase, ExperimentPhase::kAborted);
+  EXPECT_EQ(run.state.abort_reason, AbortReason::kSampleGap);
+}
+
+TEST(ExperimentSampleGap, TimeGoingBackAborts) {
+  Driver run;
+  run.plan.max_sample_gap_s = 1.5;
+  run.Apply(Event(ExperimentEventKind::kStart));
+  run.Apply(TimedSample(2.1, 10.0));
+  run.Apply(TimedSample(2.1, 9.0));
+  EXPECT_EQ(run.state.abort_reason, AbortReason::kSampleGap);
+  EXPECT_EQ(AbortReasonText(run.plan, run.state), "sample time went back by 1 s");
+}
+
+TEST(ExperimentSampleGap, TheLastSampleOfTheExcitationAfterAGapIsNotIdentified) {
+  Driver run;
+  run.plan.max_sample_gap_s = 1.5;
+  run.Apply(Event(ExperimentEventKind::kStart));
+  double t = 0.0;
+  for (int k = 0; k < 4 + 44; ++k) run.Apply(TimedSample(2.1, t += 1.0));
+  ASSERT_EQ(run.state.phase, ExperimentPhase::kExciting);
+  const ExperimentActions a = run.Apply(TimedSample(2.1, t += 2.0));
+  EXPECT_EQ(run.state.abort_reason, AbortReason::kSampleGap);
+  EXPECT_FALSE(a.start_identification);
+}
+
+ExperimentEvent StartAt(double time_s) {
+  ExperimentEvent e = Event(ExperimentEventKind::kStart);
+  e.sample.time_s = time_s;
+  return e;
+}
+
+TEST(ExperimentSampleGap, TheFirstSampleOfARunIsCheckedAgainstTheStartsTime) {
+  Driver run;
+  run.plan.max_sample_gap_s = 1.5;
+  run.Apply(TimedSample(2.1, 0.0));  // idle: ignored
+  run.Apply(StartAt(10.0));
+  run.Apply(TimedSample(2.1, 11.0));
+  EXPECT_EQ(run.state.phase, ExperimentPhase::kSettling);
+  run.Apply(Event(ExperimentEventKind::kStop));
+  run.Apply(StartAt(20.0));
+  run.Apply(TimedSample(2.1, 23.0));  // stalled right after the start
+  EXPECT_EQ(run.state.abort_reason, AbortReason::kSampleGap);
+}
+
+TEST(ExperimentSampleGap, UntimedSamplesAndStartsAreNotChecked) {
+  Driver run;
+  run.plan.max_sample_gap_s = 1.5;
+  run.Apply(Event(ExperimentEventKind::kStart));
+  run.Apply(TimedSample(2.1, 500.0));  // no time at the start: no predecessor
+  run.Apply(Sample(2.1));              // no time: not checked, not a reference
+  run.Apply(TimedSample(2.1, 501.0));
+  EXPECT_EQ(run.state.phase, ExperimentPhase::kSettling);
+}
+
+TEST(ExperimentSampleGap, TheBoundMustBePositive) {
+  ExperimentPlan plan = Plan();
+  plan.max_sample_gap_s = 0.0;
+  EXPECT_THROW(plan.Validate(), std::invalid_argument);
 }
 
 }  // namespace

@@ -106,5 +106,64 @@ TEST(ReachPipeline, InvalidSamplesNeitherCorruptTheEstimateNorCrash) {
   EXPECT_EQ(pipeline.experiment_state().phase, ExperimentPhase::kIdle);
 }
 
+TEST(ReachPipeline, ASampleGapAbortsTheExperimentAndItsRecordIsNeverIdentified) {
+  ReachPipelineOptions options = Options();
+  options.experiment->max_sample_gap_s = 1.5;  // polled every 1 s (wall)
+  ReachPipeline pipeline(options);
+  IdPool pool;
+  ReachActions a = pipeline.StartExperiment();
+  double setpoint = *a.write_setpoint;
+  double t = 1000.0;
+  auto sample = [&](double time_s) {
+    const double level = pool.Step(setpoint);
+    ReachSample s{pool.inflow(), 10.0, level, true, true, true, true};
+    s.time_s = time_s;
+    a = pipeline.OnSample(s);
+    if (a.write_setpoint) setpoint = *a.write_setpoint;
+  };
+  for (int k = 0; k < 100; ++k) sample(t += 1.0);
+  ASSERT_EQ(pipeline.experiment_state().phase, ExperimentPhase::kExciting);
+  const Eigen::Index recorded = pipeline.recorded_samples();
+  sample(t += 3.0);  // the daemon stopped for 3 s
+  EXPECT_EQ(pipeline.experiment_state().phase, ExperimentPhase::kAborted);
+  EXPECT_EQ(pipeline.experiment_state().abort_reason, AbortReason::kSampleGap);
+  EXPECT_TRUE(a.restore_nominal);
+  EXPECT_DOUBLE_EQ(setpoint, 0.5);
+  EXPECT_FALSE(a.experiment_record_complete);
+  EXPECT_EQ(pipeline.recorded_samples(), recorded);  // the late sample is not recorded
+  for (int k = 0; k < 600; ++k) {
+    sample(t += 1.0);
+    EXPECT_FALSE(a.experiment_record_complete);
+  }
+}
+
+// The pool's delay is 11 samples; a bank (and batch scan) of 0..11 puts it on the bank's edge,
+// where the true delay may lie outside: the model is returned for the operator to see, but the
+// experiment ends "identification failed" and says why.
+TEST(ReachPipeline, ABatchModelAtTheEdgeOfTheBankIsNotTheReachsModel) {
+  ReachPipelineOptions options = Options();
+  options.online_id.max_delay_samples = 11;
+  options.batch.fit.max_nk = 11;
+  ReachPipeline pipeline(options);
+  IdPool pool;
+  ReachActions a = pipeline.StartExperiment();
+  double setpoint = *a.write_setpoint;
+  for (int k = 0; k < 700 && !a.experiment_record_complete; ++k) {
+    const double level = pool.Step(setpoint);
+    a = pipeline.OnSample({pool.inflow(), 10.0, level, true, true, true, true});
+    if (a.write_setpoint) setpoint = *a.write_setpoint;
+  }
+  ASSERT_TRUE(a.experiment_record_complete);
+  ReachActions done;
+  const auto result = pipeline.IdentifyRecord(&done);
+  ASSERT_TRUE(result.has_value());
+  EXPECT_EQ(result->fit.model.nk, 11);
+  EXPECT_EQ(pipeline.experiment_state().phase, ExperimentPhase::kAborted);
+  EXPECT_EQ(pipeline.experiment_state().abort_reason, AbortReason::kIdentificationFailed);
+  EXPECT_EQ(pipeline.identification_problem(),
+            "delay 11 samples is at the edge of the bank [0, 11]: the true delay may lie outside "
+            "it");
+}
+
 }  // namespace
 }  // namespace canalid::core

@@ -109,7 +109,10 @@ std::string ExplicitExperiment(double amplitude_m, int order, const std::string&
   std::ostringstream s;
   s << "[[experiment]]\nname = \"pool2_short\"\nreach = \"pool2\"\nmode = \"explicit\"\n"
     << "amplitude = " << amplitude_m << "\nclock_period_s = 120.0\norder = " << order
-    << "\nseed = 1\nsettle_s = 0.0\nstart = \"" << start << "\"\nmax_invalid_samples = 3\n\n"
+    << "\nseed = 1\nsettle_s = 0.0\nstart = \"" << start
+    << "\"\nmax_invalid_samples = 3\n"
+    // 0.5 wall s: this machine is shared while tests run, a late poll is no fault to test here.
+    << "max_sample_gap_periods = 5.0\n\n"
     << commands;
   return s.str();
 }
@@ -311,6 +314,43 @@ LcmRecord ReadLcmLog(const fs::path& path) {
     }
   }
   return record;
+}
+
+// Whole plant seconds of canalsim's clock (input registers 4-5).
+std::uint32_t PlantSeconds(Master& master) {
+  const std::vector<std::uint16_t> r = master.Inputs(4, 2);
+  return (static_cast<std::uint32_t>(r[0]) << 16) | r[1];
+}
+
+// The daemon stalls (SIGSTOP) for 3 wall s mid-PRBS: the next sample is 3 s after the last, far
+// beyond the 0.5 s bound, so the experiment aborts on the gap, restores the nominal and identifies
+// nothing (on main the gap went into the record as one sample and a model was persisted).
+TEST(DaemonCanalsim, AStalledDaemonAbortsTheExperimentOnTheSampleGap) {
+  const fs::path dir = TestDir();
+  Canal canal(dir);
+  const double nominal = ReadSetpoint(canal.master);
+  const std::string config = WriteConfig(dir / "canalidd.toml", BaseKeys(canal.serve.port(), dir),
+                                         ExplicitExperiment(0.05, 7));
+  auto daemon = StartDaemon(dir, config);
+  ASSERT_TRUE(WaitExciting(*daemon, canal.master, nominal)) << daemon->output();
+  ASSERT_EQ(kill(daemon->pid(), SIGSTOP), 0);
+  const std::uint32_t stopped_at = PlantSeconds(canal.master);
+  // 3 wall s = 1800 plant s; bounded by canalsim's clock, which runs on without the daemon.
+  for (int i = 0; i < 400 && PlantSeconds(canal.master) < stopped_at + 1800; ++i)
+    daemon->WaitForLine("never printed", 50);  // bounded: 20 s at most
+  const std::uint32_t resumed_at = PlantSeconds(canal.master);
+  ASSERT_EQ(kill(daemon->pid(), SIGCONT), 0);
+  ASSERT_GE(resumed_at, stopped_at + 1800);
+  const std::string abort = daemon->WaitForLine("experiment aborted (sample gap of ", 20000);
+  ASSERT_FALSE(abort.empty()) << daemon->output();
+  EXPECT_NE(abort.find("(bound 0.5 s)"), std::string::npos) << abort;
+  ASSERT_FALSE(daemon->WaitForLine(" restored", 20000, Position(*daemon, abort)).empty())
+      << daemon->output();
+  EXPECT_NEAR(ReadSetpoint(canal.master), nominal, 1e-4);
+  EXPECT_EQ(daemon->Stop(SIGTERM), 0) << daemon->output();
+  EXPECT_EQ(daemon->output().find("reach pool2: identified"), std::string::npos)
+      << daemon->output();
+  EXPECT_FALSE(fs::exists(dir / "state" / "pool2.id.json"));
 }
 
 // 4. The PLC drops the daemon's connection mid-experiment: the experiment aborts on the lost link,

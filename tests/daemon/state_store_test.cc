@@ -235,5 +235,63 @@ TEST(StateStoreGuard, CorruptTruncatedOrInconsistentGuardsAreReportedAsCorrupt) 
   expect_corrupt(other_format, "another format");
 }
 
+// The reach's bank: Ts 60 s, delays 0..30 samples.
+core::OnlineIdOptions Bank() {
+  core::OnlineIdOptions o;
+  o.sample_time_s = 60.0;
+  o.min_delay_samples = 0;
+  o.max_delay_samples = 30;
+  return o;
+}
+
+// A state file written by hand, as an operator or an older build might leave it.
+PersistedModel LoadOne(const std::filesystem::path& dir, const std::string& model_json) {
+  testing::WriteFile(dir / "pool2.id.json",
+                     R"({"format": "canalid-state-v1", "reach": "pool2", "model_kind": "id",
+                         "saved_utime_us": 1, "online": null, "model": )" +
+                         model_json + "}\n");
+  const StateLoadReport report = StateStore(dir).LoadAll();
+  EXPECT_EQ(report.models.size(), 1u);
+  return report.models.empty() ? PersistedModel{} : report.models[0];
+}
+
+TEST_F(StateStoreTest, ReloadedModelsAreValidatedLikeAnyInput) {
+  const core::OnlineIdOptions bank = Bank();
+  // A good one: A = 60 / 0.00175886 = 34113 m2, nk 11.
+  const std::string good =
+      R"({"model": "id", "b": 0.00175886, "nk": 11, "sample_time_s": 60.0, "delay_s": 660.0,
+          "area_m2": 34112.98})";
+  EXPECT_EQ(PersistedIdModelProblem(LoadOne(dir_, good), bank), "");
+  const struct {
+    const char* json;
+    const char* problem;
+  } bad[] = {
+      {R"({"model": "id", "b": -0.000450812, "nk": 11, "sample_time_s": 60.0, "area_m2": -133093})",
+       "area_m2 -133093 is not > 0 and finite"},
+      {R"({"model": "id", "b": 0.00175886, "nk": 11, "sample_time_s": 60.0, "delay_s": 1e300})",
+       "delay_s 1e+300 is not nk x sample_time_s = 660"},
+      {R"({"model": "id", "b": 0.00175886, "nk": 1e300, "sample_time_s": 60.0})", "key 'nk'"},
+      // nlohmann writes NaN as null.
+      {R"({"model": "id", "b": null, "nk": 11, "sample_time_s": 60.0})", "key 'b'"},
+      {R"({"model": "id", "b": 0.00175886, "nk": 11, "sample_time_s": 60.0, "area_m2": null})",
+       "area_m2 null is not sample_time_s / b"},
+      {R"({"model": "id", "b": 0.00175886, "nk": 11, "sample_time_s": 10.0})",
+       "sample_time_s 10.0 is not the reach's 60 s"},
+      {R"({"model": "id", "b": 0.00175886, "nk": 11})", "sample_time_s none is not the reach's"},
+      {R"({"model": "id", "b": 0.00175886, "nk": 30, "sample_time_s": 60.0})",
+       "delay 30 samples is at the edge of the bank [0, 30]"},
+      {R"({"model": "id", "b": 0.00175886, "nk": 31, "sample_time_s": 60.0})",
+       "delay 31 samples is outside the bank [0, 30]"},
+      {R"({"model": "foptd", "gain": 1, "time_constant_s": 10, "delay_s": 0})", "key 'model'"},
+  };
+  for (const auto& c : bad) {
+    const std::string problem = PersistedIdModelProblem(LoadOne(dir_, c.json), bank);
+    EXPECT_NE(problem.find(c.problem), std::string::npos) << c.json << "\n -> " << problem;
+  }
+  PersistedModel arx = LoadOne(dir_, good);
+  arx.model_kind = "arx";
+  EXPECT_NE(PersistedIdModelProblem(arx, bank), "");
+}
+
 }  // namespace
 }  // namespace canalid::daemon
