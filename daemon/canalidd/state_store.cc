@@ -68,6 +68,33 @@ void WriteAll(int fd, const std::string& text, const std::filesystem::path& path
   }
 }
 
+// The JSON object of the state file `path` whose "format" is `format`, or, in `problem`, why it
+// cannot be had: it cannot be opened, it is corrupt or truncated JSON, or it is not a `what`.
+std::optional<nlohmann::json> ReadStateDocument(const std::filesystem::path& path,
+                                                const char* format, const std::string& what,
+                                                std::string& problem) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    problem = "cannot open";
+    return std::nullopt;
+  }
+  std::stringstream text;
+  text << in.rdbuf();
+  nlohmann::json document;
+  try {
+    document = nlohmann::json::parse(text.str());
+  } catch (const nlohmann::json::exception& e) {
+    problem = std::string("corrupt or truncated JSON (") + e.what() + ")";
+    return std::nullopt;
+  }
+  if (!document.is_object() || !document.contains("format") || !document["format"].is_string() ||
+      document["format"].get<std::string>() != format) {
+    problem = "not " + what + " (\"format\" is not \"" + format + "\")";
+    return std::nullopt;
+  }
+  return document;
+}
+
 }  // namespace
 
 std::string PersistedIdModelProblem(const PersistedModel& persisted,
@@ -172,27 +199,17 @@ core::GuardReading StateStore::LoadGuard(const std::string& reach) const {
     reading.problem = path.string() + ": " + why;
     return reading;
   };
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return corrupt("cannot open");
-  std::stringstream text;
-  text << in.rdbuf();
-  nlohmann::json document;
+  std::string problem;
+  const std::optional<nlohmann::json> document =
+      ReadStateDocument(path, kGuardFormat, "an experiment guard", problem);
+  if (!document) return corrupt(problem);
   try {
-    document = nlohmann::json::parse(text.str());
-  } catch (const nlohmann::json::exception& e) {
-    return corrupt(std::string("corrupt or truncated JSON (") + e.what() + ")");
-  }
-  try {
-    if (!document.is_object() || document.value("format", "") != kGuardFormat) {
-      return corrupt(std::string("not an experiment guard (\"format\" is not \"") + kGuardFormat +
-                     "\")");
-    }
     core::ExperimentGuard& g = reading.guard;
-    g.reach = document.at("reach").get<std::string>();
-    g.actuator = document.at("actuator").get<std::string>();
-    g.experiment = document.at("experiment").get<std::string>();
-    g.nominal_setpoint = document.at("nominal_setpoint").get<double>();
-    g.started_utime_us = document.at("started_utime_us").get<int64_t>();
+    g.reach = document->at("reach").get<std::string>();
+    g.actuator = document->at("actuator").get<std::string>();
+    g.experiment = document->at("experiment").get<std::string>();
+    g.nominal_setpoint = document->at("nominal_setpoint").get<double>();
+    g.started_utime_us = document->at("started_utime_us").get<int64_t>();
   } catch (const nlohmann::json::exception& e) {
     return corrupt(std::string("missing or mistyped key (") + e.what() + ")");
   }
@@ -233,16 +250,14 @@ std::map<std::string, int64_t, std::less<>> StateStore::LoadCommandCounters(
     std::string* problem) const {
   std::map<std::string, int64_t, std::less<>> counters;
   const auto path = directory_ / kCountersFile;
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return counters;
-  std::stringstream text;
-  text << in.rdbuf();
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) return counters;
+  std::string why;
+  const std::optional<nlohmann::json> document =
+      ReadStateDocument(path, kCountersFormat, "a command counter file", why);
   try {
-    const auto document = nlohmann::json::parse(text.str());
-    if (!document.is_object() || document.value("format", "") != kCountersFormat) {
-      throw std::runtime_error(std::string("\"format\" is not \"") + kCountersFormat + "\"");
-    }
-    for (const auto& [sender, counter] : document.at("counters").items()) {
+    if (!document) throw std::runtime_error(why);
+    for (const auto& [sender, counter] : document->at("counters").items()) {
       counters[sender] = counter.get<int64_t>();
     }
   } catch (const std::exception& e) {
@@ -275,26 +290,16 @@ StateLoadReport StateStore::LoadAll() const {
     auto problem = [&](const std::string& why) {
       report.problems.push_back(path.string() + ": " + why + "; ignored");
     };
-    std::ifstream in(path, std::ios::binary);
-    if (!in) {
-      problem("cannot open");
+    std::string why;
+    const std::optional<nlohmann::json> found =
+        ReadStateDocument(path, kFormat, "a canalid state file", why);
+    if (!found) {
+      problem(why);
       continue;
     }
-    std::stringstream text;
-    text << in.rdbuf();
-    nlohmann::json document;
-    try {
-      document = nlohmann::json::parse(text.str());
-    } catch (const nlohmann::json::exception& e) {
-      problem(std::string("corrupt or truncated JSON (") + e.what() + ")");
-      continue;
-    }
+    const nlohmann::json& document = *found;
     try {
       PersistedModel model;
-      if (!document.is_object() || document.value("format", "") != kFormat) {
-        problem(std::string("not a canalid state file (\"format\" is not \"") + kFormat + "\")");
-        continue;
-      }
       model.reach = document.at("reach").get<std::string>();
       model.model_kind = document.at("model_kind").get<std::string>();
       model.saved_utime_us = document.at("saved_utime_us").get<int64_t>();
