@@ -41,23 +41,41 @@ int IdSnapshotFlags(const IdSnapshot& s, const OnlineIdOptions& options) {
   }
   if (!(s.condition_number <= options.health.condition_max)) flags |= kFlagIllConditioned;
   if (s.health.frozen) flags |= kFlagFrozen;
-  if (!IdModelBoundsProblem(s.area_m2, s.delay_samples, options).empty()) {
+  if (CheckIdModelBounds(s.area_m2, s.delay_samples, options) != IdBoundsViolation::kNone) {
     flags |= kFlagOutOfBounds;
   }
   return flags;
 }
 
+IdBoundsViolation CheckIdModelBounds(double area_m2, int delay_samples, const OnlineIdOptions& o) {
+  if (!(area_m2 > 0.0 && std::isfinite(area_m2))) return IdBoundsViolation::kArea;
+  if (delay_samples < o.min_delay_samples || delay_samples > o.max_delay_samples) {
+    return IdBoundsViolation::kOutsideBank;
+  }
+  if (delay_samples == o.max_delay_samples ||
+      (delay_samples == o.min_delay_samples && o.min_delay_samples > 0)) {
+    return IdBoundsViolation::kAtBankEdge;
+  }
+  return IdBoundsViolation::kNone;
+}
+
 std::string IdModelBoundsProblem(double area_m2, int delay_samples, const OnlineIdOptions& o) {
   std::ostringstream m;
-  if (!(area_m2 > 0.0 && std::isfinite(area_m2))) {
-    m << "area_m2 " << area_m2 << " is not > 0 and finite";
-  } else if (delay_samples < o.min_delay_samples || delay_samples > o.max_delay_samples) {
-    m << "delay " << delay_samples << " samples is outside the bank [" << o.min_delay_samples
-      << ", " << o.max_delay_samples << "]";
-  } else if (delay_samples == o.max_delay_samples ||
-             (delay_samples == o.min_delay_samples && o.min_delay_samples > 0)) {
-    m << "delay " << delay_samples << " samples is at the edge of the bank [" << o.min_delay_samples
-      << ", " << o.max_delay_samples << "]: the true delay may lie outside it";
+  switch (CheckIdModelBounds(area_m2, delay_samples, o)) {
+    case IdBoundsViolation::kNone:
+      break;
+    case IdBoundsViolation::kArea:
+      m << "area_m2 " << area_m2 << " is not > 0 and finite";
+      break;
+    case IdBoundsViolation::kOutsideBank:
+      m << "delay " << delay_samples << " samples is outside the bank [" << o.min_delay_samples
+        << ", " << o.max_delay_samples << "]";
+      break;
+    case IdBoundsViolation::kAtBankEdge:
+      m << "delay " << delay_samples << " samples is at the edge of the bank ["
+        << o.min_delay_samples << ", " << o.max_delay_samples
+        << "]: the true delay may lie outside it";
+      break;
   }
   return m.str();
 }

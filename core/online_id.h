@@ -130,9 +130,14 @@ struct IdSnapshot {
 ///     > 0 (at an edge of the bank the true delay may lie outside it).
 /// An invalid snapshot (no update yet) has no flags.  Pure, no allocation.
 int IdSnapshotFlags(const IdSnapshot& snapshot, const OnlineIdOptions& options);
-/// Why an integrator-delay model is outside the physical bounds of a bank with these options
-/// (empty when inside): not finite, A <= 0, nk < 0, nk outside [min, max] or at an edge as in
-/// kFlagOutOfBounds.  The same rule flags published models and keeps models from the state.
+/// Which physical bound of a bank with these options an integrator-delay model breaks: A not
+/// finite or <= 0, nk outside [min, max], or nk at an edge as in kFlagOutOfBounds.  The same rule
+/// flags published models and keeps models from the state.  Pure, no allocation (it runs on every
+/// snapshot).
+enum class IdBoundsViolation : std::uint8_t { kNone, kArea, kOutsideBank, kAtBankEdge };
+IdBoundsViolation CheckIdModelBounds(double area_m2, int delay_samples,
+                                     const OnlineIdOptions& options);
+/// CheckIdModelBounds as a sentence for a log line (empty when inside); allocates.
 std::string IdModelBoundsProblem(double area_m2, int delay_samples, const OnlineIdOptions& options);
 
 /// Bank health beyond the per-estimator RlsHealth.
