@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -615,6 +616,8 @@ TEST(DaemonCanalsim, ExceptionRepliesAndSpikesAreCountedNotFatal) {
 // Starts canalidd in a private network namespace with a multicast route on its loopback, so
 // canalid-command (entered into the same namespace) and the daemon share a udpm bus.
 constexpr const char* kUdpmUrl = "udpm://239.255.76.67:7667?ttl=0";
+// A channel the tests play onto the udpm bus to make lcm-logger take in what came before it.
+constexpr const char* kProbeChannel = "CANALID_TEST_PROBE";
 const std::string kUdpmEnv = std::string("LCM_DEFAULT_URL=") + kUdpmUrl;
 
 int SendCommand(const fs::path& dir, pid_t daemon_pid, const fs::path& key,
@@ -849,6 +852,34 @@ TEST(DaemonCanalsim, TwoDaemonsShareOneBusOnTheirOwnPrefixes) {
   daemon_a.WaitForLine("never printed", 3000);  // bounded: 30 more polls on the bus
   EXPECT_EQ(daemon_a.Stop(SIGTERM), 0) << daemon_a.output();
   EXPECT_EQ(daemon_b.Stop(SIGTERM), 0) << daemon_b.output();
+  // Each daemon publishes its health as it stops. lcm-logger drops what it has not read yet when
+  // it is interrupted, and writes its file out only as further messages arrive: so a probe event
+  // is played onto the bus (lcm-logplayer, in the namespace) until both health messages are in
+  // the file, and only then is the logger stopped (bounded: 50 probes, 100 ms apart).
+  const fs::path probe_log = dir / "probe.lcmlog";
+  {
+    lcm::LogFile probe(probe_log.string(), "w");
+    lcm::LogEvent event{};
+    const std::string channel = kProbeChannel;
+    std::array<uint8_t, 1> byte{0};
+    event.channel = channel;
+    event.datalen = 1;
+    event.data = byte.data();
+    ASSERT_EQ(probe.writeEvent(&event), 0);
+  }
+  bool recorded = false;
+  for (int tries = 0; tries < 50 && !recorded; ++tries) {
+    const BusRecord so_far = ReadBus(bus_log);
+    recorded = so_far.health_components.count("CANALID_ASCE2_HEALTH") == 1 &&
+               so_far.health_components.count("CANALID_B_HEALTH") == 1;
+    if (recorded) break;
+    ChildProcess play(InNamespace({"/usr/bin/lcm-logplayer", std::string("--lcm-url=") + kUdpmUrl,
+                                   probe_log.string()}),
+                      {}, dir / "lcm-logplayer.log");
+    EXPECT_EQ(play.WaitExit(10000), 0) << play.output();
+    logger.WaitForLine("never printed", 100);
+  }
+  EXPECT_TRUE(recorded) << "the daemons' last health messages never reached the logger's file";
   EXPECT_EQ(logger.Stop(SIGINT), 0) << logger.output();
   EXPECT_EQ(canal_b.Stop(SIGTERM), 0) << canal_b.output();
   EXPECT_EQ(canal_a.Stop(SIGTERM), 0) << canal_a.output();
@@ -857,7 +888,7 @@ TEST(DaemonCanalsim, TwoDaemonsShareOneBusOnTheirOwnPrefixes) {
   // Only the two daemons' channels, each under its own prefix and PLC name (and the udpm
   // provider's own self test).
   for (const auto& [channel, n] : bus.count) {
-    if (channel == "LCM_SELF_TEST") continue;
+    if (channel == "LCM_SELF_TEST" || channel == kProbeChannel) continue;
     EXPECT_TRUE(channel.starts_with("CANALID_ASCE2_") || channel.starts_with("CANALID_B_"))
         << channel;
     EXPECT_NE(channel, "CANALID_ASCE2_SAMPLE_asce2b");
