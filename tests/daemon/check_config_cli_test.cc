@@ -7,8 +7,10 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -63,13 +65,15 @@ class CheckConfigCli : public ::testing::Test {
   }
 
   // Runs canalidd with `args` to completion; returns the exit code, output in `output`.
-  // `as_nobody`: as user and group 65534 (setpriv, from util-linux), for checks that root passes.
-  int Run(const std::vector<std::string>& args, std::string& output, bool as_nobody = false) {
+  // `as_nobody`: `program` (a copy of canalidd nobody can run) as user and group 65534 (setpriv,
+  // from util-linux), for checks that root passes.
+  int Run(const std::vector<std::string>& args, std::string& output, bool as_nobody = false,
+          const std::string& program = DaemonProgram()) {
     std::vector<std::string> argv;
     if (as_nobody) {
       argv = {"/usr/bin/setpriv", "--reuid=65534", "--regid=65534", "--clear-groups"};
     }
-    argv.push_back(DaemonProgram());
+    argv.push_back(program);
     argv.insert(argv.end(), args.begin(), args.end());
     ChildProcess child(argv, {}, dir_ / "canalidd.log");
     const int code = child.WaitExit(kTimeoutMs);
@@ -220,13 +224,37 @@ TEST_F(CheckConfigCli, StateDirectoryIsCheckedBeforeStart) {
   EXPECT_EQ(Run({"--check-config", config.string()}, output), kExitConfig) << output;
   EXPECT_NE(output.find("is not a directory"), std::string::npos) << output;
   EXPECT_EQ(Run({"--config", config.string()}, output), kExitConfig) << output;
-  // Not writable. Root writes anywhere, so as root the check runs as user nobody (the directory
-  // stays root's, mode 0755: readable, not writable by nobody; the test's folders are readable).
+  // Not writable.
   fs::remove(dir_ / "state");
   fs::create_directory(dir_ / "state");
-  const bool root = ::geteuid() == 0;
-  ::chmod((dir_ / "state").c_str(), root ? 0755 : 0500);
-  EXPECT_EQ(Run({"--check-config", config.string()}, output, root), kExitConfig) << output;
+  ::chmod((dir_ / "state").c_str(), 0500);
+  if (::geteuid() != 0) {
+    EXPECT_EQ(Run({"--check-config", config.string()}, output), kExitConfig) << output;
+  } else {
+    // Root writes anywhere: the check runs as user nobody, on copies of the program and the file
+    // in a folder under /tmp (the build tree may be closed to nobody: under /root in a fresh
+    // Debian root), with a state directory that stays root's (mode 0755).
+    std::string folder = "/tmp/canalid-check-config-XXXXXX";
+    ASSERT_NE(::mkdtemp(folder.data()), nullptr);
+    const fs::path open_dir = folder;
+    ::chmod(open_dir.c_str(), 0755);
+    fs::create_directory(open_dir / "state");
+    ::chmod((open_dir / "state").c_str(), 0755);
+    fs::copy_file(DaemonProgram(), open_dir / "canalidd");
+    ::chmod((open_dir / "canalidd").c_str(), 0755);
+    std::ifstream in(config);
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::string old_state = (dir_ / "state").string();
+    ASSERT_NE(text.find(old_state), std::string::npos);
+    text.replace(text.find(old_state), old_state.size(), (open_dir / "state").string());
+    std::ofstream(open_dir / "config.toml") << text;
+    ::chmod((open_dir / "config.toml").c_str(), 0644);
+    EXPECT_EQ(Run({"--check-config", (open_dir / "config.toml").string()}, output, true,
+                  (open_dir / "canalidd").string()),
+              kExitConfig)
+        << output;
+    fs::remove_all(open_dir);
+  }
   EXPECT_NE(output.find("not writable"), std::string::npos) << output;
   ::chmod((dir_ / "state").c_str(), 0700);
   EXPECT_EQ(Run({"--check-config", config.string()}, output), 0) << output;
