@@ -3,6 +3,7 @@
 #include <regex>
 
 #include "canalid/command_t.hpp"
+#include "drivers/lcm/command_sender.h"
 #include "drivers/lcm/command_wire.h"
 
 namespace canalid::drivers {
@@ -48,15 +49,7 @@ void CommandReceiver::Receive(std::span<const uint8_t> data) noexcept {
     canalid::command_t message;
     if (DecodeMessage(data, message) && message.hmac_size >= 0 &&
         static_cast<std::size_t>(message.hmac_size) == message.hmac.size()) {
-      core::CommandFields fields;
-      fields.channel = channel_;
-      fields.utime_us = message.utime;
-      fields.counter = message.counter;
-      fields.sender = message.sender;
-      fields.kind = message.kind;
-      fields.reach = message.reach;
-      fields.argument = message.argument;
-      fields.mac = std::span<const uint8_t>(message.hmac.data(), message.hmac.size());
+      const core::CommandFields fields = CommandFieldsOf(message, channel_);
       verdict = authenticator_.Verify(fields, now_us_());
       if (verdict == core::CommandVerdict::kAccepted) {
         ++counts_[static_cast<std::size_t>(verdict)];

@@ -19,4 +19,17 @@ canalid::command_t BuildSignedCommand(std::span<const uint8_t> key,
   return message;
 }
 
+core::CommandFields CommandFieldsOf(const canalid::command_t& message, std::string_view channel) {
+  core::CommandFields fields;
+  fields.channel = channel;
+  fields.utime_us = message.utime;
+  fields.counter = message.counter;
+  fields.sender = message.sender;
+  fields.kind = message.kind;
+  fields.reach = message.reach;
+  fields.argument = message.argument;
+  fields.mac = std::span<const uint8_t>(message.hmac.data(), message.hmac.size());
+  return fields;
+}
+
 }  // namespace canalid::drivers

@@ -1,6 +1,7 @@
 #pragma once
 #include <cstdint>
 #include <span>
+#include <string_view>
 
 #include "canalid/command_t.hpp"
 #include "core/command_auth.h"
@@ -12,5 +13,9 @@ namespace canalid::drivers {
 /// channel itself is not a field of the message).
 canalid::command_t BuildSignedCommand(std::span<const uint8_t> key,
                                       const core::CommandFields& fields);
+
+/// The signed fields of `message` received on `channel`, its MAC included: the inverse of
+/// BuildSignedCommand.  The views point into `message` and `channel`, which must outlive them.
+core::CommandFields CommandFieldsOf(const canalid::command_t& message, std::string_view channel);
 
 }  // namespace canalid::drivers

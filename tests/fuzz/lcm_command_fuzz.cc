@@ -15,6 +15,7 @@
 
 #include "core/command_auth.h"
 #include "drivers/lcm/command_receiver.h"
+#include "drivers/lcm/command_sender.h"
 #include "drivers/lcm/fake_bus.h"
 #include "tests/fuzz/fuzz_check.h"
 #include "tests/fuzz/lcm_fuzz_key.h"
@@ -76,18 +77,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   for (const std::string* s : {&message.sender, &message.reach, &message.argument})
     if (s->find('\0') != std::string::npos) return 0;
   message.utime = canalid::fuzz::kNowUs;
-  canalid::core::CommandFields fields;
-  fields.utime_us = message.utime;
-  fields.counter = message.counter;
-  fields.sender = message.sender;
-  fields.kind = message.kind;
-  fields.reach = message.reach;
-  fields.argument = message.argument;
-  fields.channel = canalid::fuzz::kCommandChannel;
-  const canalid::core::Sha256Digest mac =
-      canalid::core::SignCommand(canalid::fuzz::kCommandKey, fields);
-  message.hmac.assign(mac.begin(), mac.end());
-  message.hmac_size = static_cast<int32_t>(mac.size());
+  message = canalid::drivers::BuildSignedCommand(
+      canalid::fuzz::kCommandKey,
+      canalid::drivers::CommandFieldsOf(message, canalid::fuzz::kCommandChannel));
   std::vector<uint8_t> signed_bytes(static_cast<std::size_t>(message.getEncodedSize()));
   Check(message.encode(signed_bytes.data(), 0, static_cast<int>(signed_bytes.size())) ==
             static_cast<int>(signed_bytes.size()),

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "core/command_auth.h"
+#include "drivers/lcm/command_sender.h"
 #include "tests/drivers/lcm_test_messages.h"
 #include "tests/fuzz/lcm_fuzz_key.h"
 
@@ -36,19 +37,10 @@ void WriteFile(const std::filesystem::path& path, const std::vector<uint8_t>& by
   if (!out) throw std::runtime_error(path.string() + ": cannot write");
 }
 
-canalid::command_t Signed(canalid::command_t m) {
-  canalid::core::CommandFields f;
-  f.utime_us = m.utime;
-  f.counter = m.counter;
-  f.sender = m.sender;
-  f.kind = m.kind;
-  f.reach = m.reach;
-  f.argument = m.argument;
-  f.channel = canalid::fuzz::kCommandChannel;
-  const auto mac = canalid::core::SignCommand(canalid::fuzz::kCommandKey, f);
-  m.hmac.assign(mac.begin(), mac.end());
-  m.hmac_size = static_cast<int32_t>(m.hmac.size());
-  return m;
+canalid::command_t Signed(const canalid::command_t& m) {
+  return canalid::drivers::BuildSignedCommand(
+      canalid::fuzz::kCommandKey,
+      canalid::drivers::CommandFieldsOf(m, canalid::fuzz::kCommandChannel));
 }
 
 struct Event {
