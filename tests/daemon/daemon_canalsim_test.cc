@@ -325,7 +325,7 @@ std::uint32_t PlantSeconds(Master& master) {
 
 // The daemon stalls (SIGSTOP) for 3 wall s mid-PRBS: the next sample is 3 s after the last, far
 // beyond the 0.5 s bound, so the experiment aborts on the gap, restores the nominal and identifies
-// nothing (on main the gap went into the record as one sample and a model was persisted).
+// nothing (without the check the gap went into the record as one sample and a model was saved).
 TEST(DaemonCanalsim, AStalledDaemonAbortsTheExperimentOnTheSampleGap) {
   const fs::path dir = TestDir();
   Canal canal(dir);

@@ -59,6 +59,14 @@ fs::path TestDir() {
   return dir;
 }
 
+// A valid command key (64 hex digits, mode 0600) in `dir`.
+fs::path WriteKey(const fs::path& dir) {
+  const fs::path key = dir / "command.key";
+  std::ofstream(key) << std::string(64, 'a') << "\n";
+  ::chmod(key.c_str(), 0600);
+  return key;
+}
+
 // Peak resident set of process `pid` (VmHWM, KiB); -1 when unreadable.
 long PeakRssKib(pid_t pid) {
   std::ifstream status("/proc/" + std::to_string(pid) + "/status");
@@ -77,9 +85,7 @@ int64_t NowUs() {
 
 TEST(DaemonTcpq, LosingTheHubIsLoggedAndReconnectedNotAnAbort) {
   const fs::path dir = TestDir();
-  const fs::path key = dir / "command.key";
-  std::ofstream(key) << std::string(64, 'a') << "\n";
-  ::chmod(key.c_str(), 0600);
+  const fs::path key = WriteKey(dir);
   TcpqTestHub hub;
   const fs::path config = WriteConfig(dir, hub.url(), key);
 
@@ -117,9 +123,7 @@ TEST(DaemonTcpq, LosingTheHubIsLoggedAndReconnectedNotAnAbort) {
 
 TEST(DaemonTcpq, AFloodOfOversizeCommandsNeitherStallsTheLoopNorAllocates) {
   const fs::path dir = TestDir();
-  const fs::path key = dir / "command.key";
-  std::ofstream(key) << std::string(64, 'a') << "\n";
-  ::chmod(key.c_str(), 0600);
+  const fs::path key = WriteKey(dir);
   const std::vector<uint8_t> key_bytes(32, 0xaa);
   TcpqTestHub hub;
   const fs::path config = WriteConfig(dir, hub.url(), key);
@@ -213,9 +217,7 @@ TEST(DaemonTcpq, AFloodOfOversizeCommandsNeitherStallsTheLoopNorAllocates) {
 // carries on (main took the new plan, stopped, then failed to start); once fixed, it reloads.
 TEST(DaemonTcpq, SighupWithABadKeyFileKeepsTheRunningDaemon) {
   const fs::path dir = TestDir();
-  const fs::path key = dir / "command.key";
-  std::ofstream(key) << std::string(64, 'a') << "\n";
-  ::chmod(key.c_str(), 0600);
+  const fs::path key = WriteKey(dir);
   TcpqTestHub hub;
   const fs::path config = WriteConfig(dir, hub.url(), key);
   auto accepted = std::async(std::launch::async, [&hub] { return hub.Accept(); });
