@@ -94,6 +94,8 @@ DaemonExit Daemon::Run() {
           std::to_string(reaches_.size()) + " reach(es), LCM prefix " + plan_.channel_prefix);
   io_.run();
   for (auto& plc : plcs_) plc->poller->Stop();
+  // Every model queued before the stop is on disk before Run returns (and a reload reads it).
+  if (model_saver_) model_saver_->Stop();
   LogInfo(exit_ == DaemonExit::kReload ? "reloading the configuration" : "stopped");
   return exit_;
 }
@@ -273,15 +275,18 @@ void Daemon::LoadState() {
   if (plan_.state_directory.empty()) return;
   store_.emplace(plan_.state_directory);
   ResumePersistedModels(*store_, reaches_, publisher_);
+  // Its own store on the same directory: it writes only model files, which nothing on the loop
+  // thread writes (guards and command counters are other files, each with its own temp file).
+  // One slot per reach: a reach's newer model replaces its waiting one, so Submit never waits.
+  model_saver_ = std::make_unique<PersistenceWorker>(
+      [store = *store_](const PersistedModel& model) mutable { store.Save(model); },
+      [](const std::string& what) { LogError("state: " + what); },
+      std::max<std::size_t>(reaches_.size(), 1));
 }
 
 void Daemon::SaveModel(const ReachRuntime& reach, const core::IdPipelineResult& result) {
-  if (!store_) return;
-  try {
-    store_->Save(MakePersistedModel(reach, result, WallNowS()));
-  } catch (const std::exception& e) {
-    LogError(std::string("state: ") + e.what());
-  }
+  if (!model_saver_) return;
+  model_saver_->Submit(MakePersistedModel(reach, result, WallNowS()));
 }
 
 void Daemon::OnCommand(const drivers::AcceptedCommand& command) {

@@ -14,6 +14,7 @@
 #include "daemon/canalidd/daemon_plan.h"
 #include "daemon/canalidd/daemon_runtime.h"
 #include "daemon/canalidd/lcm_publisher.h"
+#include "daemon/canalidd/persistence_worker.h"
 #include "daemon/canalidd/signal_watch.h"
 #include "daemon/canalidd/state_store.h"
 #include "drivers/lcm/bus.h"
@@ -29,7 +30,10 @@ enum class DaemonExit { kStopped, kReload, kFailed };
 /// ReachPipeline per reach.  Decisions on plant data are the pipelines' (core); this class moves
 /// samples, actions and messages between them, the PLCs and the bus, and wires the parts that
 /// do one job each: SignalWatch, BusWatch, Heartbeat, CommandDispatch, restore_safety.h,
-/// model_persistence.h, health_report.h.
+/// model_persistence.h with its PersistenceWorker, health_report.h.
+///
+/// Persistence: an identified model is saved on the PersistenceWorker's thread, never on the
+/// sample path; Run() saves every queued model before it returns.
 ///
 /// Safety: every restore of a nominal setpoint stays pending until the PLC confirms the nominal
 /// value was written (a write refused while the link is down, or shortened by the rate limit, is
@@ -73,8 +77,9 @@ class Daemon final {
   void PublishHealth();
   // SIGHUP: asks `reload` for a new plan; true when the daemon stops to reload.
   bool Reload();
-  // The state directory: the store, the persisted models resumed.
+  // The state directory: the store, the persisted models resumed, the save thread started.
   void LoadState();
+  // Queues the reach's model for the save thread (never blocks on the disk).
   void SaveModel(const ReachRuntime& reach, const core::IdPipelineResult& result);
   // A command the dispatch let through, routed to the reach it names.
   void OnCommand(const drivers::AcceptedCommand& command);
@@ -98,6 +103,7 @@ class Daemon final {
   std::vector<std::unique_ptr<ReachRuntime>> reaches_;
   std::optional<DaemonPlan> reloaded_plan_;
   std::optional<StateStore> store_;
+  std::unique_ptr<PersistenceWorker> model_saver_;  ///< with a state directory
   DaemonExit exit_ = DaemonExit::kStopped;
   bool stopping_ = false;
   bool ready_ = false;
