@@ -333,7 +333,7 @@ void ValidateReaches(const DaemonConfig& c, Collector& out) {
     out.Range(at + "min_delay_s", r.min_delay_s, 0.0, 1e6);
     if (std::isfinite(r.min_delay_s) && r.min_delay_s >= 0.0) {
       double hi = 1e6;
-      if (level != nullptr && c.FindPlc(level->plc) != nullptr) {
+      if (c.FindReachPlc(r) != nullptr) {
         // A bad poll period or time scale is reported on its own key, not again here.
         const double ts = ReachSampleTimeS(c, r);
         if (ts > 0.0 && std::isfinite(ts)) hi = kMaxDelaySamples * ts;
@@ -485,6 +485,10 @@ const ExperimentConfig* DaemonConfig::FindExperiment(const std::string& name) co
   }
   return nullptr;
 }
+const PlcConfig* DaemonConfig::FindReachPlc(const ReachConfig& reach) const {
+  const ChannelConfig* level = FindChannel(reach.level);
+  return level == nullptr ? nullptr : FindPlc(level->plc);
+}
 
 std::vector<ConfigProblem> Validate(const DaemonConfig& config) {
   Collector out;
@@ -498,8 +502,7 @@ std::vector<ConfigProblem> Validate(const DaemonConfig& config) {
 }
 
 double ReachSampleTimeS(const DaemonConfig& config, const ReachConfig& reach) {
-  const ChannelConfig* level = config.FindChannel(reach.level);
-  const PlcConfig* plc = level == nullptr ? nullptr : config.FindPlc(level->plc);
+  const PlcConfig* plc = config.FindReachPlc(reach);
   if (plc == nullptr) {
     throw std::invalid_argument("reach " + Quoted(reach.name) + ": level channel " +
                                 Quoted(reach.level) + " does not resolve to a plc");

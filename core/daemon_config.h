@@ -174,6 +174,9 @@ struct DaemonConfig {
   const ChannelConfig* FindChannel(const std::string& name) const;
   const ReachConfig* FindReach(const std::string& name) const;
   const ExperimentConfig* FindExperiment(const std::string& name) const;
+  /// The PLC of `reach`: the PLC of its level channel (validation keeps all of a reach's channels
+  /// on it); nullptr when the level channel or its plc is absent.
+  const PlcConfig* FindReachPlc(const ReachConfig& reach) const;
 };
 
 /// One problem: the key path in TOML's own syntax with 0-based array indices

@@ -32,8 +32,8 @@ bool LogConfig::OnConfig(const canalid::config_t& message, const drivers::LogEve
 
 std::string LogConfig::ReachPlc(const core::ReachConfig& reach) const {
   if (!config_) return {};
-  const core::ChannelConfig* level = config_->FindChannel(reach.level);
-  return level == nullptr ? std::string() : level->plc;
+  const core::PlcConfig* plc = config_->FindReachPlc(reach);
+  return plc == nullptr ? std::string() : plc->name;
 }
 
 int SampleChannelIndex(const canalid::sample_t& sample, const std::string& name) {

@@ -1,7 +1,6 @@
 #pragma once
 #include <utility>  // before Boost.Asio under GCC 12 and C++20 (DESIGN.md)
 
-#include <array>
 #include <boost/asio.hpp>
 #include <functional>
 #include <memory>
@@ -9,14 +8,17 @@
 #include <string>
 #include <vector>
 
-#include "core/command_auth.h"
 #include "core/reach_pipeline.h"
+#include "daemon/canalidd/bus_watch.h"
+#include "daemon/canalidd/command_dispatch.h"
 #include "daemon/canalidd/daemon_plan.h"
+#include "daemon/canalidd/daemon_runtime.h"
 #include "daemon/canalidd/lcm_publisher.h"
+#include "daemon/canalidd/persistence_worker.h"
+#include "daemon/canalidd/signal_watch.h"
 #include "daemon/canalidd/state_store.h"
 #include "drivers/lcm/bus.h"
 #include "drivers/lcm/command_receiver.h"
-#include "drivers/lcm/lcm_bus.h"
 #include "drivers/modbus/plc_poller.h"
 
 namespace canalid::daemon {
@@ -26,7 +28,12 @@ enum class DaemonExit { kStopped, kReload, kFailed };
 
 /// The daemon's runtime: one Asio loop on the calling thread, one poller thread per PLC, one
 /// ReachPipeline per reach.  Decisions on plant data are the pipelines' (core); this class moves
-/// samples, actions and messages between them, the PLCs and the bus.
+/// samples, actions and messages between them, the PLCs and the bus, and wires the parts that
+/// do one job each: SignalWatch, BusWatch, Heartbeat, CommandDispatch, restore_safety.h,
+/// model_persistence.h with its PersistenceWorker, health_report.h.
+///
+/// Persistence: an identified model is saved on the PersistenceWorker's thread, never on the
+/// sample path; Run() saves every queued model before it returns.
 ///
 /// Safety: every restore of a nominal setpoint stays pending until the PLC confirms the nominal
 /// value was written (a write refused while the link is down, or shortened by the rate limit, is
@@ -61,42 +68,24 @@ class Daemon final {
   double stop_timeout_s = 5.0;
 
  private:
-  struct Reach;
-  struct Plc;
-
-  void StartPollers();
   void Drain(int plc);
   void OnPoll(int plc, const drivers::PollSample& sample);
   void OnWriteResult(int plc, const drivers::WriteResult& result);
-  void Handle(Reach& reach, const core::ReachActions& actions, double time_s);
-  void RequestSetpoint(Reach& reach, double value);
-  void StartHeartbeat(int plc);
+  void Handle(ReachRuntime& reach, const core::ReachActions& actions, double time_s);
+  void RequestSetpoint(ReachRuntime& reach, double value);
   void StartHealthTimer();
-  void StartBusWatch();
-  void WatchBus();
-  void WaitForBus();
-  // The LCM connection is gone (tcpq hub lost): counts it and retries with a doubling backoff.
-  void OnBusLost(const std::string& why);
-  // True when descriptors a and b name the same open socket (file).
-  static bool SameSocket(int a, int b);
-  void StartSignals();
   void PublishHealth();
+  // SIGHUP: asks `reload` for a new plan; true when the daemon stops to reload.
+  bool Reload();
+  // The state directory: the store, the persisted models resumed, the save thread started.
   void LoadState();
-  // Applies core::DecideRestart to each reach's guard (before the pollers start).
-  void ResumeInterruptedExperiments();
-  // Writes the reach's experiment guard; false (logged) when it is not durably on disk.
-  bool PersistGuard(Reach& reach);
-  // The PLC confirmed the reach's pending restore.
-  void OnRestoreConfirmed(Reach& reach);
-  void SaveModel(const Reach& reach, const core::IdPipelineResult& result);
-  void StartCommands();
+  // Queues the reach's model for the save thread (never blocks on the disk).
+  void SaveModel(const ReachRuntime& reach, const core::IdPipelineResult& result);
+  // A command the dispatch let through, routed to the reach it names.
   void OnCommand(const drivers::AcceptedCommand& command);
-  // Logs the commands rejected since the last line, per verdict: at once for the first, then at
-  // most once a second with a count (" xN"), every pending count when `flush` (an operator's
-  // audit trail that a flood cannot turn into a journal flood).
-  void LogRejectedCommands(bool flush);
   void BeginStop(DaemonExit exit);
   void FinishStopWhenSafe();
+  StateStore* store() { return store_ ? &*store_ : nullptr; }
   std::string Status() const;
 
   DaemonPlan plan_;
@@ -104,26 +93,17 @@ class Daemon final {
   PortFactory make_port_;
   ReloadFunction reload_;
   boost::asio::io_context io_;
-  boost::asio::signal_set signals_;
+  SignalWatch signals_;
+  BusWatch bus_watch_;
   boost::asio::steady_timer health_timer_;
   boost::asio::steady_timer stop_timer_;
-  boost::asio::steady_timer bus_retry_timer_;
-  std::unique_ptr<boost::asio::posix::stream_descriptor> bus_fd_;
-  drivers::LcmBus* lcm_bus_ = nullptr;  ///< bus_ when it is an LcmBus (else pumped by a test)
-  static constexpr double kBusBackoffMinS = 0.1;
-  static constexpr double kBusBackoffMaxS = 5.0;
-  double bus_backoff_s_ = kBusBackoffMinS;
-  int64_t bus_losses_ = 0;
-  int64_t bus_reconnects_ = 0;
   LcmPublisher publisher_;
-  std::vector<std::unique_ptr<Plc>> plcs_;
-  std::vector<std::unique_ptr<Reach>> reaches_;
+  CommandDispatch commands_;
+  std::vector<std::unique_ptr<PlcRuntime>> plcs_;
+  std::vector<std::unique_ptr<ReachRuntime>> reaches_;
   std::optional<DaemonPlan> reloaded_plan_;
   std::optional<StateStore> store_;
-  std::unique_ptr<core::CommandAuthenticator> authenticator_;
-  std::unique_ptr<drivers::CommandReceiver> command_receiver_;
-  std::array<int64_t, core::kNumCommandVerdicts> verdicts_logged_{};
-  std::array<double, core::kNumCommandVerdicts> verdict_logged_at_s_{};  ///< steady s, 0: never
+  std::unique_ptr<PersistenceWorker> model_saver_;  ///< with a state directory
   DaemonExit exit_ = DaemonExit::kStopped;
   bool stopping_ = false;
   bool ready_ = false;

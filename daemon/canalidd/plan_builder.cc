@@ -1,6 +1,5 @@
 #include "daemon/canalidd/plan_builder.h"
 
-#include <algorithm>
 #include <memory>
 #include <stdexcept>
 
@@ -48,14 +47,12 @@ DaemonPlan BuildDaemonPlan(const core::DaemonConfig& config, const std::string& 
     plan.plcs.push_back(std::move(wiring));
   }
   for (const core::ReachConfig& reach : config.reaches) {
-    const core::ChannelConfig* level = config.FindChannel(reach.level);
-    if (level == nullptr)
-      throw std::invalid_argument("reach '" + reach.name + "': no level channel");
-    const auto plc = std::find_if(config.plcs.begin(), config.plcs.end(),
-                                  [&](const core::PlcConfig& p) { return p.name == level->plc; });
-    if (plc == config.plcs.end()) throw std::invalid_argument("reach '" + reach.name + "': no PLC");
+    const core::PlcConfig* plc = config.FindReachPlc(reach);
+    if (plc == nullptr) {
+      throw std::invalid_argument("reach '" + reach.name + "': no PLC");
+    }
     ReachWiring wiring;
-    wiring.plc = static_cast<int>(plc - config.plcs.begin());
+    wiring.plc = static_cast<int>(plc - config.plcs.data());
     const drivers::PollerConfig& poller = plan.plcs[static_cast<std::size_t>(wiring.plc)].poller;
     wiring.runner = core::BuildReachRunnerOptions(
         shared, reach, [&](const std::string& name) { return ChannelIndex(poller, name); });

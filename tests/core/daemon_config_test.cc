@@ -299,5 +299,23 @@ TEST(DaemonPlanTest, OnlineIdOptions) {
   EXPECT_DOUBLE_EQ(o.rls.forgetting, 0.999);
 }
 
+// The PLC of a reach is the PLC of its level channel, the one lookup the daemon, replay and the
+// sample time share.
+TEST(DaemonConfigTest, ReachPlcIsThePlcOfItsLevelChannel) {
+  DaemonConfig c = ValidConfig();
+  PlcConfig& other = c.plcs.emplace_back(c.plcs[0]);
+  other.name = "plc2";
+  other.poll_period_s = 0.5;
+  EXPECT_EQ(c.FindReachPlc(c.reaches[0]), &c.plcs[0]);
+  c.channels[2].plc = "plc2";  // the level
+  EXPECT_EQ(c.FindReachPlc(c.reaches[0]), &c.plcs[1]);
+  EXPECT_DOUBLE_EQ(ReachSampleTimeS(c, c.reaches[0]), 25.0);
+  c.channels[2].plc = "nowhere";
+  EXPECT_EQ(c.FindReachPlc(c.reaches[0]), nullptr);
+  EXPECT_THROW(ReachSampleTimeS(c, c.reaches[0]), std::invalid_argument);
+  c.reaches[0].level = "missing";
+  EXPECT_EQ(c.FindReachPlc(c.reaches[0]), nullptr);
+}
+
 }  // namespace
 }  // namespace canalid::core

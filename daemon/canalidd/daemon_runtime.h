@@ -1,0 +1,50 @@
+#pragma once
+#include <utility>  // before Boost.Asio under GCC 12 and C++20 (DESIGN.md)
+
+#include <atomic>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/reach_pipeline.h"
+#include "core/reach_runner.h"
+#include "daemon/canalidd/daemon_plan.h"
+#include "daemon/canalidd/heartbeat.h"
+#include "drivers/modbus/plc_poller.h"
+
+namespace canalid::daemon {
+
+/// What the daemon keeps of one running PLC (owned by Daemon, used on its Asio loop).
+struct PlcRuntime {
+  explicit PlcRuntime(const PlcWiring& w) : wiring(w) {}
+  const PlcWiring& wiring;
+  std::unique_ptr<drivers::PlcPoller> poller;
+  std::vector<std::string> channel_names;
+  std::atomic<bool> drain_pending{false};  ///< a Drain is posted (set by the poller thread)
+  std::unique_ptr<Heartbeat> heartbeat;
+  std::vector<int> reaches;  ///< indices of the reaches read from this PLC
+};
+
+/// What the daemon keeps of one running reach (owned by Daemon, used on its Asio loop).
+struct ReachRuntime {
+  explicit ReachRuntime(const ReachWiring& w) : wiring(w), runner(w.runner) {}
+  const ReachWiring& wiring;
+  core::ReachRunner runner;
+  bool restore_pending = false;  ///< a nominal setpoint not yet confirmed by the PLC
+  double restore_target = 0.0;   ///< the value that restore waits for
+  bool guard_on_disk = false;    ///< <reach>.experiment.json exists (written, or left by a crash)
+  bool keep_guard = false;       ///< a refused start-up: the guard stays for an operator to check
+  double last_time_s = 0.0;
+  const std::string& name() const { return runner.name(); }
+  core::ReachPipeline& pipeline() { return runner.pipeline(); }
+  const core::ReachPipeline& pipeline() const { return runner.pipeline(); }
+};
+
+/// The name of the reach's actuator channel in its PLC's poll.  @pre the reach has an actuator.
+inline const std::string& ActuatorName(const std::vector<std::unique_ptr<PlcRuntime>>& plcs,
+                                       const ReachRuntime& reach) {
+  return plcs[static_cast<std::size_t>(reach.wiring.plc)]
+      ->channel_names[static_cast<std::size_t>(reach.wiring.runner.channels.actuator)];
+}
+
+}  // namespace canalid::daemon

@@ -1,0 +1,56 @@
+#include "daemon/canalidd/model_persistence.h"
+
+#include <algorithm>
+#include <string>
+
+#include "daemon/canalidd/clock.h"
+#include "daemon/canalidd/log.h"
+#include "drivers/json/model_json.h"
+
+namespace canalid::daemon {
+
+void ResumePersistedModels(const StateStore& store,
+                           const std::vector<std::unique_ptr<ReachRuntime>>& reaches,
+                           LcmPublisher& publisher) {
+  const StateLoadReport report = store.LoadAll();
+  for (const std::string& problem : report.problems) LogWarning("state: " + problem);
+  for (const auto& temp : report.leftover_temp_files) {
+    LogWarning("state: " + temp.string() + ": left by an interrupted write; ignored");
+  }
+  for (const PersistedModel& model : report.models) {
+    const auto reach = std::find_if(reaches.begin(), reaches.end(),
+                                    [&](const auto& r) { return r->name() == model.reach; });
+    if (reach == reaches.end()) continue;
+    // Read back like any input: a file edited by hand or written by a build without these checks
+    // must not come back as the reach's model.
+    const std::string problem = PersistedIdModelProblem(model, (*reach)->pipeline().model_bounds());
+    if (!problem.empty()) {
+      LogWarning("state: " + store.PathFor(model.reach, model.model_kind).string() + ": reach " +
+                 model.reach + ": " + problem + "; ignored");
+      continue;
+    }
+    publisher.PublishModelJson(model.reach, model.model, WallNowS());
+    LogInfo("reach " + model.reach + ": resumed the persisted " + model.model_kind + " model " +
+            model.model.dump());
+  }
+}
+
+PersistedModel MakePersistedModel(const ReachRuntime& reach, const core::IdPipelineResult& result,
+                                  double wall_time_s) {
+  PersistedModel model;
+  model.reach = reach.name();
+  model.model_kind = "id";
+  model.saved_utime_us = ToUtime(wall_time_s);
+  model.model = drivers::ToJson(result);
+  if (const core::OnlineIdBank* bank = reach.pipeline().online_id()) {
+    const core::IdSnapshot s = bank->Snapshot();
+    model.online = {{"delay_s", s.delay_s},
+                    {"area_m2", s.area_m2},
+                    {"b", s.b},
+                    {"area_std_m2", s.area_std_m2},
+                    {"samples", bank->health().samples}};
+  }
+  return model;
+}
+
+}  // namespace canalid::daemon
