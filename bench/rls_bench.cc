@@ -103,7 +103,7 @@ BENCHMARK_TEMPLATE(BM_IvRlsUpdate, 4);
 
 // One sample through a bank of 64 ID candidates (nk = 0..63), lambda 0.99 with re-centring.
 // Arg 0: the daemon's default (3 parameters, least squares); 1: with the wave-front term, as
-// `canalid identify --online --closed-loop off`; 2: closed loop, IvRls<4> (`--closed-loop on`);
+// `canalid identify --online --closed-loop off`; 2: closed loop, IvRls<4> (`--closed-loop iv`);
 // 3: auto during its decision window (both banks); 4: the three-step method (`--closed-loop
 // three-step`: the IvRls<4> bank for the delay plus one OnlineThreeStep per candidate, Rls<8> for
 // F, its simulation and Rls<7> for the level).

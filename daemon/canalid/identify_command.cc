@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "daemon/canalid/cli.h"
+#include "daemon/canalid/closed_loop_option.h"
 #include "daemon/canalid/input_error.h"
 #include "drivers/csv/csv_table.h"
 
@@ -79,14 +80,7 @@ void AddIdentifyModelOptions(CLI::App& cmd, IdentifyOptions& options) {
                  "min(record/10, "
                  "100 samples); lpv arx/frac-ss locals: 20 samples)")
       ->check(FiniteIn(0.0, 1e9, true));
-  id->add_option("--closed-loop", options.closed_loop,
-                 "auto: decide from the data; on: three-step method (--online: instrumental-"
-                 "variable RLS, instrument the integrated delayed inflow); three-step: the "
-                 "three-step method (--online: recursive, per candidate delay); off: plain fit "
-                 "(--online: RLS).  --online auto runs both over the first 200 samples after the "
-                 "longest delay (all of them if fewer), then keeps the one the batch test picks")
-      ->check(CLI::IsMember({"auto", "on", "three-step", "off"}))
-      ->capture_default_str();
+  AddClosedLoopOption(*id, options.closed_loop);
   id->add_option("--p22", options.p22,
                  "--online: IDZ direct outflow gain p22, s/m2 (from the geometry, e.g. Litrico & "
                  "Fromion's tables): fits level + p22 q_out.  With a level-driven gate b cannot be "
@@ -147,7 +141,7 @@ void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code)
       "                   --input F.csv --u q_in --y level\n"
       "  canalid identify --model arx --input F.csv --u u --y y --online --forgetting 0.999\n"
       "  canalid identify --model id --input pool2.csv --online --trace trace.csv\n"
-      "  canalid identify --model id --input gate.csv --online --closed-loop on --p22 0.0216\n"
+      "  canalid identify --model id --input gate.csv --online --closed-loop iv --p22 0.0216\n"
       "  canalid identify --compare foptd,soptd,frac-foptd --input 'steps/*.csv' [--json]\n"
       "Output: one JSON object on stdout (keys in docs/model-json.md); --compare prints a table.\n"
       "Exit 2 on bad input.");

@@ -1,6 +1,7 @@
 #include <stdexcept>
 
 #include "core/id_pipeline.h"
+#include "daemon/canalid/closed_loop_option.h"
 #include "daemon/canalid/identify_command.h"
 #include "daemon/canalid/input_error.h"
 #include "daemon/canalid/table_columns.h"
@@ -9,20 +10,22 @@
 namespace canalid::cli {
 
 nlohmann::json IdentifyId(const IdentifyOptions& options, const drivers::CsvTable& table) {
+  const core::ClosedLoopMode closed_loop = ParseClosedLoop(options.closed_loop);
+  if (closed_loop == core::ClosedLoopMode::kOn) {
+    throw InputError(
+        "--closed-loop iv: the instrumental-variable bank is --online only (the batch fit reports "
+        "its IV estimate under cross_check)");
+  }
   const Eigen::VectorXd q_in = RequireMovingColumn(table, options.qin);
   const Eigen::VectorXd q_out = RequireColumn(table, options.qout);
   const Eigen::VectorXd level = RequireColumn(table, options.level);
   const double ts = table.sample_time_s();
   core::IdPipelineOptions pipeline;
   pipeline.remove_level_outliers = !options.keep_outliers;
+  pipeline.fit.closed_loop = closed_loop;
   if (options.max_delay_s > 0.0) {
     pipeline.fit.max_nk = OptionSamples(options.max_delay_s, table, "--max-delay-s", false);
   }
-  // The batch's closed-loop method is the three-step one: "on" and "three-step" are the same.
-  pipeline.fit.closed_loop = options.closed_loop == "on" || options.closed_loop == "three-step"
-                                 ? core::ClosedLoopMode::kOn
-                             : options.closed_loop == "off" ? core::ClosedLoopMode::kOff
-                                                            : core::ClosedLoopMode::kAuto;
   try {
     return drivers::ToJson(core::IdentifyPool(q_in, q_out, level, ts, pipeline));
   } catch (const std::invalid_argument& e) {

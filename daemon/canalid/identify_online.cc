@@ -18,6 +18,7 @@
 #include "core/online_id.h"
 #include "core/outliers.h"
 #include "core/rls.h"
+#include "daemon/canalid/closed_loop_option.h"
 #include "daemon/canalid/identify_command.h"
 #include "daemon/canalid/input_error.h"
 #include "daemon/canalid/table_columns.h"
@@ -134,13 +135,10 @@ nlohmann::json OnlineId(const IdentifyOptions& options, const drivers::CsvTable&
                              : static_cast<int>(n / 3);
   id.wave_front_term = true;
   id.rls = ParseRlsOptions(options, 4);
-  // The batch flag: on = instrumental-variable RLS, off = least squares, auto = both over the
-  // first samples, then FitIdModel's closed-loop test picks one (core::OnlineIdOptions).
-  // three-step = the recursive three-step method (core::OnlineThreeStep).
-  id.closed_loop = options.closed_loop == "on"           ? core::ClosedLoopMode::kOn
-                   : options.closed_loop == "off"        ? core::ClosedLoopMode::kOff
-                   : options.closed_loop == "three-step" ? core::ClosedLoopMode::kThreeStep
-                                                         : core::ClosedLoopMode::kAuto;
+  // on (three-step) = the recursive three-step method (core::OnlineThreeStep), iv =
+  // instrumental-variable RLS, off = least squares, auto = IV and LS over the first samples, then
+  // FitIdModel's closed-loop test picks one (core::OnlineIdOptions).
+  id.closed_loop = ParseClosedLoop(options.closed_loop);
   id.outflow_direct_gain_s_per_m2 = options.p22;
   // p21 >= 0 as in the batch fit: a negative wave-front gain lets Q_(nk-1) - b q_in(k-nk+1) mimic
   // Q_nk, so the delay would be ambiguous by one sample.
@@ -201,7 +199,7 @@ nlohmann::json OnlineId(const IdentifyOptions& options, const drivers::CsvTable&
   health["dropped_samples"] = bank_health.dropped_samples;
   health["switches"] = bank_health.switches;
   health["candidates"] = bank->num_candidates();
-  std::string reason = options.closed_loop == "off" ? "disabled" : "requested";
+  std::string reason = id.closed_loop == core::ClosedLoopMode::kOff ? "disabled" : "requested";
   if (id.closed_loop == core::ClosedLoopMode::kAuto) {
     reason = !bank_health.closed_loop_decided
                  ? "undecided: fewer than " + std::to_string(id.closed_loop_window_samples) +

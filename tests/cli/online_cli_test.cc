@@ -93,7 +93,7 @@ TEST(OnlineCli, IdOnFixedGateRecordWithoutP22EstimatesAOnePlusP22G) {
   const std::string csv = Record("asce2-pool2-prbs-fixed-gate");
   const auto model =
       Identify("fixed-gate-iv-no-p22",
-               "--model id --online --closed-loop on --max-delay-s 3600 --input " + csv);
+               "--model id --online --closed-loop iv --max-delay-s 3600 --input " + csv);
   const double g = 14.58;  // least squares of q_out on the cleaned level over the record
   EXPECT_LT(Rel(model["area_m2"].get<double>(), kIdzArea * (1.0 + kIdzP22 * g)), 0.05)
       << model.dump();

@@ -265,12 +265,9 @@ TEST(DaemonCanalsim, SigtermDuringExcitationRestoresNominal) {
   auto daemon = StartDaemon(dir, config);
   ASSERT_FALSE(daemon->WaitForLine("experiment exciting", 30000).empty()) << daemon->output();
   // Wait until the gate setpoint has left the nominal, so the restore is needed.
-  bool moved = false;
-  for (int i = 0; i < 200 && !moved; ++i) {
-    daemon->WaitForLine("never printed", 50);
-    moved = std::abs(ReadSetpoint(canal.master) - nominal) > 1e-3;
-  }
-  ASSERT_TRUE(moved) << daemon->output();
+  ASSERT_TRUE(daemon->WaitUntil(
+      [&] { return std::abs(ReadSetpoint(canal.master) - nominal) > 1e-3; }, 10000, 50))
+      << daemon->output();
   EXPECT_EQ(daemon->Stop(SIGTERM), 0) << daemon->output();
   EXPECT_NEAR(ReadSetpoint(canal.master), nominal, 1e-4);
   const std::size_t term = daemon->output().find("SIGTERM: stopping");
@@ -281,14 +278,9 @@ TEST(DaemonCanalsim, SigtermDuringExcitationRestoresNominal) {
 // Wait until the daemon is exciting and the PRBS has moved the gate away from the nominal.
 bool WaitExciting(ChildProcess& daemon, Master& master, double nominal) {
   if (daemon.WaitForLine("experiment exciting", 30000).empty()) return false;
-  for (int i = 0; i < 200; ++i) {
-    if (std::abs(ReadSetpoint(master) - nominal) > 1e-3) return true;
-    daemon.WaitForLine("never printed", 50);  // bounded: reads the log meanwhile
-  }
-  return false;
+  return daemon.WaitUntil([&] { return std::abs(ReadSetpoint(master) - nominal) > 1e-3; }, 10000,
+                          50);
 }
-
-bool Running(const ChildProcess& p) { return p.pid() > 0 && kill(p.pid(), 0) == 0; }
 
 // The LCM log the daemon wrote (file://...?mode=w), read after it stopped.
 struct LcmRecord {
@@ -337,8 +329,7 @@ TEST(DaemonCanalsim, AStalledDaemonAbortsTheExperimentOnTheSampleGap) {
   ASSERT_EQ(kill(daemon->pid(), SIGSTOP), 0);
   const std::uint32_t stopped_at = PlantSeconds(canal.master);
   // 3 wall s = 1800 plant s; bounded by canalsim's clock, which runs on without the daemon.
-  for (int i = 0; i < 400 && PlantSeconds(canal.master) < stopped_at + 1800; ++i)
-    daemon->WaitForLine("never printed", 50);  // bounded: 20 s at most
+  daemon->WaitUntil([&] { return PlantSeconds(canal.master) >= stopped_at + 1800; }, 20000, 50);
   const std::uint32_t resumed_at = PlantSeconds(canal.master);
   ASSERT_EQ(kill(daemon->pid(), SIGCONT), 0);
   ASSERT_GE(resumed_at, stopped_at + 1800);
@@ -374,7 +365,7 @@ TEST(DaemonCanalsim, PlcDisconnectAbortsReconnectsAndRestores) {
   // The restore needs a working link again: its confirmation proves the reconnection.
   ASSERT_FALSE(daemon->WaitForLine(" restored", 20000, Position(*daemon, lost)).empty())
       << daemon->output();
-  EXPECT_TRUE(Running(*daemon));
+  EXPECT_TRUE(daemon->Running());
   // The test's own master may have been one of the dropped: reconnect before reading.
   canal.master.Reconnect();
   EXPECT_NEAR(ReadSetpoint(canal.master), nominal, 1e-4);
@@ -424,12 +415,10 @@ TEST(DaemonCanalsim, KilledMidPrbsRestartRestoresThePersistedNominalFirst) {
   ASSERT_TRUE(WaitExciting(*first, master, nominal)) << first->output();
   // Kill once the gate has reached a full PRBS level (the first step may be cut by the rate
   // limit; bounded: 200 reads, 50 ms apart).
-  bool at_level = false;
-  for (int i = 0; i < 200 && !at_level; ++i) {
-    at_level = std::abs(std::abs(ReadSetpoint(master) - nominal) - kAmplitude) < 1e-4;
-    if (!at_level) first->WaitForLine("never printed", 50);
-  }
-  ASSERT_TRUE(at_level) << first->output();
+  ASSERT_TRUE(first->WaitUntil(
+      [&] { return std::abs(std::abs(ReadSetpoint(master) - nominal) - kAmplitude) < 1e-4; }, 10000,
+      50))
+      << first->output();
   EXPECT_NE(first->output().find("experiment guard persisted"), std::string::npos)
       << first->output();
   EXPECT_EQ(first->Stop(SIGKILL), 128 + SIGKILL);
@@ -459,13 +448,15 @@ TEST(DaemonCanalsim, KilledMidPrbsRestartRestoresThePersistedNominalFirst) {
   // (around the PRBS level it would reach nominal +- 2 x amplitude; bounded: 200 reads, 50 ms
   // apart).
   bool below = false, above = false, off_centre = false;
-  for (int i = 0; i < 200 && !(below && above); ++i) {
-    const double value = ReadSetpoint(master);
-    below = below || std::abs(value - (nominal - kAmplitude)) < 1e-4;
-    above = above || std::abs(value - (nominal + kAmplitude)) < 1e-4;
-    off_centre = off_centre || std::abs(value - nominal) > kAmplitude + 1e-4;
-    second->WaitForLine("never printed", 50);
-  }
+  second->WaitUntil(
+      [&] {
+        const double value = ReadSetpoint(master);
+        below = below || std::abs(value - (nominal - kAmplitude)) < 1e-4;
+        above = above || std::abs(value - (nominal + kAmplitude)) < 1e-4;
+        off_centre = off_centre || std::abs(value - nominal) > kAmplitude + 1e-4;
+        return below && above;
+      },
+      10000, 50);
   EXPECT_TRUE(below && above) << second->output();
   EXPECT_FALSE(off_centre);
   EXPECT_EQ(second->Stop(SIGTERM), 0) << second->output();
@@ -553,7 +544,7 @@ TEST(DaemonCanalsim, PlcRestartAbortsReconnectsAndRestores) {
   // The backoff is at most 5 s (backoff_max_s); the restore confirms the new connection.
   ASSERT_FALSE(daemon->WaitForLine(" restored", 30000, Position(*daemon, lost)).empty())
       << daemon->output();
-  EXPECT_TRUE(Running(*daemon));
+  EXPECT_TRUE(daemon->Running());
   Master master(port, 2.0);
   EXPECT_NEAR(ReadSetpoint(master), nominal, 1e-4);
   EXPECT_EQ(daemon->Stop(SIGTERM), 0) << daemon->output();
@@ -583,7 +574,7 @@ TEST(DaemonCanalsim, ExceptionRepliesAndSpikesAreCountedNotFatal) {
   canal.master.Write(kSpikeRecords, 1 << 1);
   daemon->WaitForLine("never printed", 2000);  // bounded: 20 polls with spikes, log read meanwhile
   canal.master.Write(kSpikeRecords, 0);
-  EXPECT_TRUE(Running(*daemon)) << daemon->output();
+  EXPECT_TRUE(daemon->Running()) << daemon->output();
   EXPECT_NEAR(ReadSetpoint(canal.master), nominal, 1e-4);
   EXPECT_EQ(daemon->Stop(SIGTERM), 0) << daemon->output();
 
@@ -685,11 +676,15 @@ TEST(DaemonCanalsim, CommandsStartOnlyWhenGenuine) {
   }
   ChildProcess logger(logger_argv, {}, dir / "lcm-logger.log");
   int probes = 0;
-  for (; probes < 50 && ReadLcmLog(bus_log).configs == 0; ++probes) {
-    EXPECT_EQ(SendCommand(dir, canal.pid(), key, {"publish-config"}), 0);
-    logger.WaitForLine("never printed", 100);
-  }
-  ASSERT_LT(probes, 50) << logger.output();
+  ASSERT_TRUE(logger.WaitUntil(
+      [&] {
+        if (ReadLcmLog(bus_log).configs > 0) return true;
+        EXPECT_EQ(SendCommand(dir, canal.pid(), key, {"publish-config"}), 0);
+        ++probes;
+        return false;
+      },
+      5000, 100))
+      << logger.output();
 
   const auto now_us = std::chrono::duration_cast<std::chrono::microseconds>(
                           std::chrono::system_clock::now().time_since_epoch())
@@ -722,11 +717,13 @@ TEST(DaemonCanalsim, CommandsStartOnlyWhenGenuine) {
   // The daemon's last health message crosses the bus to the logger after the daemon has exited,
   // and lcm-logger writes an event out when the next one comes: send commands nobody answers now
   // (bounded: 50 x 100 ms) until the health message is in the file, then stop the logger.
-  for (int tries = 0; tries < 50 && ReadLcmLog(bus_log).last_health.count("commands") == 0;
-       ++tries) {
-    EXPECT_EQ(SendCommand(dir, canal.pid(), key, {"publish-config"}), 0);
-    logger.WaitForLine("never printed", 100);
-  }
+  logger.WaitUntil(
+      [&] {
+        if (ReadLcmLog(bus_log).last_health.count("commands") > 0) return true;
+        EXPECT_EQ(SendCommand(dir, canal.pid(), key, {"publish-config"}), 0);
+        return false;
+      },
+      5000, 100);
   EXPECT_EQ(logger.Stop(SIGINT), 0) << logger.output();
   EXPECT_EQ(canal.Stop(SIGTERM), 0) << canal.output();
   // The health message the daemon publishes as it stops counts every verdict once.
@@ -849,7 +846,19 @@ TEST(DaemonCanalsim, TwoDaemonsShareOneBusOnTheirOwnPrefixes) {
   // Order 4, two samples per bit: 30 samples (3 s) of excitation; wait until both have started.
   ASSERT_FALSE(daemon_a.WaitForLine("experiment exciting", 30000).empty()) << daemon_a.output();
   ASSERT_FALSE(daemon_b.WaitForLine("experiment exciting", 30000).empty()) << daemon_b.output();
-  daemon_a.WaitForLine("never printed", 3000);  // bounded: 30 more polls on the bus
+  // Until the logger's file holds 15 samples of each (bounded: 30 s), so the counts checked
+  // below do not depend on how fast this machine is.
+  auto samples_of = [](const BusRecord& b, const char* channel) {
+    const auto it = b.samples.find(channel);
+    return it == b.samples.end() ? std::size_t{0} : it->second.size();
+  };
+  EXPECT_TRUE(daemon_a.WaitUntil(
+      [&] {
+        const BusRecord so_far = ReadBus(bus_log);
+        return samples_of(so_far, "CANALID_ASCE2_SAMPLE_asce2") >= 15 &&
+               samples_of(so_far, "CANALID_B_SAMPLE_asce2b") >= 15;
+      },
+      30000, 100));
   EXPECT_EQ(daemon_a.Stop(SIGTERM), 0) << daemon_a.output();
   EXPECT_EQ(daemon_b.Stop(SIGTERM), 0) << daemon_b.output();
   // Each daemon publishes its health as it stops. lcm-logger drops what it has not read yet when
@@ -867,18 +876,20 @@ TEST(DaemonCanalsim, TwoDaemonsShareOneBusOnTheirOwnPrefixes) {
     event.data = byte.data();
     ASSERT_EQ(probe.writeEvent(&event), 0);
   }
-  bool recorded = false;
-  for (int tries = 0; tries < 50 && !recorded; ++tries) {
-    const BusRecord so_far = ReadBus(bus_log);
-    recorded = so_far.health_components.count("CANALID_ASCE2_HEALTH") == 1 &&
-               so_far.health_components.count("CANALID_B_HEALTH") == 1;
-    if (recorded) break;
-    ChildProcess play(InNamespace({"/usr/bin/lcm-logplayer", std::string("--lcm-url=") + kUdpmUrl,
-                                   probe_log.string()}),
-                      {}, dir / "lcm-logplayer.log");
-    EXPECT_EQ(play.WaitExit(10000), 0) << play.output();
-    logger.WaitForLine("never printed", 100);
-  }
+  const bool recorded = logger.WaitUntil(
+      [&] {
+        const BusRecord so_far = ReadBus(bus_log);
+        if (so_far.health_components.count("CANALID_ASCE2_HEALTH") == 1 &&
+            so_far.health_components.count("CANALID_B_HEALTH") == 1) {
+          return true;
+        }
+        ChildProcess play(InNamespace({"/usr/bin/lcm-logplayer",
+                                       std::string("--lcm-url=") + kUdpmUrl, probe_log.string()}),
+                          {}, dir / "lcm-logplayer.log");
+        EXPECT_EQ(play.WaitExit(10000), 0) << play.output();
+        return false;
+      },
+      10000, 100);
   EXPECT_TRUE(recorded) << "the daemons' last health messages never reached the logger's file";
   EXPECT_EQ(logger.Stop(SIGINT), 0) << logger.output();
   EXPECT_EQ(canal_b.Stop(SIGTERM), 0) << canal_b.output();
@@ -933,7 +944,7 @@ TEST(DaemonCanalsim, SighupReloadsAValidConfigurationOnly) {
   kill(daemon->pid(), SIGHUP);
   ASSERT_FALSE(daemon->WaitForLine("not valid; carrying on", 20000).empty()) << daemon->output();
   EXPECT_NE(daemon->output().find("plc[0].port"), std::string::npos) << daemon->output();
-  EXPECT_TRUE(Running(*daemon));
+  EXPECT_TRUE(daemon->Running());
 
   std::vector<std::pair<std::string, std::string>> keys = BaseKeys(canal.serve.port(), dir);
   keys.emplace_back("channel_prefix", "\"CANALID_RELOADED_\"");
@@ -944,7 +955,7 @@ TEST(DaemonCanalsim, SighupReloadsAValidConfigurationOnly) {
       << daemon->output();
   EXPECT_NE(daemon->output().find("reloading the configuration", before), std::string::npos);
   EXPECT_FALSE(daemon->WaitForLine("answers: ready", 20000, before).empty()) << daemon->output();
-  EXPECT_TRUE(Running(*daemon));
+  EXPECT_TRUE(daemon->Running());
   EXPECT_EQ(daemon->Stop(SIGTERM), 0) << daemon->output();
   // The log kept what the first configuration published, and holds the reloaded channels too.
   const std::string log = ReadText(dir / "run.lcmlog");

@@ -2,10 +2,7 @@
 // the daemon with the stock tool and replay the file.  udpm needs a multicast route: the test runs
 // itself again in a private network namespace whose loopback has one (the host's routes are never
 // touched), and fails with the reason where no such namespace can be made.
-#include <fcntl.h>
-#include <poll.h>
 #include <signal.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <gtest/gtest.h>
@@ -80,49 +77,43 @@ TEST(LcmLogger, RecordsASamplePublishedOnUdpm) {
   const auto log_path = dir / ("logger-" + std::to_string(port) + ".lcmlog");
   std::filesystem::remove(log_path);
 
-  int out_pipe[2];
-  ASSERT_EQ(pipe(out_pipe), 0);
-  const pid_t pid = fork();
-  ASSERT_GE(pid, 0);
-  if (pid == 0) {
-    dup2(out_pipe[1], STDOUT_FILENO);
-    dup2(out_pipe[1], STDERR_FILENO);
-    close(out_pipe[0]);
-    const std::string url_arg = "--lcm-url=" + url;
-    execlp("lcm-logger", "lcm-logger", "-f", "--flush-interval=10", url_arg.c_str(),
-           log_path.c_str(), static_cast<char*>(nullptr));
-    _exit(127);
-  }
-  close(out_pipe[1]);
+  canalid::testing::ChildOptions options;
+  options.argv = {"lcm-logger", "-f", "--flush-interval=10", "--lcm-url=" + url, log_path.string()};
+  options.log_path = dir / ("logger-" + std::to_string(port) + ".out");
+  canalid::testing::ChildProcess logger(options);
 
   LcmBus bus(url);
   std::vector<uint8_t> buffer;
-  // The logger is ready once a probe published here shows up in its file. Bounded (30 s); the
-  // pause between probes is a poll on the logger's output, which ends early if it exits.
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
-  bool ready = false;
-  while (!ready && std::chrono::steady_clock::now() < deadline) {
-    ASSERT_TRUE(PublishMessage(bus, "CANALID_PROBE", testing::MakeHealth(), buffer));
-    pollfd p{out_pipe[0], POLLIN, 0};
-    if (poll(&p, 1, 50) > 0) {
-      std::array<char, 512> text{};
-      if (read(out_pipe[0], text.data(), text.size()) == 0) break;  // logger exited
-    }
-    ready = !Events(log_path, "CANALID_PROBE").empty();
-  }
-  ASSERT_TRUE(ready) << "lcm-logger did not record a probe within 30 s";
+  // The logger is ready once a probe published here shows up in its file: a bounded wait (30 s)
+  // that publishes and re-checks every 50 ms and ends at once if the logger exits (a later probe
+  // is what makes the logger flush an earlier one).
+  bool publish_failed = false;
+  const bool ready = logger.WaitUntil(
+      [&] {
+        publish_failed =
+            publish_failed || !PublishMessage(bus, "CANALID_PROBE", testing::MakeHealth(), buffer);
+        return !Events(log_path, "CANALID_PROBE").empty();
+      },
+      30000, 50);
+  ASSERT_FALSE(publish_failed);
+  ASSERT_TRUE(ready) << "lcm-logger did not record a probe within 30 s: " << logger.output();
 
   const canalid::sample_t sent = testing::MakeSample(7);
   ASSERT_TRUE(PublishMessage(bus, "CANALID_SAMPLE_pool2", sent, buffer));
+  // lcm-logger flushes its file only when a message arrives --flush-interval after the last
+  // flush: probes keep coming until the sample is in the file, whatever the timing.
   std::vector<std::vector<uint8_t>> recorded;
-  while (recorded.empty() && std::chrono::steady_clock::now() < deadline) {
-    pollfd p{out_pipe[0], POLLIN, 0};
-    poll(&p, 1, 20);
-    recorded = Events(log_path, "CANALID_SAMPLE_pool2");
-  }
-  kill(pid, SIGINT);
-  waitpid(pid, nullptr, 0);
-  close(out_pipe[0]);
+  logger.WaitUntil(
+      [&] {
+        recorded = Events(log_path, "CANALID_SAMPLE_pool2");
+        if (!recorded.empty()) return true;
+        publish_failed =
+            publish_failed || !PublishMessage(bus, "CANALID_PROBE", testing::MakeHealth(), buffer);
+        return false;
+      },
+      30000, 20);
+  EXPECT_FALSE(publish_failed);
+  EXPECT_EQ(logger.Stop(SIGINT), 0) << logger.output();
 
   ASSERT_EQ(recorded.size(), 1u);
   canalid::sample_t got;

@@ -12,6 +12,7 @@
 
 #include <gtest/gtest.h>
 
+#include "support/child_process.h"
 #include "support/notify_waiter.h"
 
 #include <array>
@@ -64,59 +65,36 @@ bool Accepts(int port) {
 class PymodbusServer {
  public:
   explicit PymodbusServer(int port) : port_(port) {}
-  ~PymodbusServer() { Kill(); }
 
-  /// Starts the server and waits until its port accepts a connection. The wait is a bounded
-  /// connect loop (at most 30 s); between attempts it blocks on the child's stdout pipe for up to
-  /// 20 ms, which returns at once if the child exits (then the start has failed).
+  /// Starts the server and waits until its port accepts a connection: a bounded wait (30 s) that
+  /// re-checks whenever the child prints, every 20 ms, and ends at once if the child exits.
   ::testing::AssertionResult Start() {
-    const std::string script =
-        std::string(CANALID_SOURCE_DIR) + "/tests/drivers/modbus_test_server.py";
     const auto dir = std::filesystem::path(CANALID_BINARY_DIR) / "test-output" / "modbus_pymodbus";
     std::filesystem::create_directories(dir);
-    const std::string log = (dir / ("server-" + std::to_string(port_) + ".log")).string();
-    int pipe_fds[2];
-    if (pipe(pipe_fds) != 0) return ::testing::AssertionFailure() << "pipe failed";
-    pid_ = fork();
-    if (pid_ == 0) {
-      dup2(pipe_fds[1], STDOUT_FILENO);
-      const int err = open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      if (err >= 0) dup2(err, STDERR_FILENO);
-      close(pipe_fds[0]);
-      const std::string port = std::to_string(port_);
-      execl(kPython, kPython, script.c_str(), port.c_str(), static_cast<char*>(nullptr));
-      _exit(127);
+    canalid::testing::ChildOptions options;
+    options.argv = {kPython,
+                    std::string(CANALID_SOURCE_DIR) + "/tests/drivers/modbus_test_server.py",
+                    std::to_string(port_)};
+    options.stderr_path = dir / ("server-" + std::to_string(port_) + ".log");
+    child_ = std::make_unique<canalid::testing::ChildProcess>(options);
+    if (child_->WaitUntil([&] { return Accepts(port_); }, 30000)) {
+      return ::testing::AssertionSuccess();
     }
-    close(pipe_fds[1]);
-    stdout_fd_ = pipe_fds[0];
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
-    while (std::chrono::steady_clock::now() < deadline) {
-      if (Accepts(port_)) return ::testing::AssertionSuccess();
-      int status = 0;
-      if (waitpid(pid_, &status, WNOHANG) == pid_) {
-        pid_ = -1;
-        return ::testing::AssertionFailure() << "pymodbus server exited early, see " << log;
-      }
-      pollfd p{stdout_fd_, POLLIN, 0};
-      poll(&p, 1, 20);
+    if (!child_->Running()) {
+      return ::testing::AssertionFailure()
+             << "pymodbus server exited early, see " << options.stderr_path;
     }
     return ::testing::AssertionFailure() << "pymodbus server not accepting within 30 s";
   }
 
+  /// SIGKILL: the server vanishes as a crashed PLC would.
   void Kill() {
-    if (pid_ > 0) {
-      kill(pid_, SIGKILL);
-      waitpid(pid_, nullptr, 0);
-      pid_ = -1;
-    }
-    if (stdout_fd_ >= 0) close(stdout_fd_);
-    stdout_fd_ = -1;
+    if (child_) child_->Stop(SIGKILL);
   }
 
  private:
   int port_;
-  pid_t pid_ = -1;
-  int stdout_fd_ = -1;
+  std::unique_ptr<canalid::testing::ChildProcess> child_;
 };
 
 using Waiter = canalid::testing::NotifyWaiter;

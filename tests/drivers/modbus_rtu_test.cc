@@ -1,10 +1,5 @@
 // The libmodbus RTU adapter against an independent RTU server (tests/drivers/
 // modbus_rtu_pty_server.py, written from the serial-line spec) on a pseudo-terminal.
-#include <poll.h>
-#include <signal.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <gtest/gtest.h>
 
 #include <array>
@@ -18,6 +13,7 @@
 
 #include "drivers/modbus/modbus_port.h"
 #include "drivers/modbus/plc_poller.h"
+#include "tests/support/child_process.h"
 
 namespace canalid::drivers {
 namespace {
@@ -26,62 +22,25 @@ using enum RegisterKind;
 
 constexpr int kUnit = 17;
 
-/// The server child: started with pipes on stdin and stdout; ready when it prints the pty path.
+/// The server child: stdin a pipe held open (it exits when stdin closes), stdout read for the
+/// ready line, the pty's path.
 class PtyServer {
  public:
-  ~PtyServer() { Stop(); }
-
   /// Reads the ready line (the device path), waiting at most 30 s.
   std::optional<std::string> Start() {
-    int in[2];
-    int out[2];
-    if (pipe(in) != 0 || pipe(out) != 0) return std::nullopt;
-    pid_ = fork();
-    if (pid_ == 0) {
-      dup2(in[0], STDIN_FILENO);
-      dup2(out[1], STDOUT_FILENO);
-      close(in[1]);
-      close(out[0]);
-      const std::string script =
-          std::string(CANALID_SOURCE_DIR) + "/tests/drivers/modbus_rtu_pty_server.py";
-      const std::string unit = std::to_string(kUnit);
-      execl("/usr/bin/python3", "/usr/bin/python3", script.c_str(), unit.c_str(),
-            static_cast<char*>(nullptr));
-      _exit(127);
-    }
-    close(in[0]);
-    close(out[1]);
-    stdin_fd_ = in[1];
-    stdout_fd_ = out[0];
-    std::string line;
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
-    while (std::chrono::steady_clock::now() < deadline) {
-      pollfd p{stdout_fd_, POLLIN, 0};
-      if (poll(&p, 1, 1000) <= 0) continue;
-      char c = 0;
-      if (read(stdout_fd_, &c, 1) != 1) return std::nullopt;  // exited
-      if (c == '\n') return line;
-      line += c;
-    }
-    return std::nullopt;
-  }
-
-  void Stop() {
-    if (pid_ > 0) {
-      kill(pid_, SIGTERM);
-      waitpid(pid_, nullptr, 0);
-      pid_ = -1;
-    }
-    for (int* fd : {&stdin_fd_, &stdout_fd_}) {
-      if (*fd >= 0) close(*fd);
-      *fd = -1;
-    }
+    canalid::testing::ChildOptions options;
+    options.argv = {"/usr/bin/python3",
+                    std::string(CANALID_SOURCE_DIR) + "/tests/drivers/modbus_rtu_pty_server.py",
+                    std::to_string(kUnit)};
+    options.stdin_pipe = true;
+    child_ = std::make_unique<canalid::testing::ChildProcess>(options);
+    const std::string line = child_->WaitForLine("/dev/", 30000);
+    if (line.empty()) return std::nullopt;
+    return line;
   }
 
  private:
-  pid_t pid_ = -1;
-  int stdin_fd_ = -1;
-  int stdout_fd_ = -1;
+  std::unique_ptr<canalid::testing::ChildProcess> child_;
 };
 
 ModbusRtuConfig Rtu(const std::string& device, int unit) {

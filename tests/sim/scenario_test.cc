@@ -15,6 +15,7 @@
 #include "sim/config_reader.h"
 #include "sim/saint_venant.h"
 #include "sim/scenario_runner.h"
+#include "tests/support/run_program.h"
 
 namespace canalid::sim {
 namespace {
@@ -277,9 +278,9 @@ TEST(Scenario, CanalsimExitCodes) {
   const std::string canal = kSource + "/config/sim/asce-canal2.toml";
   const std::string bad = WriteTemp("bad_canal.toml", "name = \"x\"\ncolour = 3\n");
   const std::string good = kSource + "/config/sim/scenarios/asce2-pool2-step.toml";
-  auto status = [](const std::string& cmd) {
-    const int s = std::system((cmd + " >/dev/null 2>&1").c_str());
-    return WIFEXITED(s) ? WEXITSTATUS(s) : -1;
+  const auto dir = canalid::testing::TestDirectory("scenario_exit_codes");
+  auto status = [&](const std::string& cmd) {
+    return canalid::testing::RunProgram(cmd, dir).exit_code;
   };
   EXPECT_EQ(status(exe + " run --help"), 0);
   EXPECT_EQ(status(exe + " run --canal " + bad + " --scenario " + good + " --out /dev/null"), 78);

@@ -1,14 +1,9 @@
 #pragma once
 // Test helpers: start `canalsim serve` on a free loopback port, wait for its ready line (bounded),
 // stop it by pid with SIGTERM (bounded wait); and a small libmodbus TCP client.
-#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <modbus/modbus.h>
-#include <poll.h>
 #include <signal.h>
-#include <sys/syscall.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <cerrno>
 #include <cstdint>
@@ -17,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "tests/support/child_process.h"
+
 namespace canalid::testing {
 
 inline std::string CanalsimProgram() { return std::string(CANALID_BINARY_DIR) + "/sim/canalsim"; }
@@ -24,99 +21,48 @@ inline std::string SourcePath(const std::string& relative) {
   return std::string(CANALID_SOURCE_DIR) + "/" + relative;
 }
 
-/// A running `canalsim serve --listen 127.0.0.1:0 <args>`; the destructor stops it.
+/// A running `canalsim serve --listen 127.0.0.1:0 <args>` (a ChildProcess); the destructor stops
+/// it.
 class ServeProcess {
  public:
   /// @param stderr_path where the server's stderr goes.
-  /// Waits at most `ready_timeout_ms` for the ready line; throws if it does not come.
+  /// Waits at most `ready_timeout_ms` for the ready line; throws if it does not come (the server
+  /// is stopped first).
   ServeProcess(const std::vector<std::string>& args, const std::filesystem::path& stderr_path,
-               int ready_timeout_ms = 60000) {
-    // Everything the child needs is built before fork: only async-signal-safe calls after it
-    // (the RTU test has a relay thread running).
-    std::vector<std::string> all = {CanalsimProgram(), "serve", "--listen", "127.0.0.1:0"};
-    all.insert(all.end(), args.begin(), args.end());
-    std::vector<char*> argv;
-    for (std::string& a : all) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    const std::string err_path = stderr_path.string();
-    int out[2];
-    if (pipe2(out, O_CLOEXEC) != 0) throw std::runtime_error("pipe failed");
-    pid_ = fork();
-    if (pid_ < 0) throw std::runtime_error("fork failed");
-    if (pid_ == 0) {
-      dup2(out[1], STDOUT_FILENO);
-      const int err = open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      if (err >= 0) dup2(err, STDERR_FILENO);
-      execv(argv[0], argv.data());
-      _exit(127);
+               int ready_timeout_ms = 60000)
+      : child_(Options(args, stderr_path)) {
+    // "canalsim: listening on 127.0.0.1:PORT (...)"
+    const std::string key = "listening on 127.0.0.1:";
+    ready_line_ = child_.WaitForLine(key, ready_timeout_ms);
+    if (ready_line_.empty()) {
+      const bool exited = !child_.Running();
+      child_.Stop(SIGKILL);
+      throw std::runtime_error(exited ? "canalsim serve exited before its ready line: " +
+                                            child_.output()
+                                      : "canalsim serve printed no ready line in time");
     }
-    close(out[1]);
-    out_fd_ = out[0];
-    try {
-      WaitForReadyLine(ready_timeout_ms);
-    } catch (...) {
-      // Do not leave the server behind when it never became ready.
-      kill(pid_, SIGKILL);
-      waitpid(pid_, nullptr, 0);
-      pid_ = -1;
-      close(out_fd_);
-      out_fd_ = -1;
-      throw;
-    }
+    port_ = std::stoi(ready_line_.substr(ready_line_.find(key) + key.size()));
   }
-  ~ServeProcess() {
-    if (pid_ > 0) Stop();
-    if (out_fd_ >= 0) close(out_fd_);
-  }
-  ServeProcess(const ServeProcess&) = delete;
-  ServeProcess& operator=(const ServeProcess&) = delete;
 
   int port() const { return port_; }
   const std::string& ready_line() const { return ready_line_; }
 
   /// Sends `signal` (SIGTERM by default), then waits at most 20 s (SIGKILL after that).
   /// Returns the exit code, or 128 + signal if it was killed by one.
-  int Stop(int signal = SIGTERM) {
-    if (pid_ <= 0) return exit_code_;
-    kill(pid_, signal);
-    const int pidfd = static_cast<int>(syscall(SYS_pidfd_open, pid_, 0));
-    if (pidfd >= 0) {
-      pollfd p{pidfd, POLLIN, 0};
-      if (poll(&p, 1, 20000) <= 0) kill(pid_, SIGKILL);
-      close(pidfd);
-    }
-    int status = 0;
-    waitpid(pid_, &status, 0);
-    pid_ = -1;
-    exit_code_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    return exit_code_;
-  }
+  int Stop(int signal = SIGTERM) { return child_.Stop(signal, 20000); }
 
  private:
-  void WaitForReadyLine(int timeout_ms) {
-    std::string line;
-    // Bounded wait for "canalsim: listening on 127.0.0.1:PORT (...)".
-    while (line.find('\n') == std::string::npos) {
-      pollfd p{out_fd_, POLLIN, 0};
-      if (poll(&p, 1, timeout_ms) <= 0) {
-        throw std::runtime_error("canalsim serve printed no ready line in time");
-      }
-      char buffer[256];
-      const ssize_t got = read(out_fd_, buffer, sizeof(buffer));
-      if (got <= 0) throw std::runtime_error("canalsim serve exited before its ready line");
-      line.append(buffer, static_cast<std::size_t>(got));
-    }
-    ready_line_ = line.substr(0, line.find('\n'));
-    const std::string key = "listening on 127.0.0.1:";
-    const std::size_t at = ready_line_.find(key);
-    if (at == std::string::npos) throw std::runtime_error("unexpected line: " + ready_line_);
-    port_ = std::stoi(ready_line_.substr(at + key.size()));
+  static ChildOptions Options(const std::vector<std::string>& args,
+                              const std::filesystem::path& stderr_path) {
+    ChildOptions o;
+    o.argv = {CanalsimProgram(), "serve", "--listen", "127.0.0.1:0"};
+    o.argv.insert(o.argv.end(), args.begin(), args.end());
+    o.stderr_path = stderr_path;
+    return o;
   }
 
-  pid_t pid_ = -1;
-  int out_fd_ = -1;
+  ChildProcess child_;
   int port_ = 0;
-  int exit_code_ = -1;
   std::string ready_line_;
 };
 

@@ -3,6 +3,8 @@
 // only when a test says so.  Expected numbers come from the register map (docs/register-map.md,
 // 0-based addresses written out here on purpose), the canal file (target depths, flows) and the
 // PLC file config/sim/plc/asce2.toml (rate 0.005 m/s, 10 s steps, 300 s heartbeat timeout).
+#include <unistd.h>
+
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <modbus/modbus.h>
@@ -117,15 +119,13 @@ TEST_F(ServeTest, RegistersHoldTheSteadyState) {
   EXPECT_NEAR(m.Input(kIrPool2Level), 2100, 1);
 }
 
-// Runs a shell command with a bounded time and returns its stdout.
+// Runs a shell command with a bounded time (30 s) and returns its stdout.
 std::string Capture(const std::string& command) {
-  std::string out;
-  FILE* p = popen(("timeout 30 " + command).c_str(), "r");
-  if (p == nullptr) return out;
-  char buffer[512];
-  while (std::fgets(buffer, sizeof(buffer), p) != nullptr) out += buffer;
-  pclose(p);
-  return out;
+  // Per process: ctest may run this program's tests side by side.
+  static int runs = 0;
+  const std::string name =
+      "serve_capture_" + std::to_string(getpid()) + "_" + std::to_string(++runs);
+  return RunProgramWithin(command, TestDirectory(name), 30).out;
 }
 
 // mbpoll prints "[n]: \tvalue" per register.

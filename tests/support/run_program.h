@@ -1,11 +1,11 @@
 #pragma once
-#include <sys/wait.h>
-
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <string>
+
+#include "tests/support/child_process.h"
 
 namespace canalid::testing {
 
@@ -35,22 +35,24 @@ inline void WriteFile(const std::filesystem::path& path, const std::string& text
   std::ofstream(path) << text;
 }
 
-/// Runs `command` through the shell with stdout and stderr captured in files of `dir`; the
-/// program runs to completion (no timing involved).
+/// Runs `command` through the shell (a ChildProcess: stdin /dev/null, stdout also written to
+/// dir/stdout.txt, stderr to dir/stderr.txt) to completion, with no time limit of its own.
 inline ProgramRun RunProgram(const std::string& command, const std::filesystem::path& dir) {
-  const auto out = dir / "stdout.txt";
-  const auto err = dir / "stderr.txt";
-  const std::string full = command + " >" + out.string() + " 2>" + err.string() + " </dev/null";
-  const int status = std::system(full.c_str());
+  ChildOptions options;
+  options.argv = {"/bin/sh", "-c", command};
+  options.log_path = dir / "stdout.txt";
+  options.stderr_path = dir / "stderr.txt";
+  ChildProcess child(options);
   ProgramRun run;
-  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  run.out = ReadFile(out);
-  run.err = ReadFile(err);
+  run.exit_code = child.WaitExit(std::numeric_limits<int>::max());
+  run.out = child.output();
+  run.err = ReadFile(options.stderr_path);
   return run;
 }
 
 /// RunProgram with a time limit of the test's own: the child is killed after `seconds` (coreutils
-/// timeout, exit code 124), so a regression that hangs fails instead of stalling the suite.
+/// timeout, exit code 124, which also stops what the command started), so a regression that hangs
+/// fails instead of stalling the suite.
 inline ProgramRun RunProgramWithin(const std::string& command, const std::filesystem::path& dir,
                                    int seconds) {
   return RunProgram("timeout --kill-after=5 " + std::to_string(seconds) + " " + command, dir);
