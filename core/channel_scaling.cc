@@ -8,17 +8,13 @@
 namespace canalid::core {
 namespace {
 
+// @pre r.size() == 2 (checked by the callers).
 uint32_t Combine(WordOrder order, std::span<const uint16_t> r) {
-  const uint32_t high = order == WordOrder::kHighWordFirst ? r[0] : r[1];
-  const uint32_t low = order == WordOrder::kHighWordFirst ? r[1] : r[0];
-  return (high << 16) | low;
+  return DecodeUint32(r.first<2>(), order);
 }
 
 void Split(WordOrder order, uint32_t bits, std::span<uint16_t> r) {
-  const auto high = static_cast<uint16_t>(bits >> 16);
-  const auto low = static_cast<uint16_t>(bits & 0xFFFFu);
-  r[0] = order == WordOrder::kHighWordFirst ? high : low;
-  r[1] = order == WordOrder::kHighWordFirst ? low : high;
+  EncodeUint32(bits, order, r.first<2>());
 }
 
 }  // namespace

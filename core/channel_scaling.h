@@ -2,6 +2,8 @@
 #include <cstdint>
 #include <span>
 
+#include "core/register_codec.h"
+
 namespace canalid::core {
 
 /// How a channel's raw value is laid out in 16-bit Modbus registers.
@@ -10,11 +12,7 @@ namespace canalid::core {
 ///   kF32: two registers forming an IEEE 754 binary32 bit pattern.
 enum class RegisterType { kU16, kI16, kU32, kI32, kF32 };
 
-/// Order of the two 16-bit words of a 32-bit value (bytes inside a register are always big
-/// endian, as Modbus specifies).
-///   kHighWordFirst: register[0] holds bits 31..16 (Modbus "big endian", ABCD).
-///   kLowWordFirst:  register[0] holds bits 15..0 (word swapped, CDAB).
-enum class WordOrder { kHighWordFirst, kLowWordFirst };
+/// WordOrder (core/register_codec.h): the order of the two 16-bit words of a 32-bit value.
 
 /// Number of registers a type occupies (1 or 2).
 int RegisterCount(RegisterType type);

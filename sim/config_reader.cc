@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <sstream>
+#include <utility>
 
 namespace canalid::sim {
 namespace {
@@ -18,46 +19,44 @@ ConfigError::ConfigError(std::vector<std::string> problems)
     : std::runtime_error(Join(problems)), problems_(std::move(problems)) {}
 
 std::string KeyPath(std::string_view where, std::string_view key) {
-  return where.empty() ? std::string(key) : std::string(where) + "." + std::string(key);
+  return core::TomlKeyPath(where, key);
 }
 
-ConfigReader::ConfigReader(const std::string& path) : path_(path) {
+namespace {
+
+ConfigError FromTomlError(const core::TomlError& e) {
+  std::vector<std::string> problems;
+  for (const core::TomlIssue& issue : e.issues()) problems.push_back(issue.ToString());
+  return ConfigError(std::move(problems));
+}
+
+core::TomlReader ReadFile(const std::string& path) {
   try {
-    root_ = toml::parse_file(path);
-  } catch (const toml::parse_error& e) {
-    throw SyntaxError(e);
+    return core::TomlReader::FromFile(path);
+  } catch (const core::TomlError& e) {
+    throw FromTomlError(e);
   }
 }
+
+core::TomlReader ReadText(std::string_view text, const std::string& name) {
+  try {
+    return core::TomlReader(text, name);
+  } catch (const core::TomlError& e) {
+    throw FromTomlError(e);
+  }
+}
+
+}  // namespace
+
+ConfigReader::ConfigReader(const std::string& path) : toml_(ReadFile(path)) {}
 
 ConfigReader ConfigReader::FromText(std::string_view text, const std::string& name) {
-  ConfigReader reader;
-  reader.path_ = name;
-  try {
-    reader.root_ = toml::parse(text, name);
-  } catch (const toml::parse_error& e) {
-    throw reader.SyntaxError(e);
-  }
-  return reader;
-}
-
-ConfigError ConfigReader::SyntaxError(const toml::parse_error& e) const {
-  std::ostringstream os;
-  os << path_ << ":" << e.source().begin.line << ":" << e.source().begin.column << ": "
-     << e.description();
-  return ConfigError({os.str()});
+  return ConfigReader(ReadText(text, name));
 }
 
 void ConfigReader::Problem(const toml::source_region& region, const std::string& message) {
-  std::ostringstream os;
-  os << path_ << ":" << region.begin.line << ":" << region.begin.column << ": " << message;
-  // Keep the file's order: problems are found table by table, not line by line.
-  auto at = problems_.begin();
-  while (at != problems_.end() &&
-         (at->first.line < region.begin.line ||
-          (at->first.line == region.begin.line && at->first.column <= region.begin.column))) {
-    ++at;
-  }
-  problems_.insert(at, {region.begin, os.str()});
+  // The message names its key path itself (the simulator's wording).
+  toml_.Problem(region, "", message);
 }
 
 double ConfigReader::Number(const toml::table& table, std::string_view key, std::string_view where,
@@ -122,32 +121,26 @@ std::string ConfigReader::Choice(const toml::table& table, std::string_view key,
                                  std::initializer_list<std::string_view> allowed) {
   std::string value = String(table, key, where, fallback);
   if (std::find(allowed.begin(), allowed.end(), value) == allowed.end()) {
-    std::string list;
-    for (std::string_view a : allowed)
-      list += (list.empty() ? "\"" : ", \"") + std::string(a) + "\"";
     const toml::node* node = table.get(key);
     Problem(node != nullptr ? node->source() : table.source(),
-            "'" + KeyPath(where, key) + "' = \"" + value + "\" must be one of " + list);
+            "'" + KeyPath(where, key) + "' = \"" + value + "\" must be one of " +
+                core::JoinNames(allowed, "\""));
   }
   return value;
 }
 
 void ConfigReader::CheckKeys(const toml::table& table, std::string_view where,
                              std::initializer_list<std::string_view> allowed) {
-  for (const auto& [key, node] : table) {
-    if (std::find(allowed.begin(), allowed.end(), key.str()) == allowed.end()) {
-      std::string list;
-      for (std::string_view a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
-      Problem(key.source(),
-              "unknown key '" + KeyPath(where, key.str()) + "' (allowed: " + list + ")");
-    }
+  for (const auto& [key, region] : core::TomlReader::UnknownKeys(table, allowed)) {
+    Problem(region, "unknown key '" + KeyPath(where, key) +
+                        "' (allowed: " + core::JoinNames(allowed) + ")");
   }
 }
 
 void ConfigReader::Finish() const {
-  if (problems_.empty()) return;
+  if (!toml_.HasProblems()) return;
   std::vector<std::string> messages;
-  for (const auto& [position, message] : problems_) messages.push_back(message);
+  for (const core::TomlIssue& issue : toml_.Issues()) messages.push_back(issue.ToString());
   throw ConfigError(messages);
 }
 

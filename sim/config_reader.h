@@ -1,13 +1,15 @@
 #pragma once
 #include <toml++/toml.h>
+
 #include <cstdint>
 #include <initializer_list>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <string_view>
-#include <utility>
 #include <vector>
+
+#include "core/toml_reader.h"
 
 namespace canalid::sim {
 
@@ -21,8 +23,9 @@ class ConfigError : public std::runtime_error {
   std::vector<std::string> problems_;
 };
 
-/// Reads typed values out of a parsed TOML document and collects the problems (with file, line,
-/// column and key path) instead of stopping at the first one.  Call Finish() at the end.
+/// The simulator's files' vocabulary over core::TomlReader: reads typed values out of a parsed
+/// TOML document and collects the problems ("file:line:column: message", the message naming the
+/// key path) instead of stopping at the first one.  Call Finish() at the end.
 class ConfigReader final {
  public:
   /// Parses the file.  @throws ConfigError with the parser's location on a syntax error.
@@ -30,8 +33,8 @@ class ConfigReader final {
   /// Parses `text` as if it were the contents of the file `name` (messages name `name`).
   /// @throws ConfigError with the parser's location on a syntax error.
   static ConfigReader FromText(std::string_view text, const std::string& name);
-  const toml::table& root() const { return root_; }
-  const std::string& path() const { return path_; }
+  const toml::table& root() const { return toml_.root(); }
+  const std::string& path() const { return toml_.name(); }
 
   /// A number in [lo, hi]; a missing key yields `fallback` or, without one, a problem.
   double Number(const toml::table& table, std::string_view key, std::string_view where,
@@ -49,17 +52,14 @@ class ConfigReader final {
   void CheckKeys(const toml::table& table, std::string_view where,
                  std::initializer_list<std::string_view> allowed);
   void Problem(const toml::source_region& region, const std::string& message);
-  bool HasProblems() const { return !problems_.empty(); }
+  bool HasProblems() const { return toml_.HasProblems(); }
   /// @throws ConfigError if any problem was recorded.
   void Finish() const;
 
  private:
-  ConfigReader() = default;
-  ConfigError SyntaxError(const toml::parse_error& e) const;
+  explicit ConfigReader(core::TomlReader toml) : toml_(std::move(toml)) {}
 
-  std::string path_;
-  toml::table root_;
-  std::vector<std::pair<toml::source_position, std::string>> problems_;
+  core::TomlReader toml_;
 };
 
 /// "where.key" or "key" when where is empty.

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <string>
 
+#include "core/splitmix64.h"
 #include "sim/prbs_sequence.h"
 
 namespace canalid::sim {
@@ -62,14 +63,6 @@ void Apply(SaintVenantCanal* plant, const InputRef& input, double value) {
   }
 }
 
-// SplitMix64 finaliser: independent-looking streams from (seed, column).
-std::uint64_t Mix(std::uint64_t x) {
-  x += 0x9E3779B97F4A7C15ull;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-  return x ^ (x >> 31);
-}
-
 }  // namespace
 
 double InputValue(const Scenario& scenario, const std::vector<std::vector<int>>& prbs,
@@ -118,7 +111,8 @@ RunSummary RunScenario(const Scenario& scenario, std::uint64_t seed, std::ostrea
   }
   std::vector<SensorModel> sensors;
   for (std::size_t c = 0; c < scenario.columns.size(); ++c) {
-    sensors.emplace_back(scenario.columns[c].sensor, Mix(seed * 1000003ull + c));
+    // Independent-looking noise streams from (seed, column).
+    sensors.emplace_back(scenario.columns[c].sensor, core::SplitMix64Hash(seed * 1000003ull + c));
   }
 
   csv << "time_s";

@@ -5,11 +5,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <fstream>
 #include <limits>
 #include <map>
 #include <set>
-#include <sstream>
 #include <utility>
 
 namespace canalid::daemon {
@@ -23,71 +21,36 @@ using core::ReachConfig;
 
 std::string Quoted(std::string_view s) { return "\"" + std::string(s) + "\""; }
 
-const char* TypeName(const toml::node& node) {
-  switch (node.type()) {
-    case toml::node_type::string:
-      return "a string";
-    case toml::node_type::integer:
-      return "an integer";
-    case toml::node_type::floating_point:
-      return "a float";
-    case toml::node_type::boolean:
-      return "a boolean";
-    case toml::node_type::table:
-      return "a table";
-    case toml::node_type::array:
-      return "an array";
-    default:
-      return "a date or time";
-  }
-}
-
-std::string JoinKeys(std::initializer_list<std::string_view> keys) {
-  std::string out;
-  for (std::string_view k : keys) out += (out.empty() ? "" : ", ") + std::string(k);
-  return out;
-}
-
 // Walks the document, filling the config and collecting problems with their positions. Every key
 // read (and every table) records its position under its path, so that problems found later by
 // core::Validate can be placed too.
 class Reader {
  public:
-  explicit Reader(std::string file) : file_(std::move(file)) {}
+  explicit Reader(core::TomlReader& toml) : toml_(toml) {}
 
   void Problem(const toml::source_region& where, std::string path, std::string message) {
-    ConfigIssue issue;
-    issue.file = file_;
-    issue.line = where.begin.line == 0 ? 1 : static_cast<int>(where.begin.line);
-    issue.column = where.begin.column == 0 ? 1 : static_cast<int>(where.begin.column);
-    issue.path = std::move(path);
-    issue.message = std::move(message);
-    if (!placing_) reported_.insert(issue.path);
-    issues_.push_back(std::move(issue));
+    reported_.insert(path);
+    toml_.Problem(where, std::move(path), std::move(message));
   }
 
-  void Mark(const std::string& path, const toml::source_region& where) {
-    positions_.emplace(path, where);
-  }
+  void Mark(const std::string& path, const toml::source_region& where) { toml_.Mark(path, where); }
 
   // Unknown keys are errors; `conditional` maps keys allowed only elsewhere to the reason.
   void Keys(const toml::table& table, const std::string& path,
             std::initializer_list<std::string_view> allowed,
             const std::map<std::string, std::string>& conditional = {}) {
-    for (const auto& [key, node] : table) {
-      const std::string k(key.str());
-      if (std::find(allowed.begin(), allowed.end(), k) != allowed.end()) continue;
+    for (const auto& [k, where] : core::TomlReader::UnknownKeys(table, allowed)) {
       const auto it = conditional.find(k);
       if (it != conditional.end()) {
-        Problem(key.source(), Join(path, k), "only allowed when " + it->second);
+        Problem(where, Join(path, k), "only allowed when " + it->second);
       } else {
-        Problem(key.source(), Join(path, k), "unknown key (allowed: " + JoinKeys(allowed) + ")");
+        Problem(where, Join(path, k), "unknown key (allowed: " + core::JoinNames(allowed) + ")");
       }
     }
   }
 
   static std::string Join(const std::string& path, std::string_view key) {
-    return path.empty() ? std::string(key) : path + "." + std::string(key);
+    return core::TomlKeyPath(path, key);
   }
 
   const toml::node* Get(const toml::table& table, const std::string& path, std::string_view key,
@@ -111,7 +74,7 @@ class Reader {
       out = static_cast<double>(i->get());
     } else {
       Problem(node->source(), Join(path, key),
-              std::string("expected a number, got ") + TypeName(*node));
+              std::string("expected a number, got ") + core::TomlTypeName(*node));
     }
   }
 
@@ -131,7 +94,7 @@ class Reader {
     const auto* i = node->as_integer();
     if (i == nullptr) {
       Problem(node->source(), Join(path, key),
-              std::string("expected an integer, got ") + TypeName(*node));
+              std::string("expected an integer, got ") + core::TomlTypeName(*node));
       return;
     }
     const std::int64_t v = i->get();
@@ -151,7 +114,7 @@ class Reader {
       out = b->get();
     } else {
       Problem(node->source(), Join(path, key),
-              std::string("expected a boolean, got ") + TypeName(*node));
+              std::string("expected a boolean, got ") + core::TomlTypeName(*node));
     }
   }
 
@@ -164,7 +127,7 @@ class Reader {
       return true;
     }
     Problem(node->source(), Join(path, key),
-            std::string("expected a string, got ") + TypeName(*node));
+            std::string("expected a string, got ") + core::TomlTypeName(*node));
     return false;
   }
 
@@ -173,7 +136,7 @@ class Reader {
     const auto* s = node.as_string();
     if (s == nullptr) {
       Problem(node.source(), path,
-              std::string("expected a string, got ") + TypeName(node) +
+              std::string("expected a string, got ") + core::TomlTypeName(node) +
                   " (allowed: " + core::AllowedNames<E>() + ")");
       return false;
     }
@@ -202,8 +165,8 @@ class Reader {
     const auto* array = node->as_array();
     if (array == nullptr) {
       Problem(node->source(), Join(path, key),
-              std::string("expected an array, got ") + TypeName(*node) + " (allowed: of " +
-                  core::AllowedNames<E>() + ")");
+              std::string("expected an array, got ") + core::TomlTypeName(*node) +
+                  " (allowed: of " + core::AllowedNames<E>() + ")");
       return;
     }
     out.clear();
@@ -222,7 +185,7 @@ class Reader {
     if (node == nullptr) return nullptr;
     if (const auto* table = node->as_table()) return table;
     Problem(node->source(), Join(path, key),
-            std::string("expected a table, got ") + TypeName(*node));
+            std::string("expected a table, got ") + core::TomlTypeName(*node));
     return nullptr;
   }
 
@@ -235,7 +198,7 @@ class Reader {
     if (array == nullptr || !array->is_array_of_tables()) {
       Problem(node->source(), std::string(key),
               std::string("expected an array of tables [[") + std::string(key) + "]], got " +
-                  TypeName(*node));
+                  core::TomlTypeName(*node));
       return;
     }
     for (std::size_t i = 0; i < array->size(); ++i) {
@@ -250,42 +213,12 @@ class Reader {
   void Place(const core::ConfigProblem& problem) {
     // A key that could not be read keeps its default, which Validate may then flag again.
     if (reported_.count(problem.path) != 0) return;
-    placing_ = true;
-    std::string path = problem.path;
-    while (!path.empty()) {
-      const auto it = positions_.find(path);
-      if (it != positions_.end()) {
-        Problem(it->second, problem.path, problem.message);
-        placing_ = false;
-        return;
-      }
-      // "reach[0].level" -> "reach[0]" -> "reach" -> "" (the file's start).
-      const std::size_t dot = path.rfind('.');
-      const std::size_t bracket = path.rfind('[');
-      std::size_t cut = 0;
-      if (dot != std::string::npos) cut = dot;
-      if (bracket != std::string::npos && (dot == std::string::npos || bracket > dot)) {
-        cut = bracket;
-      }
-      path = path.substr(0, cut);
-    }
-    Problem(toml::source_region{}, problem.path, problem.message);
-    placing_ = false;
-  }
-
-  std::vector<ConfigIssue> Take() {
-    std::stable_sort(issues_.begin(), issues_.end(), [](const auto& a, const auto& b) {
-      return std::pair(a.line, a.column) < std::pair(b.line, b.column);
-    });
-    return std::move(issues_);
+    toml_.Problem(toml_.Locate(problem.path), problem.path, problem.message);
   }
 
  private:
-  std::string file_;
-  std::map<std::string, toml::source_region> positions_;
+  core::TomlReader& toml_;
   std::set<std::string> reported_;  // paths with a problem found while reading
-  bool placing_ = false;
-  std::vector<ConfigIssue> issues_;
 };
 
 void ReadDaemon(Reader& r, const toml::table& root, DaemonConfig& c) {
@@ -467,38 +400,9 @@ void ReadCommands(Reader& r, const toml::table& root, DaemonConfig& c) {
   r.EnumList(*t, "commands", "accepted", c.commands.accepted);
 }
 
-}  // namespace
-
-std::string ConfigIssue::ToString() const {
-  std::string out = file + ":" + std::to_string(line) + ":" + std::to_string(column) + ": ";
-  if (!path.empty()) out += path + ": ";
-  return out + message;
-}
-
-namespace {
-std::string JoinIssues(const std::vector<ConfigIssue>& issues) {
-  std::string out;
-  for (const ConfigIssue& issue : issues) out += (out.empty() ? "" : "\n") + issue.ToString();
-  return out;
-}
-}  // namespace
-
-ConfigError::ConfigError(std::vector<ConfigIssue> issues)
-    : std::runtime_error(JoinIssues(issues)), issues_(std::move(issues)) {}
-
-DaemonConfig ParseDaemonConfig(std::string_view text, const std::string& name) {
-  toml::table root;
-  try {
-    root = toml::parse(text, name);
-  } catch (const toml::parse_error& e) {
-    ConfigIssue issue;
-    issue.file = name;
-    issue.line = static_cast<int>(e.source().begin.line);
-    issue.column = static_cast<int>(e.source().begin.column);
-    issue.message = std::string(e.description());
-    throw ConfigError({issue});
-  }
-  Reader r(name);
+DaemonConfig Parse(core::TomlReader& toml) {
+  const toml::table& root = toml.root();
+  Reader r(toml);
   DaemonConfig c;
   r.Keys(root, "", {"daemon", "lcm", "plc", "channel", "reach", "experiment", "commands"});
   ReadDaemon(r, root, c);
@@ -517,22 +421,20 @@ DaemonConfig ParseDaemonConfig(std::string_view text, const std::string& name) {
   });
   ReadCommands(r, root, c);
   for (const core::ConfigProblem& problem : core::Validate(c)) r.Place(problem);
-  std::vector<ConfigIssue> issues = r.Take();
-  if (!issues.empty()) throw ConfigError(std::move(issues));
+  if (toml.HasProblems()) throw ConfigError(toml.Issues());
   return c;
 }
 
+}  // namespace
+
+DaemonConfig ParseDaemonConfig(std::string_view text, const std::string& name) {
+  core::TomlReader toml(text, name);  // throws the syntax error alone
+  return Parse(toml);
+}
+
 DaemonConfig LoadDaemonConfig(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  if (in) text << in.rdbuf();
-  if (!in) {
-    ConfigIssue issue;
-    issue.file = path;
-    issue.message = "cannot read the file";
-    throw ConfigError({issue});
-  }
-  return ParseDaemonConfig(text.str(), path);
+  core::TomlReader toml = core::TomlReader::FromFile(path);
+  return Parse(toml);
 }
 
 }  // namespace canalid::daemon

@@ -1,35 +1,21 @@
 #pragma once
-#include <stdexcept>
 #include <string>
 #include <string_view>
-#include <vector>
 
 #include "core/daemon_config.h"
+#include "core/toml_reader.h"
 
 namespace canalid::daemon {
 
 /// One problem of a configuration file, printed as
 ///   file:line:column: key.path: message
-/// (line and column 1-based; the key's or its value's position, or its table's when it is missing).
-struct ConfigIssue {
-  std::string file;
-  int line = 1;
-  int column = 1;
-  std::string path;  ///< TOML key path, 0-based array indices: "channel[2].plc"; "" for syntax
-  std::string message;
-  std::string ToString() const;
-};
+/// (line and column 1-based; the key's or its value's position, or its table's when it is missing;
+/// path "" for a syntax error).
+using ConfigIssue = core::TomlIssue;
 
 /// Every problem of a configuration at once, sorted by position. what() is all of them, one per
 /// line.
-class ConfigError : public std::runtime_error {
- public:
-  explicit ConfigError(std::vector<ConfigIssue> issues);
-  const std::vector<ConfigIssue>& issues() const { return issues_; }
-
- private:
-  std::vector<ConfigIssue> issues_;
-};
+using ConfigError = core::TomlError;
 
 /// Parses canalidd's TOML configuration (docs/configuration.md) strictly: unknown keys and
 /// tables, wrong types, missing required keys, keys of another transport or mode, and every

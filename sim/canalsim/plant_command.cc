@@ -10,7 +10,7 @@
 
 #include "drivers/csv/csv_table.h"
 #include "drivers/json/model_json_read.h"
-#include "sim/model_json/model_plant_json.h"
+#include "sim/canalsim/model_plant_json.h"
 
 namespace canalid::sim {
 namespace {

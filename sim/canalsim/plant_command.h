@@ -5,7 +5,7 @@
 namespace canalid::sim {
 
 /// `canalsim plant`: a transfer-function plant built from a `canalid identify` model JSON
-/// (sim/model_json/model_plant_json.h) driven row by row with the inputs of a CSV, its output
+/// (sim/canalsim/model_plant_json.h) driven row by row with the inputs of a CSV, its output
 /// written as CSV: the fast plant for unit tests and rigs that do not need Saint-Venant.
 /// Registers the sub-command and its options on construction; Run() after a successful parse.
 class PlantCommand final {

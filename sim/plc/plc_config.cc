@@ -138,7 +138,7 @@ PlcConfig ReadPlcConfig(ConfigReader& reader, const Canal& canal) {
            "input_scaled_base", "input_float_base", "holding_scaled_base", "holding_float_base"});
       const std::string order =
           reader.Choice(*t, "float_word_order", w, "abcd", {"abcd", "cdab", "badc", "dcba"});
-      ParseWordOrder(order, &c.word_order);
+      c.word_order = core::WordOrderFromLetters(order).value_or(c.word_order);
       c.level_unit_m = reader.Number(*t, "level_unit_m", w, c.level_unit_m, 1e-6, 10.0);
       c.flow_unit_m3s = reader.Number(*t, "flow_unit_m3s", w, c.flow_unit_m3s, 1e-6, 10.0);
       c.setting_unit_m = reader.Number(*t, "setting_unit_m", w, c.setting_unit_m, 1e-6, 10.0);

@@ -3,8 +3,8 @@
 #include <string_view>
 #include <vector>
 
+#include "core/register_codec.h"
 #include "sim/canal.h"
-#include "sim/plc/register_codec.h"
 
 namespace canalid::sim::plc {
 
@@ -29,7 +29,7 @@ struct PoolPlcConfig {
 struct PlcConfig {
   double plant_step_s = 10.0;        ///< plant time step (s of canal time).
   double heartbeat_timeout_s = 0.0;  ///< plant seconds without a heartbeat change; 0 disables.
-  WordOrder word_order = WordOrder::kAbcd;
+  core::WordOrder word_order = core::WordOrder::kHighWordFirst;  ///< of the float registers
   double level_unit_m = 0.001;    ///< one count of a 16-bit level register (m).
   double flow_unit_m3s = 0.001;   ///< one count of a 16-bit flow register (m^3/s).
   double setting_unit_m = 0.001;  ///< one count of a 16-bit gate/weir setting (m).

@@ -1,12 +1,18 @@
 #include "sim/plc/plc_simulation.h"
 
 #include <cmath>
+#include <span>
 #include <stdexcept>
 
-#include "sim/plc/register_codec.h"
+#include "core/register_codec.h"
 
 namespace canalid::sim::plc {
 namespace {
+
+// The two registers of a 32-bit value at `at`.
+std::span<std::uint16_t, 2> Pair(std::vector<std::uint16_t>& registers, int at) {
+  return std::span(registers).subspan(static_cast<std::size_t>(at)).first<2>();
+}
 
 std::vector<double> NominalStructures(const SaintVenantCanal& plant, const PlcConfig& config) {
   std::vector<double> v;
@@ -80,16 +86,16 @@ bool PlcSimulation::TakeDrop() {
 void PlcSimulation::OnHoldingWrite(int first, int count) {
   const double now_s = plant_.time_s();
   if (Touches(first, count, kHrHeartbeat, 1)) logic_.Heartbeat(holding_[kHrHeartbeat], now_s);
-  const WordOrder order = config_.word_order;
+  const core::WordOrder order = config_.word_order;
   bool any_setpoint = false;
   if (plant_.canal().upstream.type == UpstreamBoundary::Type::kFlow) {
     if (Touches(first, count, kHrUpstreamScaled, 1)) {
       logic_.SetUpstreamSetpoint(
-          DecodeScaled16(holding_[kHrUpstreamScaled], config_.flow_unit_m3s));
+          core::DecodeScaled16(holding_[kHrUpstreamScaled], config_.flow_unit_m3s));
       any_setpoint = true;
     }
     if (Touches(first, count, kHrUpstreamFloat, 2)) {
-      logic_.SetUpstreamSetpoint(DecodeFloat32(&holding_[kHrUpstreamFloat], order));
+      logic_.SetUpstreamSetpoint(core::DecodeFloat32(Pair(holding_, kHrUpstreamFloat), order));
       any_setpoint = true;
     }
   }
@@ -102,19 +108,19 @@ void PlcSimulation::OnHoldingWrite(int first, int count) {
     const int sf = HoldingFloatAddress(config_, r, kStructureSetpoint);
     const int of = HoldingFloatAddress(config_, r, kOfftakeSetpoint);
     if (Touches(first, count, ss, 1)) {
-      logic_.SetStructureSetpoint(r, DecodeScaled16(holding_[ss], su));
+      logic_.SetStructureSetpoint(r, core::DecodeScaled16(holding_[ss], su));
       any_setpoint = true;
     }
     if (Touches(first, count, sf, 2)) {
-      logic_.SetStructureSetpoint(r, DecodeFloat32(&holding_[sf], order));
+      logic_.SetStructureSetpoint(r, core::DecodeFloat32(Pair(holding_, sf), order));
       any_setpoint = true;
     }
     if (Touches(first, count, os, 1)) {
-      logic_.SetOfftakeSetpoint(r, DecodeScaled16(holding_[os], ou));
+      logic_.SetOfftakeSetpoint(r, core::DecodeScaled16(holding_[os], ou));
       any_setpoint = true;
     }
     if (Touches(first, count, of, 2)) {
-      logic_.SetOfftakeSetpoint(r, DecodeFloat32(&holding_[of], order));
+      logic_.SetOfftakeSetpoint(r, core::DecodeFloat32(Pair(holding_, of), order));
       any_setpoint = true;
     }
   }
@@ -141,15 +147,15 @@ void PlcSimulation::OnHoldingWrite(int first, int count) {
 }
 
 void PlcSimulation::PutInput(int record, int field, double value, double unit) {
-  input_[InputScaledAddress(config_, record, field)] = EncodeScaled16(value, unit);
-  EncodeFloat32(static_cast<float>(value), config_.word_order,
-                &input_[InputFloatAddress(config_, record, field)]);
+  input_[InputScaledAddress(config_, record, field)] = core::EncodeScaled16(value, unit);
+  core::EncodeFloat32(static_cast<float>(value), config_.word_order,
+                      Pair(input_, InputFloatAddress(config_, record, field)));
 }
 
 void PlcSimulation::PutHolding(int record, int field, double value, double unit) {
-  holding_[HoldingScaledAddress(config_, record, field)] = EncodeScaled16(value, unit);
-  EncodeFloat32(static_cast<float>(value), config_.word_order,
-                &holding_[HoldingFloatAddress(config_, record, field)]);
+  holding_[HoldingScaledAddress(config_, record, field)] = core::EncodeScaled16(value, unit);
+  core::EncodeFloat32(static_cast<float>(value), config_.word_order,
+                      Pair(holding_, HoldingFloatAddress(config_, record, field)));
 }
 
 void PlcSimulation::PublishHoldings() {
@@ -157,8 +163,9 @@ void PlcSimulation::PublishHoldings() {
   const bool flow_boundary = plant_.canal().upstream.type == UpstreamBoundary::Type::kFlow;
   const double upstream = flow_boundary ? logic_.upstream_setpoint_m3s() : plant_.upstream();
   holding_[kHrUpstreamScaled] =
-      EncodeScaled16(upstream, flow_boundary ? config_.flow_unit_m3s : config_.level_unit_m);
-  EncodeFloat32(static_cast<float>(upstream), config_.word_order, &holding_[kHrUpstreamFloat]);
+      core::EncodeScaled16(upstream, flow_boundary ? config_.flow_unit_m3s : config_.level_unit_m);
+  core::EncodeFloat32(static_cast<float>(upstream), config_.word_order,
+                      Pair(holding_, kHrUpstreamFloat));
   for (int r = 0; r < logic_.num_records(); ++r) {
     const Pool& pool = plant_.canal().pools[config_.pools[r].pool];
     PutHolding(r, kStructureSetpoint, logic_.structure_setpoint(r),
@@ -175,7 +182,8 @@ double PlcSimulation::Level(int record, double true_depth_m, bool downstream) co
   if ((holding_[kHrFaultSpikeMask] >> record) & 1u) {
     const int period = holding_[kHrFaultSpikePeriod] == 0 ? 2 : holding_[kHrFaultSpikePeriod];
     if (steps_ % period == 0) {
-      return true_depth_m + DecodeScaled16(holding_[kHrFaultSpikeAmplitude], config_.level_unit_m);
+      return true_depth_m +
+             core::DecodeScaled16(holding_[kHrFaultSpikeAmplitude], config_.level_unit_m);
     }
   }
   return true_depth_m;
@@ -197,8 +205,9 @@ void PlcSimulation::PublishInputs() {
   input_[kIrStatus] = status;
   input_[kIrFaults] = faults;
   const double t_s = plant_.time_s();
-  EncodeFloat32(static_cast<float>(t_s), config_.word_order, &input_[kIrTimeFloat]);
-  EncodeUint32(static_cast<std::uint32_t>(std::floor(t_s)), &input_[kIrTimeSeconds]);
+  core::EncodeFloat32(static_cast<float>(t_s), config_.word_order, Pair(input_, kIrTimeFloat));
+  core::EncodeUint32(static_cast<std::uint32_t>(std::floor(t_s)), core::WordOrder::kHighWordFirst,
+                     Pair(input_, kIrTimeSeconds));
   input_[kIrStepCount] = static_cast<std::uint16_t>(steps_ & 0xFFFF);
   input_[kIrPoolCount] = static_cast<std::uint16_t>(config_.pools.size());
   input_[kIrHeartbeat] = logic_.heartbeat();

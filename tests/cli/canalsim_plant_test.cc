@@ -1,7 +1,8 @@
-// `canalsim plant`: the plant of a model JSON (sim/model_json) driven by a CSV from the command
-// line.  Its output must equal `canalid simulate` of the same JSON on the same CSV (the two share
-// the models' equations but not their code: batch simulators in core/ against the streaming
-// plants of sim/), for a kind of each family, and its errors are one line with exit 78.
+// `canalsim plant`: the plant of a model JSON (sim/canalsim/model_plant_json.h) driven by a CSV
+// from the command line.  Its output must equal `canalid simulate` of the same JSON on the same
+// CSV (the two share the models' equations but not their code: batch simulators in core/ against
+// the streaming plants of sim/), for a kind of each family, and its errors are one line with
+// exit 78.
 #include <gtest/gtest.h>
 
 #include <algorithm>

@@ -3,19 +3,15 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/splitmix64.h"
+
 namespace canalid::core::testdata {
 
-/// SplitMix64.
+/// SplitMix64 (core/splitmix64.h) with normal noise on top.
 class TestRandom {
  public:
-  explicit TestRandom(std::uint64_t seed) : state_(seed) {}
-  double Uniform() {  // [0, 1)
-    std::uint64_t z = (state_ += 0x9E3779B97F4A7C15ULL);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-    z ^= z >> 31;
-    return static_cast<double>(z >> 11) * 0x1.0p-53;
-  }
+  explicit TestRandom(std::uint64_t seed) : random_(seed) {}
+  double Uniform() { return random_.NextUniform(); }  // [0, 1)
   double Normal() {  // Irwin-Hall: unit variance, good enough for noise
     double s = -6.0;
     for (int i = 0; i < 12; ++i) s += Uniform();
@@ -23,7 +19,7 @@ class TestRandom {
   }
 
  private:
-  std::uint64_t state_;
+  SplitMix64 random_;
 };
 
 /// PRBS-like two-level signal: a fresh random sign every `clock` samples.

@@ -1,10 +1,10 @@
 // Round trip through the real programs: `canalid identify` writes a model JSON, the plant built
-// from it (sim/model_json) is driven sample by sample with an input record, and its output must
-// equal `canalid simulate` of the same JSON on the same record.  The two share the model's
-// equations but not their code: canalid simulate runs the batch simulators of core/ (OpenLoop
-// regressors times theta for id, core::Simulate for foptd, a fresh Oustaloup simulator for
-// frac-foptd); the plants are streaming implementations in sim/.
-#include "sim/model_json/model_plant_json.h"
+// from it (sim/canalsim/model_plant_json.h) is driven sample by sample with an input record, and
+// its output must equal `canalid simulate` of the same JSON on the same record.  The two share
+// the model's equations but not their code: canalid simulate runs the batch simulators of core/
+// (OpenLoop regressors times theta for id, core::Simulate for foptd, a fresh Oustaloup simulator
+// for frac-foptd); the plants are streaming implementations in sim/.
+#include "sim/canalsim/model_plant_json.h"
 
 #include <gtest/gtest.h>
 

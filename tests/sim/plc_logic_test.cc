@@ -151,7 +151,7 @@ TEST(PlcConfig, LoadsTheAsce2Example) {
   EXPECT_DOUBLE_EQ(c.pools[1].rate_per_s, 0.005);
   EXPECT_DOUBLE_EQ(c.pools[7].setpoint_max, 1.9);
   EXPECT_DOUBLE_EQ(c.heartbeat_timeout_s, 300.0);
-  EXPECT_EQ(c.word_order, WordOrder::kAbcd);
+  EXPECT_EQ(c.word_order, core::WordOrder::kHighWordFirst);
   EXPECT_EQ(c.input_float_base, 300);
 }
 

@@ -6,10 +6,10 @@
 
 #include <string>
 
+#include "core/register_codec.h"
 #include "sim/canal_config.h"
 #include "sim/plc/plc_config.h"
 #include "sim/plc/plc_simulation.h"
-#include "sim/plc/register_codec.h"
 #include "sim/plc/register_map.h"
 
 namespace canalid::sim::plc {
@@ -28,7 +28,7 @@ void Write(PlcSimulation* sim, int address, std::initializer_list<std::uint16_t>
 TEST(PlcSimulation, CdabFloatsInTheImage) {
   const Canal canal = LoadCanal(kCanal);
   PlcConfig config = DefaultPlcConfig(canal);
-  config.word_order = WordOrder::kCdab;
+  config.word_order = core::WordOrder::kLowWordFirst;
   PlcSimulation sim(canal, config, true);
   const std::uint16_t* level =
       &sim.input_registers()[InputFloatAddress(config, 1, kLevelDownstream)];

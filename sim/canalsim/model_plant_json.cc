@@ -1,4 +1,4 @@
-#include "sim/model_json/model_plant_json.h"
+#include "sim/canalsim/model_plant_json.h"
 
 #include <algorithm>
 #include <cmath>

@@ -31,7 +31,8 @@ inline constexpr const char* kModelPlantKinds = "id, arx, foptd, soptd, frac-fop
 /// - "arx": ArxPlant, as many inputs as the model, the model's sample time when recorded; its
 ///   first outputs are `initial_outputs` (`canalid simulate` uses the first max(first_sample, 1)
 ///   measured outputs).
-/// Lives in its own library (canalid_sim_json) because sim/ does not depend on drivers/.
+/// Part of the canalsim program (library canalsim_lib), not of canalid_sim: it reads the JSON
+/// with drivers/, and the simulator library depends on core only.
 /// @throws drivers::ModelJsonError on a bad record, std::invalid_argument on another kind
 ///         (or lpv with a local model other than arx, or without bands), a sample time that does
 ///         not match a discrete model (id, arx, frac-ss, lpv), or empty initial inputs.
