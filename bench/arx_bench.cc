@@ -9,8 +9,8 @@
 
 #include <random>
 
-#include "core/arx.h"
-#include "core/delay_estimation.h"
+#include "core/linear/arx.h"
+#include "core/linear/delay_estimation.h"
 
 namespace canalid::core {
 namespace {

@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "core/command_auth.h"
-#include "core/hmac.h"
+#include "drivers/auth/command_auth.h"
+#include "drivers/auth/hmac.h"
 
 namespace {
 
@@ -17,22 +17,22 @@ constexpr int64_t kNowUs = 1'763'700'000'000'000;
 void BM_HmacSha256(benchmark::State& state) {
   const std::vector<uint8_t> key(32, 0x11);
   const std::vector<uint8_t> data(static_cast<std::size_t>(state.range(0)), 0x5a);
-  for (auto _ : state) benchmark::DoNotOptimize(canalid::core::HmacSha256::Mac(key, data));
+  for (auto _ : state) benchmark::DoNotOptimize(canalid::drivers::HmacSha256::Mac(key, data));
   state.SetBytesProcessed(state.iterations() * state.range(0));
 }
 BENCHMARK(BM_HmacSha256)->Arg(64)->Arg(4096);
 
 void BM_VerifyForgedCommand(benchmark::State& state) {
   const std::vector<uint8_t> key(32, 0x11);
-  canalid::core::CommandAuthenticator auth({.enabled = true, .max_clock_skew_s = 30.0}, key);
-  canalid::core::CommandFields fields;
+  canalid::drivers::CommandAuthenticator auth({.enabled = true, .max_clock_skew_s = 30.0}, key);
+  canalid::drivers::CommandFields fields;
   fields.utime_us = kNowUs;
   fields.counter = 1;
   fields.sender = "operator@scada1";
   fields.kind = 1;
   fields.reach = "pool2";
   fields.argument = "prbs";
-  const auto mac = canalid::core::SignCommand(std::vector<uint8_t>(32, 0x22), fields);
+  const auto mac = canalid::drivers::SignCommand(std::vector<uint8_t>(32, 0x22), fields);
   fields.mac = mac;
   for (auto _ : state) benchmark::DoNotOptimize(auth.Verify(fields, kNowUs));
 }

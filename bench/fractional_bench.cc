@@ -5,14 +5,14 @@
 #include <cmath>
 #include <random>
 
-#include "core/fractional_foptd.h"
-#include "core/fractional_foptd_fit.h"
-#include "core/fractional_simulator.h"
+#include "core/fractional/fractional_foptd.h"
+#include "core/fractional/fractional_foptd_fit.h"
+#include "core/fractional/fractional_simulator.h"
 
 namespace canalid::core {
 namespace {
 
-const FractionalFoptdParams kNominal{0.372, 10.975, 0.8, 4.05};  // seed 2's nominal plant
+const FractionalFoptdParams kNominal{0.372, 10.975, 0.8, 4.05};  // the flume paper's nominal plant
 constexpr double kTs = 0.15;
 
 // GL1 cost per internal step is one dot product over the memory (here L = 1000, 1 substep).

@@ -1,15 +1,16 @@
 // ID model timings.  Run:  build/bench/id_bench --benchmark_repetitions=5
 //   --benchmark_report_aggregates_only=true
-// IdDelayScan/day: FitIdModel on one day of 1 s data (86 400 samples) with candidate delays
+// IdDelayScan/day: FitIntegratorDelay on one day of 1 s data (86 400 samples) with candidate delays
 //   nk = 0..120: for each candidate the regression [Q, q_in(k-nk), 1, k] is solved by QR.
-// IdPipeline/day: the whole `canalid identify --model id` core (Hampel on the level, the scan,
+// IdentifyIntegratorDelay/day: the whole `canalid identify --model id` core (Hampel on the level,
+// the scan,
 //   closed-loop detection, IV and correlation cross-checks).
 #include <benchmark/benchmark.h>
 
 #include <random>
 
-#include "core/id_model.h"
-#include "core/id_pipeline.h"
+#include "core/integrator_delay/identify_integrator_delay.h"
+#include "core/integrator_delay/integrator_delay_model.h"
 
 namespace canalid::core {
 namespace {
@@ -38,11 +39,11 @@ PoolRecord MakeDay() {
 
 void BM_IdDelayScanDay(benchmark::State& state) {
   const PoolRecord r = MakeDay();
-  IdFitOptions options;
+  IntegratorDelayFitOptions options;
   options.min_nk = 600;  // 121 candidates around the truth, as a 0..120 scan at 6 s would be
   options.max_nk = 720;
   for (auto _ : state) {
-    IdFitResult fit = FitIdModel(r.q_in, r.q_out, r.level, 1.0, options);
+    IntegratorDelayFit fit = FitIntegratorDelay(r.q_in, r.q_out, r.level, 1.0, options);
     benchmark::DoNotOptimize(fit.model.b);
   }
   state.SetItemsProcessed(state.iterations() * 121);
@@ -52,11 +53,12 @@ BENCHMARK(BM_IdDelayScanDay)->Unit(benchmark::kMillisecond);
 
 void BM_IdPipelineDay(benchmark::State& state) {
   const PoolRecord r = MakeDay();
-  IdPipelineOptions options;
+  IntegratorDelayIdentificationOptions options;
   options.fit.min_nk = 600;
   options.fit.max_nk = 720;
   for (auto _ : state) {
-    IdPipelineResult result = IdentifyPool(r.q_in, r.q_out, r.level, 1.0, options);
+    IntegratorDelayIdentification result =
+        IdentifyIntegratorDelay(r.q_in, r.q_out, r.level, 1.0, options);
     benchmark::DoNotOptimize(result.fit.model.b);
   }
 }

@@ -94,7 +94,7 @@ std::string MakeLog(std::int64_t samples) {
 // another value replays with the config changed to it (--config).
 void BM_ReplayThroughput(benchmark::State& state) {
   const std::string log = MakeLog(state.range(0));
-  std::optional<canalid::core::DaemonConfig> config;
+  std::optional<canalid::config::DaemonConfig> config;
   if (state.range(1) != 1400) {
     std::string text =
         ReadText(std::string(CANALID_BENCH_SOURCE_DIR) + "/config/canalidd-asce2.toml");

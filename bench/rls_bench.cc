@@ -5,11 +5,11 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/online_arx.h"
-#include "core/online_fractional.h"
-#include "core/online_id.h"
-#include "core/rls.h"
-#include "core/rls_iv.h"
+#include "core/online/online_arx.h"
+#include "core/online/online_fractional.h"
+#include "core/online/online_integrator_delay.h"
+#include "core/online/rls.h"
+#include "core/online/rls_iv.h"
 
 namespace canalid::core {
 namespace {
@@ -108,7 +108,7 @@ BENCHMARK_TEMPLATE(BM_IvRlsUpdate, 4);
 // three-step`: the IvRls<4> bank for the delay plus one OnlineThreeStep per candidate, Rls<8> for
 // F, its simulation and Rls<7> for the level).
 void BM_IdBank64(benchmark::State& state) {
-  OnlineIdOptions options;
+  OnlineIntegratorDelayOptions options;
   options.sample_time_s = 60.0;
   options.max_delay_samples = 63;
   options.rls.forgetting = 0.99;
@@ -119,7 +119,7 @@ void BM_IdBank64(benchmark::State& state) {
                         : variant == 4 ? ClosedLoopMode::kThreeStep
                                        : ClosedLoopMode::kOff;
   options.closed_loop_window_samples = 1000000000;
-  OnlineIdBank bank(options);
+  OnlineIntegratorDelayBank bank(options);
   std::uint64_t seed = 3;
   std::vector<double> q_in(kPool);
   std::vector<double> q_out(kPool);

@@ -5,7 +5,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "core/grunwald_letnikov.h"
+#include "core/fractional/grunwald_letnikov.h"
 
 namespace canalid::sim {
 namespace {

@@ -1,13 +1,14 @@
 #pragma once
 #include <Eigen/Core>
 
-#include "core/commensurate_state_space.h"
+#include "core/fractional/commensurate_state_space.h"
 #include "sim/sampled_plant.h"
 
 namespace canalid::sim {
 
-/// Seed 1's commensurate fractional state space (core/commensurate_state_space.h), alpha = 1/q,
-/// n = 2q states, run sample by sample with the recursion of core::SimulateCommensurate:
+/// The LPV paper's commensurate fractional state space
+/// (core/fractional/commensurate_state_space.h), alpha = 1/q, n = 2q states, run sample by sample
+/// with the recursion of core::SimulateCommensurate:
 ///   x[k+1] = A x[k] + B du[k - nk] - sum_{j=1..min(k+1, L)} w_j x[k+1-j],  y[k] = C x[k],
 /// w_j the Grunwald-Letnikov weights of order alpha.  Unit static gain, started at rest at u0
 /// (the convention of `canalid simulate` for frac-ss records):

@@ -9,7 +9,7 @@
 #include <string_view>
 #include <vector>
 
-#include "core/toml_reader.h"
+#include "core/toml/toml_reader.h"
 
 namespace canalid::sim {
 

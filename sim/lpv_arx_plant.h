@@ -1,7 +1,7 @@
 #pragma once
 #include <Eigen/Core>
 
-#include "core/lpv_model.h"
+#include "core/fractional/lpv_model.h"
 #include "sim/sampled_plant.h"
 
 namespace canalid::sim {

@@ -5,7 +5,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "core/check.h"
+#include "core/numerics/check.h"
 #include "sim/backwater.h"
 
 namespace canalid::sim {

@@ -37,8 +37,8 @@ void FractionalFoptdPlant::Advance(const Eigen::Ref<const Eigen::VectorXd>& inpu
   simulator_.Advance(inputs(0) - initial_input_);
 }
 
-IdLevelPlant::IdLevelPlant(const core::IdModel& model, double p21_s_per_m2, double offset_m,
-                           double drift_m_per_sample, int fit_from_sample,
+IdLevelPlant::IdLevelPlant(const core::IntegratorDelayModel& model, double p21_s_per_m2,
+                           double offset_m, double drift_m_per_sample, int fit_from_sample,
                            double initial_inflow_m3s)
     : model_(model),
       p21_(p21_s_per_m2),

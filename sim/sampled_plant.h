@@ -2,10 +2,10 @@
 #include <Eigen/Core>
 #include <memory>
 
-#include "core/arx.h"
-#include "core/fractional_foptd.h"
-#include "core/fractional_simulator.h"
-#include "core/id_model.h"
+#include "core/fractional/fractional_foptd.h"
+#include "core/fractional/fractional_simulator.h"
+#include "core/integrator_delay/integrator_delay_model.h"
+#include "core/linear/arx.h"
 #include "sim/pool_plant.h"
 
 namespace canalid::sim {
@@ -48,7 +48,8 @@ class FractionalFoptdPlant final : public SampledPlant {
   double sample_time_s_, initial_input_, level_;
 };
 
-/// The integrator-delay level equation of `canalid identify --model id` (core/id_model.h):
+/// The integrator-delay level equation of `canalid identify --model id`
+/// (core/integrator_delay/integrator_delay_model.h):
 ///   Q(k) = Q(k-1) + q_in(k - nk) - q_out(k - 1),  Q(k0 - 1) = 0,
 ///   y(k) = b Q(k) + p21 q_in(k - nk) + c + d (k - k0),
 /// with inputs (q_in, q_out) in m^3/s and y in m.  The plant's sample 0 is the model's sample 0;
@@ -56,7 +57,7 @@ class FractionalFoptdPlant final : public SampledPlant {
 class IdLevelPlant final : public SampledPlant {
  public:
   /// @throws std::invalid_argument unless nk >= 0, Ts > 0, b finite, k0 >= 0.
-  IdLevelPlant(const core::IdModel& model, double p21_s_per_m2, double offset_m,
+  IdLevelPlant(const core::IntegratorDelayModel& model, double p21_s_per_m2, double offset_m,
                double drift_m_per_sample, int fit_from_sample, double initial_inflow_m3s);
   double sample_time_s() const override { return model_.sample_time_s; }
   int input_count() const override { return 2; }
@@ -65,7 +66,7 @@ class IdLevelPlant final : public SampledPlant {
 
  private:
   double DelayedInflow(double inflow_now) const;
-  core::IdModel model_;
+  core::IntegratorDelayModel model_;
   double p21_, offset_m_, drift_m_per_sample_;
   int k0_;
   Eigen::VectorXd inflow_history_;  // ring of the last nk inflows (q_in(k - nk) .. q_in(k - 1))

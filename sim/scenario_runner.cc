@@ -4,7 +4,7 @@
 #include <cstdio>
 #include <string>
 
-#include "core/splitmix64.h"
+#include "core/numerics/splitmix64.h"
 #include "sim/prbs_sequence.h"
 
 namespace canalid::sim {

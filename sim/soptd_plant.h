@@ -1,8 +1,8 @@
 #pragma once
 #include <Eigen/Core>
 
-#include "core/delayed_zoh.h"
-#include "core/process_models.h"
+#include "core/linear/process_models.h"
+#include "core/signal/delayed_zoh.h"
 #include "sim/sampled_plant.h"
 
 namespace canalid::sim {

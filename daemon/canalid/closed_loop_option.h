@@ -1,7 +1,7 @@
 #pragma once
 #include <string>
 
-#include "core/id_model.h"
+#include "core/integrator_delay/integrator_delay_model.h"
 
 namespace CLI {
 class App;

@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-#include "core/commensurate_state_space.h"
-#include "core/fractional_foptd_fit.h"
-#include "core/process_model_fit.h"
+#include "core/fractional/commensurate_state_space.h"
+#include "core/fractional/fractional_foptd_fit.h"
+#include "core/linear/process_model_fit.h"
 #include "daemon/canalid/identify_command.h"
 #include "daemon/canalid/input_error.h"
 #include "daemon/canalid/table_columns.h"
@@ -113,7 +113,8 @@ int RunCompare(const IdentifyOptions& options) {
     std::cout << (options.pretty ? out.dump(2) : out.dump()) << std::endl;
     return 0;
   }
-  std::printf("norm_error = sqrt(ISE/t_f)/|dy| over %zu files (seed 2, Table 1)\n", files.size());
+  std::printf("norm_error = sqrt(ISE/t_f)/|dy| over %zu files (the flume paper, Table 1)\n",
+              files.size());
   std::printf("%-12s %12s %12s %12s\n", "model", "mean", "max", "std");
   for (std::size_t k = 0; k < kinds.size(); ++k) {
     const Summary s = Summarise(errors[k]);

@@ -4,8 +4,8 @@
 #include <iostream>
 #include <stdexcept>
 
-#include "core/experiment_design.h"
-#include "core/prbs.h"
+#include "core/experiment/experiment_design.h"
+#include "core/signal/prbs.h"
 #include "daemon/canalid/cli.h"
 #include "daemon/canalid/input_error.h"
 #include "drivers/csv/csv_table.h"
@@ -59,7 +59,7 @@ void AddDesignCommand(CLI::App& app, DesignOptions& options, int& exit_code) {
   CLI::App* cmd =
       app.add_subcommand("design", "Design a PRBS identification experiment on a pool's inflow");
   cmd->footer(
-      "Rules (domain brief section 3): amplitude 5-10 % of the nominal flow; clock period about "
+      "Rules (docs/references.md): amplitude 5-10 % of the nominal flow; clock period about "
       "half\n"
       "the expected delay, a whole number of samples; the smallest LFSR order whose period lasts "
       "at\n"

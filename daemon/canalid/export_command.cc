@@ -29,7 +29,7 @@ drivers::LogScanResult Scan(const std::string& log, drivers::LogScanOptions opti
 }
 
 int RunExport(const ExportOptions& options) {
-  std::optional<core::DaemonConfig> config;
+  std::optional<config::DaemonConfig> config;
   drivers::LogScanOptions scan;
   scan.prefix = options.prefix;
   if (!options.config.empty()) {

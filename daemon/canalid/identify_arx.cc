@@ -1,8 +1,8 @@
 #include <stdexcept>
 
-#include "core/arx.h"
-#include "core/detrend.h"
-#include "core/metrics.h"
+#include "core/linear/arx.h"
+#include "core/numerics/metrics.h"
+#include "core/signal/detrend.h"
 #include "daemon/canalid/identify_command.h"
 #include "daemon/canalid/input_error.h"
 #include "daemon/canalid/table_columns.h"

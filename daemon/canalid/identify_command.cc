@@ -113,7 +113,7 @@ void AddIdentifyModelOptions(CLI::App& cmd, IdentifyOptions& options) {
   auto* lpv = cmd.add_option_group("LPV (--model lpv)");
   lpv->add_option("--local", options.local,
                   "Local model per band: arx (first order with delay), frac-foptd, frac-ss "
-                  "(with --q), integer (seed 1's k e^-tau s/(s(S s^2+M s+1)))");
+                  "(with --q), integer (the LPV paper's k e^-tau s/(s(S s^2+M s+1)))");
   lpv->add_option("--schedule", options.schedule, "Scheduling column (theta)");
   lpv->add_option("--bands", options.bands, "Band edges b0,b1,...,bn, strictly increasing");
   lpv->add_option("--bands-file", options.bands_file,

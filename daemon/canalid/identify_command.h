@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "core/arx.h"
+#include "core/linear/arx.h"
 
 namespace CLI {
 class App;
@@ -73,7 +73,7 @@ void AddIdentifyModelOptions(CLI::App& cmd, IdentifyOptions& options);
 /// time) filled in.  @throws InputError on bad columns, options or data.
 nlohmann::json IdentifyModel(const IdentifyOptions& options, const drivers::CsvTable& table);
 
-/// One model kind each; they return the model JSON (DESIGN.md keys).  @throws InputError.
+/// One model kind each; they return the model JSON (docs/design.md keys).  @throws InputError.
 nlohmann::json IdentifyId(const IdentifyOptions& options, const drivers::CsvTable& table);
 nlohmann::json IdentifyArx(const IdentifyOptions& options, const drivers::CsvTable& table);
 
@@ -95,7 +95,7 @@ nlohmann::json IdentifyLpv(const IdentifyOptions& options, const drivers::CsvTab
 nlohmann::json IdentifyOnline(const IdentifyOptions& options, const drivers::CsvTable& table);
 
 /// `--compare`: fits every listed kind to every file of the glob in options.input and prints
-/// seed 2's Table 1 (mean, max, std of norm_error per model), or JSON with --json.
+/// the flume paper's Table 1 (mean, max, std of norm_error per model), or JSON with --json.
 int RunCompare(const IdentifyOptions& options);
 
 }  // namespace canalid::cli

@@ -2,9 +2,9 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "core/commensurate_state_space.h"
-#include "core/fractional_foptd_fit.h"
-#include "core/fractional_simulator.h"
+#include "core/fractional/commensurate_state_space.h"
+#include "core/fractional/fractional_foptd_fit.h"
+#include "core/fractional/fractional_simulator.h"
 #include "daemon/canalid/identify_command.h"
 #include "daemon/canalid/input_error.h"
 #include "daemon/canalid/table_columns.h"

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "core/lpv_model.h"
+#include "core/fractional/lpv_model.h"
 #include "daemon/canalid/identify_command.h"
 #include "daemon/canalid/input_error.h"
 #include "daemon/canalid/table_columns.h"
@@ -87,7 +87,7 @@ core::LocalModelKind LocalKind(const IdentifyOptions& options, const drivers::Cs
   if (options.local == "frac-foptd") return core::FractionalFoptdKind();
   if (options.local == "frac-ss")
     return core::CommensurateKind(options.q > 0 ? options.q : 2, max_delay);
-  if (options.local == "integer") return core::IntegerSeed1Kind();
+  if (options.local == "integer") return core::IntegratorWaveKind();
   throw InputError("--local: unknown local model kind '" + options.local +
                    "' (arx, frac-foptd, frac-ss, integer)");
 }

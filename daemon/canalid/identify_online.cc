@@ -11,13 +11,11 @@
 #include <string>
 #include <vector>
 
-#include "core/arx.h"
-#include "core/detrend.h"
-#include "core/id_pipeline.h"
-#include "core/metrics.h"
-#include "core/online_id.h"
-#include "core/outliers.h"
-#include "core/rls.h"
+#include "core/integrator_delay/identify_integrator_delay.h"
+#include "core/linear/arx.h"
+#include "core/numerics/metrics.h"
+#include "core/online/online_integrator_delay.h"
+#include "core/online/rls.h"
 #include "daemon/canalid/closed_loop_option.h"
 #include "daemon/canalid/identify_command.h"
 #include "daemon/canalid/input_error.h"
@@ -120,14 +118,14 @@ nlohmann::json OnlineId(const IdentifyOptions& options, const drivers::CsvTable&
   const double ts = table.sample_time_s();
   const auto n = level.size();
   // The batch pipeline's cleaning, so online and batch see the same level.
-  const core::IdPipelineOptions pipeline;
+  const core::IntegratorDelayIdentificationOptions pipeline;
   core::OutlierReport outliers;
   if (!options.keep_outliers) {
     core::OutlierResult cleaned = core::RemoveOutliers(level, pipeline.level_outliers);
     level = cleaned.cleaned;
     outliers = cleaned.report;
   }
-  core::OnlineIdOptions id;
+  core::OnlineIntegratorDelayOptions id;
   id.sample_time_s = ts;
   id.min_delay_samples = 0;
   id.max_delay_samples = options.max_delay_s > 0.0
@@ -137,7 +135,7 @@ nlohmann::json OnlineId(const IdentifyOptions& options, const drivers::CsvTable&
   id.rls = ParseRlsOptions(options, 4);
   // on (three-step) = the recursive three-step method (core::OnlineThreeStep), iv =
   // instrumental-variable RLS, off = least squares, auto = IV and LS over the first samples, then
-  // FitIdModel's closed-loop test picks one (core::OnlineIdOptions).
+  // FitIntegratorDelay's closed-loop test picks one (core::OnlineIntegratorDelayOptions).
   id.closed_loop = ParseClosedLoop(options.closed_loop);
   id.outflow_direct_gain_s_per_m2 = options.p22;
   // p21 >= 0 as in the batch fit: a negative wave-front gain lets Q_(nk-1) - b q_in(k-nk+1) mimic
@@ -154,9 +152,9 @@ nlohmann::json OnlineId(const IdentifyOptions& options, const drivers::CsvTable&
   // that a record always ends decided.
   id.closed_loop_window_samples =
       static_cast<int>(std::min<Eigen::Index>(200, n - id.max_delay_samples - 1));
-  std::unique_ptr<core::OnlineIdBank> bank;
+  std::unique_ptr<core::OnlineIntegratorDelayBank> bank;
   try {
-    bank = std::make_unique<core::OnlineIdBank>(id);
+    bank = std::make_unique<core::OnlineIntegratorDelayBank>(id);
   } catch (const std::invalid_argument& e) {
     throw InputError(e.what());
   }
@@ -168,7 +166,7 @@ nlohmann::json OnlineId(const IdentifyOptions& options, const drivers::CsvTable&
   for (Eigen::Index k = 0; k < n; ++k) {
     bank->Update(q_in(k), q_out(k), level(k));
     if (!trace.enabled()) continue;
-    const core::IdSnapshot s = bank->Snapshot();
+    const core::IntegratorDelaySnapshot s = bank->Snapshot();
     if (!s.valid) continue;
     const double row[] = {
         s.delay_s,
@@ -189,9 +187,9 @@ nlohmann::json OnlineId(const IdentifyOptions& options, const drivers::CsvTable&
     trace.Row(time_s(k), row, std::size(row));
   }
   trace.Close();
-  const core::IdSnapshot s = bank->Snapshot();
+  const core::IntegratorDelaySnapshot s = bank->Snapshot();
   if (!s.valid) throw InputError(table.source() + ": the online bank made no estimate");
-  const core::IdBankHealth& bank_health = bank->health();
+  const core::IntegratorDelayBankHealth& bank_health = bank->health();
   nlohmann::json health = HealthJson(s.health);
   health["samples"] = bank_health.samples;
   health["bad_flow_samples"] = bank_health.bad_flow_samples;

@@ -1,6 +1,6 @@
 #include <stdexcept>
 
-#include "core/process_model_fit.h"
+#include "core/linear/process_model_fit.h"
 #include "daemon/canalid/identify_command.h"
 #include "daemon/canalid/input_error.h"
 #include "daemon/canalid/table_columns.h"

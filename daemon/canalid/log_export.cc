@@ -29,7 +29,7 @@ struct LogExporter::ReachFile {
   double time_s = 0.0;
 };
 
-LogExporter::LogExporter(std::string dir, std::optional<core::DaemonConfig> config,
+LogExporter::LogExporter(std::string dir, std::optional<config::DaemonConfig> config,
                          std::string reach, std::vector<std::string> model_parameters,
                          std::string log_path)
     : dir_(std::move(dir)),
@@ -62,7 +62,7 @@ void LogExporter::OnConfig(const canalid::config_t& config, const drivers::LogEv
 void LogExporter::OnSample(const std::string& plc, const canalid::sample_t& sample,
                            const drivers::LogEvent& event) {
   if (!config_.config()) return;
-  for (const core::ReachConfig& reach : config_.config()->reaches) {
+  for (const config::ReachConfig& reach : config_.config()->reaches) {
     if (!reach_filter_.empty() && reach.name != reach_filter_) continue;
     if (config_.ReachPlc(reach) != plc) continue;
     ReachFile* file = nullptr;
@@ -74,7 +74,7 @@ void LogExporter::OnSample(const std::string& plc, const canalid::sample_t& samp
       r->name = reach.name;
       r->plc = plc;
       r->channels = {reach.inflow, reach.outflow, reach.level, reach.actuator};
-      r->sample_time_s = core::ReachSampleTimeS(*config_.config(), reach);
+      r->sample_time_s = config::ReachSampleTimeS(*config_.config(), reach);
       r->file = Open(reach.name + ".csv");
       std::fprintf(r->file, "time_s");
       for (const std::string& c : r->channels) std::fprintf(r->file, ",%s", c.c_str());

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "daemon/canalid/log_config.h"
+#include "daemon/canalid/recorded_config.h"
 #include "drivers/lcm/log_messages.h"
 
 namespace canalid::cli {
@@ -27,7 +27,7 @@ namespace canalid::cli {
 class LogExporter final : public drivers::LogMessageVisitor {
  public:
   /// @throws InputError when a file cannot be created.
-  LogExporter(std::string dir, std::optional<core::DaemonConfig> config, std::string reach,
+  LogExporter(std::string dir, std::optional<config::DaemonConfig> config, std::string reach,
               std::vector<std::string> model_parameters, std::string log_path);
   ~LogExporter() override;
 
@@ -51,7 +51,7 @@ class LogExporter final : public drivers::LogMessageVisitor {
   std::FILE* Open(const std::string& name);
 
   std::string dir_;
-  LogConfig config_;
+  RecordedConfig config_;
   std::string reach_filter_;
   std::vector<std::string> model_parameters_;
   std::string log_path_;

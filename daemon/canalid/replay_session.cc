@@ -31,8 +31,8 @@ struct ReplaySession::Plc {
 };
 
 struct ReplaySession::Reach {
-  core::ReachConfig config;
-  std::optional<core::ReachRunner> runner;  // built at the first sample of its PLC in a run
+  config::ReachConfig config;
+  std::optional<core::ReachController> runner;  // built at the first sample of its PLC in a run
   std::optional<ReplayModel> last_batch;
   double last_time_s = 0.0;
 };
@@ -55,19 +55,19 @@ void ReplaySession::OnConfig(const canalid::config_t& config, const drivers::Log
 void ReplaySession::Restart() {
   plcs_.clear();
   reaches_.clear();
-  const core::DaemonConfig& config = *config_.config();
+  const config::DaemonConfig& config = *config_.config();
   if (!options_.reach.empty() && config.FindReach(options_.reach) == nullptr) {
     std::string known;
     for (const auto& r : config.reaches) known += (known.empty() ? "" : ", ") + r.name;
     throw InputError("--reach " + options_.reach + ": not a reach of the configuration (" + known +
                      ")");
   }
-  for (const core::PlcConfig& plc : config.plcs) {
+  for (const config::PlcConfig& plc : config.plcs) {
     auto p = std::make_unique<Plc>();
     p->name = plc.name;
     plcs_.push_back(std::move(p));
   }
-  for (const core::ReachConfig& reach : config.reaches) {
+  for (const config::ReachConfig& reach : config.reaches) {
     if (!options_.reach.empty() && reach.name != options_.reach) continue;
     const std::string plc = config_.ReachPlc(reach);
     for (auto& p : plcs_) {
@@ -149,7 +149,7 @@ void ReplaySession::OnSample(const std::string& plc_name, const canalid::sample_
 void ReplaySession::Step(Reach& reach, const core::ReachActions& actions, double log_time_s) {
   if (!actions.experiment_record_complete) return;
   core::ReachActions after;
-  const std::optional<core::IdPipelineResult> result =
+  const std::optional<core::IntegratorDelayIdentification> result =
       reach.runner->pipeline().IdentifyRecord(&after);
   if (!result) {
     on_warning_("reach " + reach.config.name + ": the experiment record could not be identified");
@@ -175,7 +175,7 @@ void ReplaySession::OnExperiment(const canalid::experiment_state_t& live,
   }
   for (auto& reach : reaches_) {
     if (reach->config.name != live.reach || !reach->runner) continue;
-    core::ReachPipeline& pipeline = reach->runner->pipeline();
+    core::ReachSampleProcessor& pipeline = reach->runner->pipeline();
     const core::ExperimentPhase ours = pipeline.experiment_state().phase;
     const double t = first_utime_ ? static_cast<double>(live.utime - *first_utime_) * 1e-6 : 0.0;
     if (LiveRunning(live.state) && !Running(ours)) {
@@ -215,8 +215,8 @@ void ReplaySession::OnModel(const canalid::model_snapshot_t& model,
 }
 
 ReplayModel ReplaySession::OnlineModel(const Reach& reach, double log_time_s) const {
-  const core::OnlineIdBank& bank = *reach.runner->pipeline().online_id();
-  const core::IdSnapshot s = bank.Snapshot();
+  const core::OnlineIntegratorDelayBank& bank = *reach.runner->pipeline().online_id();
+  const core::IntegratorDelaySnapshot s = bank.Snapshot();
   ReplayModel model;
   model.reach = reach.config.name;
   model.log_time_s = log_time_s;

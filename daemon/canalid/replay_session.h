@@ -9,8 +9,8 @@
 #include <utility>
 #include <vector>
 
-#include "core/reach_runner.h"
-#include "daemon/canalid/log_config.h"
+#include "core/reach/reach_controller.h"
+#include "daemon/canalid/recorded_config.h"
 #include "drivers/lcm/log_messages.h"
 
 namespace canalid::cli {
@@ -25,14 +25,14 @@ struct ReplayModel {
 };
 
 struct ReplaySessionOptions {
-  std::optional<core::DaemonConfig> config;  ///< --config: instead of the one in the log
-  std::string reach;                         ///< only this reach; empty: all
-  std::optional<double> from_s, to_s;        ///< window, seconds since the first sample
-  std::int64_t snapshot_every = 0;           ///< online snapshots every so many samples; 0: none
-  std::string log_path;                      ///< for messages
+  std::optional<config::DaemonConfig> config;  ///< --config: instead of the one in the log
+  std::string reach;                           ///< only this reach; empty: all
+  std::optional<double> from_s, to_s;          ///< window, seconds since the first sample
+  std::int64_t snapshot_every = 0;             ///< online snapshots every so many samples; 0: none
+  std::string log_path;                        ///< for messages
 };
 
-/// Runs the daemon's per-reach code (core::ReachRunner, the same the daemon runs on every poll)
+/// Runs the daemon's per-reach code (core::ReachController, the same the daemon runs on every poll)
 /// over the messages of a log: samples feed the reaches of their PLC, and experiment transitions
 /// the samples cannot show (operator commands, write failures, link losses detected between
 /// polls, stops) are taken from the recorded experiment messages, and estimator resets from the
@@ -78,7 +78,7 @@ class ReplaySession final : public drivers::LogMessageVisitor {
   ReplaySessionOptions options_;
   ModelSink on_model_;
   WarningSink on_warning_;
-  LogConfig config_;
+  RecordedConfig config_;
   std::vector<std::unique_ptr<Plc>> plcs_;
   std::vector<std::unique_ptr<Reach>> reaches_;
   std::map<std::string, std::map<std::string, canalid::model_snapshot_t>> live_models_;

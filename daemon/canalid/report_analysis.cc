@@ -5,8 +5,8 @@
 #include <cstdio>
 #include <stdexcept>
 
-#include "core/correlation.h"
-#include "core/lpv_model.h"
+#include "core/fractional/lpv_model.h"
+#include "core/linear/correlation.h"
 #include "daemon/canalid/input_error.h"
 #include "daemon/canalid/simulate_command.h"
 #include "daemon/canalid/table_columns.h"

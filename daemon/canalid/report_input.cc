@@ -22,7 +22,7 @@ drivers::CsvTable ReadCsv(const std::string& path) {
 }
 
 ReportInput FromLog(const std::string& path, const ReportLogOptions& options) {
-  std::optional<core::DaemonConfig> config;
+  std::optional<config::DaemonConfig> config;
   drivers::LogScanOptions scan;
   if (!options.config.empty()) {
     try {

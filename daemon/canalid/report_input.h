@@ -25,7 +25,7 @@ struct ReportInput {
 };
 
 /// The record of a report as an in-memory table (time_s first, named columns, uniform sampling):
-/// a CSV file (DESIGN.md's CSV interface), or an LCM log of canalidd (recognised by the LCM
+/// a CSV file (docs/design.md's CSV interface), or an LCM log of canalidd (recognised by the LCM
 /// event sync word), whose reach is exported as `canalid export` does into
 /// `log.data_dir/<reach>.csv` and read from there.
 /// @throws InputError naming the file, line and column of a bad CSV, a damaged log (byte offset),

@@ -4,7 +4,7 @@
 #include <fstream>
 #include <iostream>
 
-#include "core/metrics.h"
+#include "core/numerics/metrics.h"
 #include "daemon/canalid/input_error.h"
 #include "daemon/canalid/table_columns.h"
 #include "drivers/csv/csv_table.h"

@@ -1,12 +1,12 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "core/arx.h"
-#include "core/commensurate_state_space.h"
-#include "core/fractional_simulator.h"
-#include "core/id_model.h"
-#include "core/lpv_model.h"
-#include "core/process_models.h"
+#include "core/fractional/commensurate_state_space.h"
+#include "core/fractional/fractional_simulator.h"
+#include "core/fractional/lpv_model.h"
+#include "core/integrator_delay/integrator_delay_model.h"
+#include "core/linear/arx.h"
+#include "core/linear/process_models.h"
 #include "daemon/canalid/input_error.h"
 #include "daemon/canalid/simulate_command.h"
 #include "daemon/canalid/table_columns.h"
@@ -41,7 +41,7 @@ void RequireSampleTime(const drivers::CsvTable& table, double model_ts, const st
 
 SimulatedOutput SimulateId(const nlohmann::json& model, const std::string& source,
                            const drivers::CsvTable& table, const SimulateOptions& options) {
-  drivers::IdModelRecord r = drivers::IdModelFromJson(model, source);
+  drivers::IntegratorDelayModelRecord r = drivers::IntegratorDelayModelFromJson(model, source);
   // A model written without its sample time is taken at the record's.
   if (r.model.sample_time_s > 0.0) {
     RequireSampleTime(table, r.model.sample_time_s, source);
@@ -153,7 +153,7 @@ SimulatedOutput SimulateFracSs(const nlohmann::json& model, const std::string& s
   const std::string u = InputNames(model, source, options, {"u"})[0];
   const Deviations d = FromFirstInput(table, u, r.model.input_offset);
   SimulatedOutput out;
-  // Seed 1's companion form has unit static gain.
+  // The LPV paper's companion form has unit static gain.
   out.y = core::SimulateCommensurate(r.model.model, d.du, r.memory_length).array() +
           (r.model.output_offset + d.start_offset);
   return out;

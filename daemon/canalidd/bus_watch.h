@@ -1,5 +1,5 @@
 #pragma once
-#include <utility>  // before Boost.Asio under GCC 12 and C++20 (DESIGN.md)
+#include <utility>  // before Boost.Asio under GCC 12 and C++20 (docs/design.md)
 
 #include <boost/asio.hpp>
 #include <cstdint>

@@ -16,12 +16,12 @@ CommandDispatch::CommandDispatch(const DaemonPlan& plan, drivers::Bus& bus, Hand
 void CommandDispatch::Start(StateStore* store) {
   if (!plan_.commands_enabled) return;
   store_ = store;
-  core::CommandAuthOptions options;
+  drivers::CommandAuthOptions options;
   options.enabled = true;
   options.max_clock_skew_s = plan_.command_max_clock_skew_s;
   {
-    const core::SecretBytes key = ReadKeyFile(plan_.command_key_file);  // wiped at the brace
-    authenticator_ = std::make_unique<core::CommandAuthenticator>(options, key.span());
+    const drivers::SecretBytes key = ReadKeyFile(plan_.command_key_file);  // wiped at the brace
+    authenticator_ = std::make_unique<drivers::CommandAuthenticator>(options, key.span());
   }
   if (store_) {
     std::string problem;
@@ -61,8 +61,8 @@ void CommandDispatch::OnAccepted(const drivers::AcceptedCommand& command) {
 void CommandDispatch::LogRejected(bool flush) {
   if (!receiver_) return;
   const double now = SteadyNowS();
-  for (int v = 1; v < core::kNumCommandVerdicts; ++v) {
-    const auto verdict = static_cast<core::CommandVerdict>(v);
+  for (int v = 1; v < drivers::kNumCommandVerdicts; ++v) {
+    const auto verdict = static_cast<drivers::CommandVerdict>(v);
     const auto index = static_cast<std::size_t>(v);
     const int64_t count = receiver_->count(verdict);
     const int64_t unlogged = count - verdicts_logged_[index];
@@ -70,7 +70,7 @@ void CommandDispatch::LogRejected(bool flush) {
     // At most one line a second per verdict (the first at once), with the count: a flood of bad
     // messages must not flood the journal or block the loop on a slow log.
     if (!flush && now - verdict_logged_at_s_[index] < 1.0) continue;
-    LogWarning(std::string("command rejected (") + core::CommandVerdictName(verdict) + ")" +
+    LogWarning(std::string("command rejected (") + drivers::CommandVerdictName(verdict) + ")" +
                (unlogged > 1 ? " x" + std::to_string(unlogged) : std::string()));
     verdicts_logged_[index] = count;
     verdict_logged_at_s_[index] = now;

@@ -4,9 +4,9 @@
 #include <functional>
 #include <memory>
 
-#include "core/command_auth.h"
 #include "daemon/canalidd/daemon_plan.h"
 #include "daemon/canalidd/state_store.h"
+#include "drivers/auth/command_auth.h"
 #include "drivers/lcm/bus.h"
 #include "drivers/lcm/command_receiver.h"
 
@@ -38,10 +38,10 @@ class CommandDispatch final {
   drivers::Bus& bus_;
   Handler on_command_;
   StateStore* store_ = nullptr;
-  std::unique_ptr<core::CommandAuthenticator> authenticator_;
+  std::unique_ptr<drivers::CommandAuthenticator> authenticator_;
   std::unique_ptr<drivers::CommandReceiver> receiver_;
-  std::array<int64_t, core::kNumCommandVerdicts> verdicts_logged_{};
-  std::array<double, core::kNumCommandVerdicts> verdict_logged_at_s_{};  ///< steady s, 0: never
+  std::array<int64_t, drivers::kNumCommandVerdicts> verdicts_logged_{};
+  std::array<double, drivers::kNumCommandVerdicts> verdict_logged_at_s_{};  ///< steady s, 0: never
 };
 
 }  // namespace canalid::daemon

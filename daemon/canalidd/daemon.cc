@@ -249,7 +249,8 @@ void Daemon::Handle(ReachRuntime& reach, const core::ReachActions& actions, doub
   }
   if (actions.experiment_record_complete) {
     core::ReachActions after;
-    const std::optional<core::IdPipelineResult> result = reach.pipeline().IdentifyRecord(&after);
+    const std::optional<core::IntegratorDelayIdentification> result =
+        reach.pipeline().IdentifyRecord(&after);
     const std::string& problem = reach.pipeline().identification_problem();
     if (result) {
       publisher_.PublishBatchId(name, *result, time_s, reach.pipeline().recorded_samples(),
@@ -284,13 +285,14 @@ void Daemon::LoadState() {
       std::max<std::size_t>(reaches_.size(), 1));
 }
 
-void Daemon::SaveModel(const ReachRuntime& reach, const core::IdPipelineResult& result) {
+void Daemon::SaveModel(const ReachRuntime& reach,
+                       const core::IntegratorDelayIdentification& result) {
   if (!model_saver_) return;
   model_saver_->Submit(MakePersistedModel(reach, result, WallNowS()));
 }
 
 void Daemon::OnCommand(const drivers::AcceptedCommand& command) {
-  if (command.kind == core::CommandKind::kPublishConfig) {
+  if (command.kind == drivers::CommandKind::kPublishConfig) {
     publisher_.PublishConfig(plan_.config_path, plan_.config_text, WallNowS());
     return;
   }
@@ -298,7 +300,7 @@ void Daemon::OnCommand(const drivers::AcceptedCommand& command) {
     if (reach->name() != command.reach) continue;
     LogInfo("command from " + command.sender + " for reach " + command.reach);
     switch (command.kind) {
-      case core::CommandKind::kStartExperiment:
+      case drivers::CommandKind::kStartExperiment:
         if (!reach->pipeline().experiment_plan()) {
           LogWarning("reach " + command.reach + ": no experiment to start");
         } else if (!reach->runner.excitation_allowed()) {
@@ -309,18 +311,18 @@ void Daemon::OnCommand(const drivers::AcceptedCommand& command) {
           Handle(*reach, reach->pipeline().StartExperiment(), reach->last_time_s);
         }
         break;
-      case core::CommandKind::kAbortExperiment:
+      case drivers::CommandKind::kAbortExperiment:
         Handle(*reach, reach->pipeline().StopExperiment(), reach->last_time_s);
         break;
-      case core::CommandKind::kResetEstimator:
+      case drivers::CommandKind::kResetEstimator:
         reach->pipeline().ResetOnlineEstimator();
         // Marks the reset in the record (`canalid replay` resets its bank here too).
-        if (const core::OnlineIdBank* bank = reach->pipeline().online_id()) {
+        if (const core::OnlineIntegratorDelayBank* bank = reach->pipeline().online_id()) {
           publisher_.PublishOnlineId(reach->name(), bank->Snapshot(), reach->last_time_s,
                                      "rls-bank-reset");
         }
         break;
-      case core::CommandKind::kPublishConfig:
+      case drivers::CommandKind::kPublishConfig:
         break;
     }
     return;

@@ -1,5 +1,5 @@
 #pragma once
-#include <utility>  // before Boost.Asio under GCC 12 and C++20 (DESIGN.md)
+#include <utility>  // before Boost.Asio under GCC 12 and C++20 (docs/design.md)
 
 #include <boost/asio.hpp>
 #include <functional>
@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "core/reach_pipeline.h"
+#include "core/reach/reach_sample_processor.h"
 #include "daemon/canalidd/bus_watch.h"
 #include "daemon/canalidd/command_dispatch.h"
 #include "daemon/canalidd/daemon_plan.h"
@@ -17,6 +17,7 @@
 #include "daemon/canalidd/persistence_worker.h"
 #include "daemon/canalidd/signal_watch.h"
 #include "daemon/canalidd/state_store.h"
+#include "drivers/auth/command_auth.h"
 #include "drivers/lcm/bus.h"
 #include "drivers/lcm/command_receiver.h"
 #include "drivers/modbus/plc_poller.h"
@@ -27,8 +28,8 @@ namespace canalid::daemon {
 enum class DaemonExit { kStopped, kReload, kFailed };
 
 /// The daemon's runtime: one Asio loop on the calling thread, one poller thread per PLC, one
-/// ReachPipeline per reach.  Decisions on plant data are the pipelines' (core); this class moves
-/// samples, actions and messages between them, the PLCs and the bus, and wires the parts that
+/// ReachSampleProcessor per reach.  Decisions on plant data are the pipelines' (core); this class
+/// moves samples, actions and messages between them, the PLCs and the bus, and wires the parts that
 /// do one job each: SignalWatch, BusWatch, Heartbeat, CommandDispatch, restore_safety.h,
 /// model_persistence.h with its PersistenceWorker, health_report.h.
 ///
@@ -38,13 +39,13 @@ enum class DaemonExit { kStopped, kReload, kFailed };
 /// Safety: every restore of a nominal setpoint stays pending until the PLC confirms the nominal
 /// value was written (a write refused while the link is down, or shortened by the rate limit, is
 /// asked again on the next sample).  No excitation write goes out before the reach's experiment
-/// guard (core/experiment_guard.h) is durably in the state directory; the guard is removed once
-/// the PLC confirms the nominal at the experiment's end.  At start, a guard left by a crash is
-/// decided on by core::DecideRestart: its nominal is restored first, before any experiment.
-/// SIGTERM/SIGINT stop the experiments, wait (at most `stop_timeout_s`) for the nominal setpoints
-/// to be written, then stop.  SIGHUP asks `reload` for a new plan: when it returns one, Run() stops
-/// safely and returns kReload (the caller builds a new Daemon); when it returns none (invalid
-/// configuration), the daemon carries on.
+/// guard (core/experiment/experiment_guard.h) is durably in the state directory; the guard is
+/// removed once the PLC confirms the nominal at the experiment's end.  At start, a guard left by a
+/// crash is decided on by core::DecideRestart: its nominal is restored first, before any
+/// experiment. SIGTERM/SIGINT stop the experiments, wait (at most `stop_timeout_s`) for the nominal
+/// setpoints to be written, then stop.  SIGHUP asks `reload` for a new plan: when it returns one,
+/// Run() stops safely and returns kReload (the caller builds a new Daemon); when it returns none
+/// (invalid configuration), the daemon carries on.
 class Daemon final {
  public:
   using PortFactory = std::function<std::unique_ptr<drivers::PlcPort>(const PlcWiring&)>;
@@ -80,7 +81,7 @@ class Daemon final {
   // The state directory: the store, the persisted models resumed, the save thread started.
   void LoadState();
   // Queues the reach's model for the save thread (never blocks on the disk).
-  void SaveModel(const ReachRuntime& reach, const core::IdPipelineResult& result);
+  void SaveModel(const ReachRuntime& reach, const core::IntegratorDelayIdentification& result);
   // A command the dispatch let through, routed to the reach it names.
   void OnCommand(const drivers::AcceptedCommand& command);
   void BeginStop(DaemonExit exit);

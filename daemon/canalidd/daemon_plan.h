@@ -4,8 +4,8 @@
 #include <variant>
 #include <vector>
 
-#include "core/command_auth.h"
-#include "core/reach_runner.h"
+#include "core/reach/reach_controller.h"
+#include "drivers/auth/command_auth.h"
 #include "drivers/modbus/modbus_port.h"
 #include "drivers/modbus/plc_poller.h"
 
@@ -23,7 +23,7 @@ struct PlcWiring {
 /// One reach: the PLC it reads and what it runs (its channels are indices into that PLC's poll).
 struct ReachWiring {
   int plc = 0;  ///< index into DaemonPlan::plcs; all of a reach's channels are on one PLC
-  core::ReachRunnerOptions runner;
+  core::ReachControllerOptions runner;
 };
 
 /// Everything the daemon runs, derived from the validated configuration.
@@ -39,7 +39,7 @@ struct DaemonPlan {
   bool commands_enabled = false;
   std::string command_key_file;
   double command_max_clock_skew_s = 5.0;
-  std::vector<core::CommandKind> command_kinds;  ///< the kinds accepted (others are refused)
+  std::vector<drivers::CommandKind> command_kinds;  ///< the kinds accepted (others are refused)
 };
 
 }  // namespace canalid::daemon

@@ -1,13 +1,13 @@
 #pragma once
-#include <utility>  // before Boost.Asio under GCC 12 and C++20 (DESIGN.md)
+#include <utility>  // before Boost.Asio under GCC 12 and C++20 (docs/design.md)
 
 #include <atomic>
 #include <memory>
 #include <string>
 #include <vector>
 
-#include "core/reach_pipeline.h"
-#include "core/reach_runner.h"
+#include "core/reach/reach_controller.h"
+#include "core/reach/reach_sample_processor.h"
 #include "daemon/canalidd/daemon_plan.h"
 #include "daemon/canalidd/heartbeat.h"
 #include "drivers/modbus/plc_poller.h"
@@ -29,15 +29,15 @@ struct PlcRuntime {
 struct ReachRuntime {
   explicit ReachRuntime(const ReachWiring& w) : wiring(w), runner(w.runner) {}
   const ReachWiring& wiring;
-  core::ReachRunner runner;
+  core::ReachController runner;
   bool restore_pending = false;  ///< a nominal setpoint not yet confirmed by the PLC
   double restore_target = 0.0;   ///< the value that restore waits for
   bool guard_on_disk = false;    ///< <reach>.experiment.json exists (written, or left by a crash)
   bool keep_guard = false;       ///< a refused start-up: the guard stays for an operator to check
   double last_time_s = 0.0;
   const std::string& name() const { return runner.name(); }
-  core::ReachPipeline& pipeline() { return runner.pipeline(); }
-  const core::ReachPipeline& pipeline() const { return runner.pipeline(); }
+  core::ReachSampleProcessor& pipeline() { return runner.pipeline(); }
+  const core::ReachSampleProcessor& pipeline() const { return runner.pipeline(); }
 };
 
 /// The name of the reach's actuator channel in its PLC's poll.  @pre the reach has an actuator.

@@ -3,8 +3,8 @@
 namespace canalid::daemon {
 
 std::variant<drivers::ModbusTcpConfig, drivers::ModbusRtuConfig> BuildModbusConfig(
-    const core::PlcConfig& plc) {
-  if (plc.transport == core::PlcTransport::kTcp) {
+    const config::PlcConfig& plc) {
+  if (plc.transport == config::PlcTransport::kTcp) {
     drivers::ModbusTcpConfig tcp;
     tcp.host = plc.host;
     tcp.port = plc.port;
@@ -24,8 +24,8 @@ std::variant<drivers::ModbusTcpConfig, drivers::ModbusRtuConfig> BuildModbusConf
   return rtu;
 }
 
-drivers::PollerConfig BuildPollerConfig(const core::DaemonConfig& config,
-                                        const core::PlcConfig& plc) {
+drivers::PollerConfig BuildPollerConfig(const config::DaemonConfig& config,
+                                        const config::PlcConfig& plc) {
   drivers::PollerConfig poller;
   poller.plc_name = plc.name;
   poller.period_s = plc.poll_period_s;
@@ -33,12 +33,12 @@ drivers::PollerConfig BuildPollerConfig(const core::DaemonConfig& config,
   poller.backoff_initial_s = plc.backoff_initial_s;
   poller.backoff_max_s = plc.backoff_max_s;
   poller.timeouts_before_reconnect = plc.timeouts_before_reconnect;
-  for (const core::ChannelConfig& ch : config.channels) {
+  for (const config::ChannelConfig& ch : config.channels) {
     if (ch.plc != plc.name) continue;
     drivers::PollChannel& p = poller.channels.emplace_back();
     p.name = ch.name;
-    p.kind = ch.table == core::RegisterTable::kInput ? drivers::RegisterKind::kInput
-                                                     : drivers::RegisterKind::kHolding;
+    p.kind = ch.table == config::RegisterTable::kInput ? drivers::RegisterKind::kInput
+                                                       : drivers::RegisterKind::kHolding;
     p.address = ch.address;
     p.scaling = {ch.type, ch.word_order, ch.scale, ch.offset, ch.valid_min, ch.valid_max};
     p.writable = ch.writable;

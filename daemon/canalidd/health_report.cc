@@ -60,21 +60,21 @@ HealthReport BusHealth(int64_t handler_failures, int64_t publish_failures, int64
 HealthReport CommandHealth(const drivers::CommandReceiver& receiver) {
   HealthReport commands;
   commands.component = "commands";
-  for (int v = 0; v < core::kNumCommandVerdicts; ++v) {
-    const auto verdict = static_cast<core::CommandVerdict>(v);
-    commands.counters.emplace_back(std::string("verdicts.") + core::CommandVerdictName(verdict),
+  for (int v = 0; v < drivers::kNumCommandVerdicts; ++v) {
+    const auto verdict = static_cast<drivers::CommandVerdict>(v);
+    commands.counters.emplace_back(std::string("verdicts.") + drivers::CommandVerdictName(verdict),
                                    receiver.count(verdict));
   }
   commands.counters.emplace_back("callback_failures", receiver.callback_failures());
   return commands;
 }
 
-HealthReport ReachHealth(const std::string& reach, const core::ReachPipeline& pipeline) {
+HealthReport ReachHealth(const std::string& reach, const core::ReachSampleProcessor& pipeline) {
   HealthReport report;
   report.component = "reach." + reach;
   report.counters = {{"samples", pipeline.samples()}};
-  if (const core::OnlineIdBank* bank = pipeline.online_id()) {
-    const core::IdBankHealth& h = bank->health();
+  if (const core::OnlineIntegratorDelayBank* bank = pipeline.online_id()) {
+    const core::IntegratorDelayBankHealth& h = bank->health();
     report.counters.insert(report.counters.end(), {{"bad_flow_samples", h.bad_flow_samples},
                                                    {"bad_level_samples", h.bad_level_samples},
                                                    {"delay_switches", h.switches}});

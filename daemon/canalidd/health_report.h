@@ -2,7 +2,7 @@
 #include <cstdint>
 #include <string>
 
-#include "core/reach_pipeline.h"
+#include "core/reach/reach_sample_processor.h"
 #include "daemon/canalidd/lcm_publisher.h"
 #include "drivers/lcm/command_receiver.h"
 #include "drivers/modbus/plc_poller.h"
@@ -20,6 +20,6 @@ HealthReport BusHealth(int64_t handler_failures, int64_t publish_failures, int64
 /// "commands": the receiver's count per verdict and its callback failures.
 HealthReport CommandHealth(const drivers::CommandReceiver& receiver);
 /// "reach.<name>": samples, and the online bank's data counters when it runs.
-HealthReport ReachHealth(const std::string& reach, const core::ReachPipeline& pipeline);
+HealthReport ReachHealth(const std::string& reach, const core::ReachSampleProcessor& pipeline);
 
 }  // namespace canalid::daemon

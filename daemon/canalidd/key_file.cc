@@ -32,12 +32,12 @@ struct FileBuffer {
   static constexpr std::size_t kHexDigits = 2 * kCommandKeyBytes;
   std::array<uint8_t, kHexDigits + 2> bytes{};  // one more than the longest accepted file
   std::size_t size = 0;
-  ~FileBuffer() { core::WipeBytes(bytes); }
+  ~FileBuffer() { drivers::WipeBytes(bytes); }
 };
 
 }  // namespace
 
-core::SecretBytes ReadKeyFile(const std::filesystem::path& path) {
+drivers::SecretBytes ReadKeyFile(const std::filesystem::path& path) {
   // Open first and check the opened file (fstat), so the checked file is the one read.
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NOCTTY | O_NONBLOCK);
   if (fd < 0) Fail(path, std::string("cannot open: ") + std::strerror(errno));
@@ -82,7 +82,7 @@ core::SecretBytes ReadKeyFile(const std::filesystem::path& path) {
                    : std::to_string(digits) + " hex digits instead of " +
                          std::to_string(FileBuffer::kHexDigits));
   }
-  core::SecretBytes key(kCommandKeyBytes);
+  drivers::SecretBytes key(kCommandKeyBytes);
   const std::span<uint8_t> out = key.mutable_span();
   for (std::size_t i = 0; i < kCommandKeyBytes; ++i) {
     out[i] =

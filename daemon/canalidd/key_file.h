@@ -3,7 +3,7 @@
 #include <filesystem>
 #include <string>
 
-#include "core/secret_bytes.h"
+#include "drivers/auth/secret_bytes.h"
 
 namespace canalid::daemon {
 
@@ -25,6 +25,6 @@ inline constexpr const char* kKeyFileFormat =
 /// character that is not a hex digit, or anything after the key but one newline.
 /// The file's bytes and the key are wiped (OPENSSL_cleanse) from every buffer this used; the
 /// returned key is wiped when it is destroyed.
-core::SecretBytes ReadKeyFile(const std::filesystem::path& path);
+drivers::SecretBytes ReadKeyFile(const std::filesystem::path& path);
 
 }  // namespace canalid::daemon

@@ -86,8 +86,9 @@ void LcmPublisher::PublishSample(const std::string& plc,
   Send(Channel(sample_channels_, "SAMPLE_", plc), sample_);
 }
 
-void LcmPublisher::PublishOnlineId(const std::string& reach, const core::IdSnapshot& snapshot,
-                                   double time_s, const char* estimator) {
+void LcmPublisher::PublishOnlineId(const std::string& reach,
+                                   const core::IntegratorDelaySnapshot& snapshot, double time_s,
+                                   const char* estimator) {
   model_.utime = ToUtime(time_s);
   model_.reach = reach;
   model_.model_kind = "id";
@@ -106,9 +107,10 @@ void LcmPublisher::PublishOnlineId(const std::string& reach, const core::IdSnaps
   Send(Channel(model_channels_, "MODEL_", reach), model_);
 }
 
-void LcmPublisher::PublishBatchId(const std::string& reach, const core::IdPipelineResult& result,
-                                  double time_s, std::int64_t samples, bool out_of_bounds) {
-  const core::IdFitResult& fit = result.fit;
+void LcmPublisher::PublishBatchId(const std::string& reach,
+                                  const core::IntegratorDelayIdentification& result, double time_s,
+                                  std::int64_t samples, bool out_of_bounds) {
+  const core::IntegratorDelayFit& fit = result.fit;
   model_.utime = ToUtime(time_s);
   model_.reach = reach;
   model_.model_kind = "id";

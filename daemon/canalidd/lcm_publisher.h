@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
-#include "core/experiment.h"
-#include "core/id_pipeline.h"
-#include "core/online_id.h"
+#include "core/experiment/experiment.h"
+#include "core/integrator_delay/identify_integrator_delay.h"
+#include "core/online/online_integrator_delay.h"
 #include "drivers/lcm/bus.h"
 #include "drivers/modbus/plc_poller.h"
 
@@ -36,11 +36,11 @@ class LcmPublisher final {
 
   void PublishSample(const std::string& plc, const std::vector<std::string>& channel_names,
                      const drivers::PollSample& sample);
-  void PublishOnlineId(const std::string& reach, const core::IdSnapshot& snapshot, double time_s,
-                       const char* estimator);
+  void PublishOnlineId(const std::string& reach, const core::IntegratorDelaySnapshot& snapshot,
+                       double time_s, const char* estimator);
   /// `out_of_bounds`: the model failed the reach's bounds (FLAG_OUT_OF_BOUNDS; not persisted).
-  void PublishBatchId(const std::string& reach, const core::IdPipelineResult& result, double time_s,
-                      std::int64_t samples, bool out_of_bounds);
+  void PublishBatchId(const std::string& reach, const core::IntegratorDelayIdentification& result,
+                      double time_s, std::int64_t samples, bool out_of_bounds);
   /// A model from the state directory (estimator "persisted"): the numeric keys of its JSON.
   void PublishModelJson(const std::string& reach, const nlohmann::json& model, double time_s);
   void PublishExperiment(const std::string& reach, const core::ExperimentState& state,

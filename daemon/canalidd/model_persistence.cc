@@ -23,7 +23,8 @@ void ResumePersistedModels(const StateStore& store,
     if (reach == reaches.end()) continue;
     // Read back like any input: a file edited by hand or written by a build without these checks
     // must not come back as the reach's model.
-    const std::string problem = PersistedIdModelProblem(model, (*reach)->pipeline().model_bounds());
+    const std::string problem =
+        PersistedIntegratorDelayProblem(model, (*reach)->pipeline().model_bounds());
     if (!problem.empty()) {
       LogWarning("state: " + store.PathFor(model.reach, model.model_kind).string() + ": reach " +
                  model.reach + ": " + problem + "; ignored");
@@ -35,15 +36,16 @@ void ResumePersistedModels(const StateStore& store,
   }
 }
 
-PersistedModel MakePersistedModel(const ReachRuntime& reach, const core::IdPipelineResult& result,
+PersistedModel MakePersistedModel(const ReachRuntime& reach,
+                                  const core::IntegratorDelayIdentification& result,
                                   double wall_time_s) {
   PersistedModel model;
   model.reach = reach.name();
   model.model_kind = "id";
   model.saved_utime_us = ToUtime(wall_time_s);
   model.model = drivers::ToJson(result);
-  if (const core::OnlineIdBank* bank = reach.pipeline().online_id()) {
-    const core::IdSnapshot s = bank->Snapshot();
+  if (const core::OnlineIntegratorDelayBank* bank = reach.pipeline().online_id()) {
+    const core::IntegratorDelaySnapshot s = bank->Snapshot();
     model.online = {{"delay_s", s.delay_s},
                     {"area_m2", s.area_m2},
                     {"b", s.b},

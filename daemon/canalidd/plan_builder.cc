@@ -3,8 +3,8 @@
 #include <memory>
 #include <stdexcept>
 
-#include "core/daemon_plan.h"
 #include "daemon/canalidd/driver_config.h"
+#include "daemon/config/plan_from_config.h"
 
 namespace canalid::daemon {
 namespace {
@@ -19,10 +19,10 @@ int ChannelIndex(const drivers::PollerConfig& poller, const std::string& name) {
 
 }  // namespace
 
-DaemonPlan BuildDaemonPlan(const core::DaemonConfig& config, const std::string& config_path,
+DaemonPlan BuildDaemonPlan(const config::DaemonConfig& config, const std::string& config_path,
                            const std::string& config_text) {
   // Shared by every reach's experiment factory, which may run long after this returns.
-  const auto shared = std::make_shared<const core::DaemonConfig>(config);
+  const auto shared = std::make_shared<const config::DaemonConfig>(config);
   DaemonPlan plan;
   plan.config_path = config_path;
   plan.config_text = config_text;
@@ -33,12 +33,12 @@ DaemonPlan BuildDaemonPlan(const core::DaemonConfig& config, const std::string& 
   plan.command_key_file = config.commands.key_file;
   plan.command_max_clock_skew_s = config.commands.max_clock_skew_s;
   plan.command_kinds = config.commands.accepted;
-  for (const core::PlcConfig& plc : config.plcs) {
+  for (const config::PlcConfig& plc : config.plcs) {
     PlcWiring wiring;
     wiring.link = BuildModbusConfig(plc);
     wiring.poller = BuildPollerConfig(config, plc);
     if (config.daemon.heartbeat) {
-      const core::ChannelConfig* channel = config.FindChannel(config.daemon.heartbeat->channel);
+      const config::ChannelConfig* channel = config.FindChannel(config.daemon.heartbeat->channel);
       if (channel != nullptr && channel->plc == plc.name) {
         wiring.heartbeat_channel = ChannelIndex(wiring.poller, channel->name);
         wiring.heartbeat_period_s = config.daemon.heartbeat->period_s;
@@ -46,15 +46,15 @@ DaemonPlan BuildDaemonPlan(const core::DaemonConfig& config, const std::string& 
     }
     plan.plcs.push_back(std::move(wiring));
   }
-  for (const core::ReachConfig& reach : config.reaches) {
-    const core::PlcConfig* plc = config.FindReachPlc(reach);
+  for (const config::ReachConfig& reach : config.reaches) {
+    const config::PlcConfig* plc = config.FindReachPlc(reach);
     if (plc == nullptr) {
       throw std::invalid_argument("reach '" + reach.name + "': no PLC");
     }
     ReachWiring wiring;
     wiring.plc = static_cast<int>(plc - config.plcs.data());
     const drivers::PollerConfig& poller = plan.plcs[static_cast<std::size_t>(wiring.plc)].poller;
-    wiring.runner = core::BuildReachRunnerOptions(
+    wiring.runner = config::BuildReachControllerOptions(
         shared, reach, [&](const std::string& name) { return ChannelIndex(poller, name); });
     plan.reaches.push_back(std::move(wiring));
   }

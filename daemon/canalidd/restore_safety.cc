@@ -3,7 +3,7 @@
 #include <cmath>
 #include <exception>
 
-#include "core/experiment_guard.h"
+#include "core/experiment/experiment_guard.h"
 #include "daemon/canalidd/clock.h"
 #include "daemon/canalidd/log.h"
 

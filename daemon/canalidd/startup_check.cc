@@ -49,7 +49,7 @@ StartupNotes CheckStartup(const DaemonPlan& plan, bool for_start) {
   StartupNotes notes;
   if (plan.commands_enabled) {
     try {
-      core::SecretBytes key = ReadKeyFile(plan.command_key_file);  // wiped on return
+      drivers::SecretBytes key = ReadKeyFile(plan.command_key_file);  // wiped on return
     } catch (const std::exception& e) {
       throw StartupError(e.what());
     }

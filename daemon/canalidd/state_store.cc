@@ -97,19 +97,19 @@ std::optional<nlohmann::json> ReadStateDocument(const std::filesystem::path& pat
 
 }  // namespace
 
-std::string PersistedIdModelProblem(const PersistedModel& persisted,
-                                    const core::OnlineIdOptions& bank) {
+std::string PersistedIntegratorDelayProblem(const PersistedModel& persisted,
+                                            const core::OnlineIntegratorDelayOptions& bank) {
   const nlohmann::json& j = persisted.model;
   if (persisted.model_kind != "id") {
     return "model kind '" + persisted.model_kind + "' is not one the daemon persists (id)";
   }
-  drivers::IdModelRecord record;
+  drivers::IntegratorDelayModelRecord record;
   try {
-    record = drivers::IdModelFromJson(j, "model");
+    record = drivers::IntegratorDelayModelFromJson(j, "model");
   } catch (const std::exception& e) {
     return e.what();
   }
-  const core::IdModel& m = record.model;
+  const core::IntegratorDelayModel& m = record.model;
   const double ts = bank.sample_time_s;
   std::ostringstream why;
   auto differs = [](double a, double b) { return !(std::abs(a - b) <= 1e-6 * std::abs(b)); };
@@ -121,7 +121,7 @@ std::string PersistedIdModelProblem(const PersistedModel& persisted,
   } else if (j.contains("delay_s") &&
              (!j.at("delay_s").is_number() || differs(j.at("delay_s").get<double>(), m.nk * ts))) {
     why << "delay_s " << j.at("delay_s").dump() << " is not nk x sample_time_s = " << m.nk * ts;
-  } else if (std::string bounds = core::IdModelBoundsProblem(ts / m.b, m.nk, bank);
+  } else if (std::string bounds = core::IntegratorDelayBoundsProblem(ts / m.b, m.nk, bank);
              !bounds.empty()) {
     return bounds;
   } else if (j.contains("area_m2") &&

@@ -8,8 +8,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/experiment_guard.h"
-#include "core/online_id.h"
+#include "core/experiment/experiment_guard.h"
+#include "core/online/online_integrator_delay.h"
 
 namespace canalid::daemon {
 
@@ -34,11 +34,12 @@ struct StateLoadReport {
 
 /// Why a persisted model cannot be resumed as the model of a reach whose online bank has these
 /// options (empty when it can), checked like any input: kind "id" (the only kind the daemon
-/// persists), readable by drivers::IdModelFromJson (b finite, nk an integer >= 0, ...),
-/// sample_time_s present and equal to the bank's Ts, delay_s (when present) finite and equal to
-/// nk Ts and area_m2 (when present) equal to Ts / b (both to 1e-6), and inside
-/// core::IdModelBoundsProblem (A > 0, nk within the bank and not at its edge).  Pure.
-std::string PersistedIdModelProblem(const PersistedModel& model, const core::OnlineIdOptions& bank);
+/// persists), readable by drivers::IntegratorDelayModelFromJson (b finite, nk an integer >= 0,
+/// ...), sample_time_s present and equal to the bank's Ts, delay_s (when present) finite and equal
+/// to nk Ts and area_m2 (when present) equal to Ts / b (both to 1e-6), and inside
+/// core::IntegratorDelayBoundsProblem (A > 0, nk within the bank and not at its edge).  Pure.
+std::string PersistedIntegratorDelayProblem(const PersistedModel& model,
+                                            const core::OnlineIntegratorDelayOptions& bank);
 
 /// Models persisted in the state directory (systemd StateDirectory=, /var/lib/canalidd), one file
 /// per reach and model kind: `<reach>.<model_kind>.json` holding
@@ -61,7 +62,7 @@ class StateStore final {
   /// empty state). Never throws for a bad file: it is reported in problems and skipped.
   StateLoadReport LoadAll() const;
 
-  /// Last accepted command counter per sender (core::CommandAuthenticator::last_counters), saved
+  /// Last accepted command counter per sender (drivers::CommandAuthenticator::last_counters), saved
   /// atomically to `command-counters.json` so a restart does not reopen a replay window.
   /// @throws std::runtime_error as Save.
   void SaveCommandCounters(const std::map<std::string, int64_t, std::less<>>& counters);
@@ -69,7 +70,8 @@ class StateStore final {
   /// ("PATH: reason") and gives no counters (the timestamp window still bounds replays).
   std::map<std::string, int64_t, std::less<>> LoadCommandCounters(std::string* problem) const;
 
-  /// The experiment guard of a reach (core/experiment_guard.h), `<reach>.experiment.json`:
+  /// The experiment guard of a reach (core/experiment/experiment_guard.h),
+  /// `<reach>.experiment.json`:
   ///   {"format": "canalid-experiment-guard-v1", "reach", "actuator", "experiment",
   ///    "nominal_setpoint", "started_utime_us", "state": "running"}
   /// written atomically and durably like Save (the file and the directory entry are on disk when

@@ -13,8 +13,8 @@
 #include <vector>
 
 #include "canalid/version.h"
-#include "core/command_auth.h"
 #include "daemon/canalidd/key_file.h"
+#include "drivers/auth/command_auth.h"
 #include "drivers/lcm/bus.h"
 #include "drivers/lcm/command_sender.h"
 #include "drivers/lcm/lcm_bus.h"
@@ -36,7 +36,7 @@ std::string DefaultSender() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  using canalid::core::CommandKind;
+  using canalid::drivers::CommandKind;
   CLI::App app{"Sign a canalid operator command with the shared key and publish it on LCM."};
   std::string key_path, url, channel = "CANALID_COMMAND", reach, argument, action;
   std::string sender = DefaultSender();
@@ -70,9 +70,9 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   try {
-    canalid::core::SecretBytes key = canalid::daemon::ReadKeyFile(key_path);
+    canalid::drivers::SecretBytes key = canalid::daemon::ReadKeyFile(key_path);
     const int64_t now_us = NowUs();
-    canalid::core::CommandFields fields;
+    canalid::drivers::CommandFields fields;
     fields.channel = channel;
     fields.utime_us = utime_us != 0 ? utime_us : now_us;
     fields.counter = counter != 0 ? counter : now_us;

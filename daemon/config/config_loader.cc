@@ -13,11 +13,11 @@
 namespace canalid::daemon {
 namespace {
 
-using core::ChannelConfig;
-using core::DaemonConfig;
-using core::ExperimentConfig;
-using core::PlcConfig;
-using core::ReachConfig;
+using config::ChannelConfig;
+using config::DaemonConfig;
+using config::ExperimentConfig;
+using config::PlcConfig;
+using config::ReachConfig;
 
 std::string Quoted(std::string_view s) { return "\"" + std::string(s) + "\""; }
 
@@ -137,13 +137,13 @@ class Reader {
     if (s == nullptr) {
       Problem(node.source(), path,
               std::string("expected a string, got ") + core::TomlTypeName(node) +
-                  " (allowed: " + core::AllowedNames<E>() + ")");
+                  " (allowed: " + config::AllowedNames<E>() + ")");
       return false;
     }
-    const std::optional<E> value = core::EnumFromName<E>(s->get());
+    const std::optional<E> value = config::EnumFromName<E>(s->get());
     if (!value) {
       Problem(node.source(), path,
-              Quoted(s->get()) + " is not allowed (allowed: " + core::AllowedNames<E>() + ")");
+              Quoted(s->get()) + " is not allowed (allowed: " + config::AllowedNames<E>() + ")");
       return false;
     }
     out = *value;
@@ -166,7 +166,7 @@ class Reader {
     if (array == nullptr) {
       Problem(node->source(), Join(path, key),
               std::string("expected an array, got ") + core::TomlTypeName(*node) +
-                  " (allowed: of " + core::AllowedNames<E>() + ")");
+                  " (allowed: of " + config::AllowedNames<E>() + ")");
       return;
     }
     out.clear();
@@ -210,7 +210,7 @@ class Reader {
   }
 
   // Places a problem found by core::Validate at its key, or the nearest enclosing table.
-  void Place(const core::ConfigProblem& problem) {
+  void Place(const config::ConfigProblem& problem) {
     // A key that could not be read keeps its default, which Validate may then flag again.
     if (reported_.count(problem.path) != 0) return;
     toml_.Problem(toml_.Locate(problem.path), problem.path, problem.message);
@@ -247,7 +247,7 @@ void ReadLcm(Reader& r, const toml::table& root, DaemonConfig& c) {
 void ReadPlc(Reader& r, const toml::table& t, const std::string& at, PlcConfig& p) {
   r.String(t, at, "name", p.name, true);
   r.Enum(t, at, "transport", p.transport);
-  const bool tcp = p.transport == core::PlcTransport::kTcp;
+  const bool tcp = p.transport == config::PlcTransport::kTcp;
   const std::string tcp_only = "transport = \"tcp\"";
   const std::string rtu_only = "transport = \"rtu\"";
   const std::map<std::string, std::string> other =
@@ -358,7 +358,7 @@ void ReadReach(Reader& r, const toml::table& t, const std::string& at, ReachConf
 
 void ReadExperiment(Reader& r, const toml::table& t, const std::string& at, ExperimentConfig& e) {
   r.Enum(t, at, "mode", e.mode);
-  const bool design = e.mode == core::ExperimentMode::kDesign;
+  const bool design = e.mode == config::ExperimentMode::kDesign;
   const std::string design_only = "mode = \"design\"";
   const std::string explicit_only = "mode = \"explicit\"";
   if (design) {
@@ -420,7 +420,7 @@ DaemonConfig Parse(core::TomlReader& toml) {
     ReadExperiment(r, t, at, c.experiments.emplace_back());
   });
   ReadCommands(r, root, c);
-  for (const core::ConfigProblem& problem : core::Validate(c)) r.Place(problem);
+  for (const config::ConfigProblem& problem : config::Validate(c)) r.Place(problem);
   if (toml.HasProblems()) throw ConfigError(toml.Issues());
   return c;
 }

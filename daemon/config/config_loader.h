@@ -2,8 +2,8 @@
 #include <string>
 #include <string_view>
 
-#include "core/daemon_config.h"
-#include "core/toml_reader.h"
+#include "core/toml/toml_reader.h"
+#include "daemon/config/daemon_config.h"
 
 namespace canalid::daemon {
 
@@ -21,16 +21,16 @@ using ConfigError = core::TomlError;
 /// tables, wrong types, missing required keys, keys of another transport or mode, and every
 /// problem of core::Validate are reported together.  `name` is the file name used in messages.
 /// @throws ConfigError with every problem (a TOML syntax error is reported alone).
-core::DaemonConfig ParseDaemonConfig(std::string_view text, const std::string& name);
+config::DaemonConfig ParseDaemonConfig(std::string_view text, const std::string& name);
 
 /// Reads and parses the file `path`.  @throws ConfigError (also when it cannot be read).
-core::DaemonConfig LoadDaemonConfig(const std::string& path);
+config::DaemonConfig LoadDaemonConfig(const std::string& path);
 
 /// The effective configuration as TOML, every key written with its value (defaults included),
 /// numbers in their shortest exact form, so that ParseDaemonConfig(RenderDaemonConfig(c)) == c for
 /// every c that ParseDaemonConfig returns (fields of the other transport or experiment mode are
 /// not written: they keep their defaults).  Published on LCM at start, parsed again by
 /// `canalid replay`.
-std::string RenderDaemonConfig(const core::DaemonConfig& config);
+std::string RenderDaemonConfig(const config::DaemonConfig& config);
 
 }  // namespace canalid::daemon

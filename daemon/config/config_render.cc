@@ -51,7 +51,7 @@ class Writer {
   void List(const char* key, const std::vector<E>& values) {
     std::string text = "[";
     for (std::size_t i = 0; i < values.size(); ++i) {
-      text += (i == 0 ? "" : ", ") + String(core::EnumName(values[i]));
+      text += (i == 0 ? "" : ", ") + String(config::EnumName(values[i]));
     }
     Key(key, text + "]");
   }
@@ -63,12 +63,12 @@ class Writer {
 
 }  // namespace
 
-std::string RenderDaemonConfig(const core::DaemonConfig& c) {
+std::string RenderDaemonConfig(const config::DaemonConfig& c) {
   Writer w;
   w.Line("# canalidd effective configuration (every key, defaults filled in)");
   w.Line("[daemon]");
   w.Str("state_directory", c.daemon.state_directory);
-  w.Key("log_level", core::EnumName(c.daemon.log_level));
+  w.Key("log_level", config::EnumName(c.daemon.log_level));
   w.Key("time_scale", c.daemon.time_scale);
   if (c.daemon.heartbeat) {
     w.Line("[daemon.heartbeat]");
@@ -79,12 +79,12 @@ std::string RenderDaemonConfig(const core::DaemonConfig& c) {
   w.Line("[lcm]");
   w.Str("url", c.lcm.url);
   w.Str("channel_prefix", c.lcm.channel_prefix);
-  for (const core::PlcConfig& p : c.plcs) {
+  for (const config::PlcConfig& p : c.plcs) {
     w.Line("");
     w.Line("[[plc]]");
     w.Str("name", p.name);
-    w.Key("transport", core::EnumName(p.transport));
-    if (p.transport == core::PlcTransport::kTcp) {
+    w.Key("transport", config::EnumName(p.transport));
+    if (p.transport == config::PlcTransport::kTcp) {
       w.Str("host", p.host);
       w.Int("port", p.port);
       w.Key("connect_timeout_s", p.connect_timeout_s);
@@ -103,16 +103,16 @@ std::string RenderDaemonConfig(const core::DaemonConfig& c) {
     w.Int("max_gap_registers", p.max_gap_registers);
     w.Int("timeouts_before_reconnect", p.timeouts_before_reconnect);
   }
-  for (const core::ChannelConfig& ch : c.channels) {
+  for (const config::ChannelConfig& ch : c.channels) {
     w.Line("");
     w.Line("[[channel]]");
     w.Str("name", ch.name);
     w.Str("plc", ch.plc);
-    w.Key("role", core::EnumName(ch.role));
-    w.Key("register", core::EnumName(ch.table));
+    w.Key("role", config::EnumName(ch.role));
+    w.Key("register", config::EnumName(ch.table));
     w.Int("address", ch.address);
-    w.Key("type", core::EnumName(ch.type));
-    w.Key("word_order", core::EnumName(ch.word_order));
+    w.Key("type", config::EnumName(ch.type));
+    w.Key("word_order", config::EnumName(ch.word_order));
     w.Key("scale", ch.scale);
     w.Key("offset", ch.offset);
     w.Str("unit", ch.unit);
@@ -125,7 +125,7 @@ std::string RenderDaemonConfig(const core::DaemonConfig& c) {
       w.Key("max_rate_per_s", ch.max_rate_per_s);
     }
   }
-  for (const core::ReachConfig& r : c.reaches) {
+  for (const config::ReachConfig& r : c.reaches) {
     w.Line("");
     w.Line("[[reach]]");
     w.Str("name", r.name);
@@ -145,16 +145,16 @@ std::string RenderDaemonConfig(const core::DaemonConfig& c) {
     w.Key("min_delay_s", r.min_delay_s);
     w.Key("max_delay_s", r.max_delay_s);
     w.Key("forgetting", r.forgetting);
-    w.Key("rls_method", core::EnumName(r.rls_method));
-    w.Key("closed_loop", core::EnumName(r.closed_loop));
+    w.Key("rls_method", config::EnumName(r.rls_method));
+    w.Key("closed_loop", config::EnumName(r.closed_loop));
   }
-  for (const core::ExperimentConfig& e : c.experiments) {
+  for (const config::ExperimentConfig& e : c.experiments) {
     w.Line("");
     w.Line("[[experiment]]");
     w.Str("name", e.name);
     w.Str("reach", e.reach);
-    w.Key("mode", core::EnumName(e.mode));
-    if (e.mode == core::ExperimentMode::kDesign) {
+    w.Key("mode", config::EnumName(e.mode));
+    if (e.mode == config::ExperimentMode::kDesign) {
       w.Key("amplitude_percent", e.amplitude_percent);
       w.Key("duration_factor", e.duration_factor);
     } else {
@@ -165,7 +165,7 @@ std::string RenderDaemonConfig(const core::DaemonConfig& c) {
     }
     w.Int("seed", e.seed);
     w.Key("settle_s", e.settle_s);
-    w.Key("start", core::EnumName(e.start));
+    w.Key("start", config::EnumName(e.start));
     w.Int("max_invalid_samples", e.max_invalid_samples);
     w.Key("max_sample_gap_periods", e.max_sample_gap_periods);
   }

@@ -13,7 +13,7 @@ class CsvError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/// A uniformly sampled table read from CSV (DESIGN.md): a header row of column names, `time_s`
+/// A uniformly sampled table read from CSV (docs/design.md): a header row of column names, `time_s`
 /// first, then one numeric row per sample.  Rejected, with file, line and column: a missing file,
 /// an empty file, a header without `time_s` first, duplicate names, rows with the wrong number
 /// of cells, a cell that is not a finite number, time that does not increase, sampling that is

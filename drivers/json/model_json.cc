@@ -10,7 +10,7 @@ nlohmann::json ToJson(const core::FitMetrics& metrics) {
           {"norm_error", metrics.norm_error}};
 }
 
-nlohmann::json ToJson(const core::IdFitResult& fit) {
+nlohmann::json ToJson(const core::IntegratorDelayFit& fit) {
   const double ts = fit.model.sample_time_s;
   return {{"model", "id"},
           {"delay_s", fit.model.delay_s()},
@@ -32,7 +32,7 @@ nlohmann::json ToJson(const core::IdFitResult& fit) {
           {"warnings", fit.warnings}};
 }
 
-nlohmann::json ToJson(const core::IdPipelineResult& result) {
+nlohmann::json ToJson(const core::IntegratorDelayIdentification& result) {
   nlohmann::json json = ToJson(result.fit);
   const double ts = result.fit.model.sample_time_s;
   const auto& replaced = result.level_outliers.replaced;
@@ -200,7 +200,7 @@ nlohmann::json ToJson(const core::LpvIdentification& lpv, double sample_time_s) 
           {"metrics_per_band", bands}};
 }
 
-nlohmann::json OnlineIdJson(const core::IdSnapshot& s, double sample_time_s) {
+nlohmann::json OnlineIdJson(const core::IntegratorDelaySnapshot& s, double sample_time_s) {
   return {{"model", "id"},
           {"estimator", "online"},
           {"delay_s", s.delay_s},

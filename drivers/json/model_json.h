@@ -1,27 +1,27 @@
 #pragma once
 #include <nlohmann/json.hpp>
 
-#include "core/arx.h"
-#include "core/commensurate_state_space.h"
-#include "core/experiment_design.h"
-#include "core/fractional_foptd_fit.h"
-#include "core/fractional_simulator.h"
-#include "core/id_model.h"
-#include "core/id_pipeline.h"
-#include "core/lpv_model.h"
-#include "core/metrics.h"
-#include "core/online_id.h"
-#include "core/process_model_fit.h"
+#include "core/experiment/experiment_design.h"
+#include "core/fractional/commensurate_state_space.h"
+#include "core/fractional/fractional_foptd_fit.h"
+#include "core/fractional/fractional_simulator.h"
+#include "core/fractional/lpv_model.h"
+#include "core/integrator_delay/identify_integrator_delay.h"
+#include "core/integrator_delay/integrator_delay_model.h"
+#include "core/linear/arx.h"
+#include "core/linear/process_model_fit.h"
+#include "core/numerics/metrics.h"
+#include "core/online/online_integrator_delay.h"
 
 namespace canalid::drivers {
 
-/// Model JSON (DESIGN.md "Interfaces"): one object with "model" and self-describing keys in SI
+/// Model JSON (docs/design.md "Interfaces"): one object with "model" and self-describing keys in SI
 /// units, plus "metrics".  These are the only places that name the keys, so `canalid identify`,
 /// `canalid replay` and the daemon's state files agree.
 nlohmann::json ToJson(const core::FitMetrics& metrics);
-nlohmann::json ToJson(const core::IdFitResult& fit);
+nlohmann::json ToJson(const core::IntegratorDelayFit& fit);
 /// The ID model plus "preprocessing" (replaced level samples) and the correlation cross-check.
-nlohmann::json ToJson(const core::IdPipelineResult& result);
+nlohmann::json ToJson(const core::IntegratorDelayIdentification& result);
 /// "model": "arx" with a, b_coeffs (one list per input), na, nb, nk, parameter_std, loss, aic, fpe.
 nlohmann::json ToJson(const core::ArxModel& model);
 /// The experiment design (amplitude, clock, order, periods, duration and the explanation).
@@ -43,6 +43,6 @@ nlohmann::json ToJson(const core::LpvIdentification& lpv, double sample_time_s);
 /// A snapshot of the online ID bank in the ID model's keys ("model": "id", delay_s, nk, b,
 /// area_m2, sample_time_s, p21_s_per_m2, offset_m, drift_m_per_s) with its standard deviations,
 /// errors and "estimator": "online".
-nlohmann::json OnlineIdJson(const core::IdSnapshot& snapshot, double sample_time_s);
+nlohmann::json OnlineIdJson(const core::IntegratorDelaySnapshot& snapshot, double sample_time_s);
 
 }  // namespace canalid::drivers

@@ -3,8 +3,8 @@
 #include <cmath>
 #include <optional>
 
-#include "core/fractional_foptd_fit.h"
-#include "core/oustaloup.h"
+#include "core/fractional/fractional_foptd_fit.h"
+#include "core/fractional/oustaloup.h"
 
 namespace canalid::drivers {
 namespace {
@@ -132,9 +132,9 @@ std::vector<std::string> ModelInputs(const json& j, const std::string& source) {
   return names;
 }
 
-IdModelRecord IdModelFromJson(const json& j, const std::string& source) {
+IntegratorDelayModelRecord IntegratorDelayModelFromJson(const json& j, const std::string& source) {
   ExpectKind(j, "id", source);
-  IdModelRecord r;
+  IntegratorDelayModelRecord r;
   r.model.b = Number(j, "b", source);
   r.model.nk = Integer(j, "nk", source, 0);
   r.model.sample_time_s = SampleTimeOrZero(j, source);

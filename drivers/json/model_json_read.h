@@ -5,13 +5,13 @@
 #include <string>
 #include <vector>
 
-#include "core/arx.h"
-#include "core/commensurate_state_space.h"
-#include "core/fractional_foptd.h"
-#include "core/fractional_simulator.h"
-#include "core/id_model.h"
-#include "core/lpv_model.h"
-#include "core/process_models.h"
+#include "core/fractional/commensurate_state_space.h"
+#include "core/fractional/fractional_foptd.h"
+#include "core/fractional/fractional_simulator.h"
+#include "core/fractional/lpv_model.h"
+#include "core/integrator_delay/integrator_delay_model.h"
+#include "core/linear/arx.h"
+#include "core/linear/process_models.h"
 
 namespace canalid::drivers {
 
@@ -38,15 +38,16 @@ class ModelJsonError : public std::runtime_error {
 /// "id": the open-loop level equation y(k) = b Q(k) + p21 q_in(k - nk) + c + d (k - k0).
 /// Required b, nk; model.sample_time_s is 0 when "sample_time_s" is absent (use the record's),
 /// p21, offset and drift default to 0, fit_from_sample to nk + 1, closed_loop to false.
-struct IdModelRecord {
-  core::IdModel model;
+struct IntegratorDelayModelRecord {
+  core::IntegratorDelayModel model;
   double p21_s_per_m2 = 0.0;
   double offset_m = 0.0;
   double drift_m_per_s = 0.0;
   int fit_from_sample = 0;  ///< k0
   bool closed_loop = false;
 };
-IdModelRecord IdModelFromJson(const nlohmann::json& json, const std::string& source);
+IntegratorDelayModelRecord IntegratorDelayModelFromJson(const nlohmann::json& json,
+                                                        const std::string& source);
 
 /// "arx": orders, a and b_coeffs (parameters and statistics are not restored); first_sample from
 /// "fit_from_sample", by default orders.min_first_sample() (the fit's own default).
@@ -81,7 +82,7 @@ struct FractionalFoptdRecord {
 FractionalFoptdRecord FractionalFoptdFromJson(const nlohmann::json& json,
                                               const std::string& source);
 
-/// "frac-ss": the companion matrices A, B, C are checked to have seed 1's form for q.
+/// "frac-ss": the companion matrices A, B, C are checked to have the LPV paper's form for q.
 /// Required q, A, B, C, delay_samples; sample_time_s is 0 when absent (use the record's),
 /// memory_length defaults to 0 (the whole record).
 struct CommensurateRecord {

@@ -9,7 +9,7 @@
 namespace canalid::drivers {
 
 CommandReceiver::CommandReceiver(Bus& bus, const std::string& channel,
-                                 core::CommandAuthenticator& authenticator, Clock now_us,
+                                 drivers::CommandAuthenticator& authenticator, Clock now_us,
                                  Callback on_accepted)
     : bus_(bus),
       channel_(channel),
@@ -33,13 +33,13 @@ CommandReceiver::~CommandReceiver() { bus_.Unsubscribe(subscription_); }
 int64_t CommandReceiver::rejected() const {
   int64_t total = 0;
   for (std::size_t i = 0; i < counts_.size(); ++i) {
-    if (i != static_cast<std::size_t>(core::CommandVerdict::kAccepted)) total += counts_[i];
+    if (i != static_cast<std::size_t>(drivers::CommandVerdict::kAccepted)) total += counts_[i];
   }
   return total;
 }
 
 void CommandReceiver::Receive(std::span<const uint8_t> data) noexcept {
-  auto verdict = core::CommandVerdict::kMalformed;
+  auto verdict = drivers::CommandVerdict::kMalformed;
   // Before lcm-gen's decode, which would allocate what hmac_size says (CommandWireIsBounded).
   if (!CommandWireIsBounded(data)) {
     ++counts_[static_cast<std::size_t>(verdict)];
@@ -49,11 +49,11 @@ void CommandReceiver::Receive(std::span<const uint8_t> data) noexcept {
     canalid::command_t message;
     if (DecodeMessage(data, message) && message.hmac_size >= 0 &&
         static_cast<std::size_t>(message.hmac_size) == message.hmac.size()) {
-      const core::CommandFields fields = CommandFieldsOf(message, channel_);
+      const drivers::CommandFields fields = CommandFieldsOf(message, channel_);
       verdict = authenticator_.Verify(fields, now_us_());
-      if (verdict == core::CommandVerdict::kAccepted) {
+      if (verdict == drivers::CommandVerdict::kAccepted) {
         ++counts_[static_cast<std::size_t>(verdict)];
-        AcceptedCommand command{static_cast<core::CommandKind>(message.kind),
+        AcceptedCommand command{static_cast<drivers::CommandKind>(message.kind),
                                 message.utime,
                                 message.counter,
                                 message.sender,

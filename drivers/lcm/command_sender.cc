@@ -5,7 +5,7 @@
 namespace canalid::drivers {
 
 canalid::command_t BuildSignedCommand(std::span<const uint8_t> key,
-                                      const core::CommandFields& fields) {
+                                      const drivers::CommandFields& fields) {
   canalid::command_t message;
   message.utime = fields.utime_us;
   message.counter = fields.counter;
@@ -13,14 +13,15 @@ canalid::command_t BuildSignedCommand(std::span<const uint8_t> key,
   message.kind = fields.kind;
   message.reach = std::string(fields.reach);
   message.argument = std::string(fields.argument);
-  const core::Sha256Digest mac = core::SignCommand(key, fields);
+  const drivers::Sha256Digest mac = drivers::SignCommand(key, fields);
   message.hmac.assign(mac.begin(), mac.end());
   message.hmac_size = static_cast<int32_t>(message.hmac.size());
   return message;
 }
 
-core::CommandFields CommandFieldsOf(const canalid::command_t& message, std::string_view channel) {
-  core::CommandFields fields;
+drivers::CommandFields CommandFieldsOf(const canalid::command_t& message,
+                                       std::string_view channel) {
+  drivers::CommandFields fields;
   fields.channel = channel;
   fields.utime_us = message.utime;
   fields.counter = message.counter;

@@ -55,14 +55,14 @@ bool CommandWireIsBounded(std::span<const uint8_t> data) noexcept {
   // Fields in command_t.lcm order.
   return r.U64(fingerprint) &&
          fingerprint == static_cast<uint64_t>(canalid::command_t::getHash()) &&
-         r.Skip(8) &&                                 // utime
-         r.Skip(8) &&                                 // counter
-         r.String(core::kMaxCommandSenderBytes) &&    // sender
-         r.Skip(1) &&                                 // kind
-         r.String(core::kMaxCommandReachBytes) &&     // reach
-         r.String(core::kMaxCommandArgumentBytes) &&  // argument
-         r.I32(hmac_size) && hmac_size == static_cast<int32_t>(sizeof(core::Sha256Digest)) &&
-         r.Skip(sizeof(core::Sha256Digest)) && r.left() == 0;
+         r.Skip(8) &&                                    // utime
+         r.Skip(8) &&                                    // counter
+         r.String(drivers::kMaxCommandSenderBytes) &&    // sender
+         r.Skip(1) &&                                    // kind
+         r.String(drivers::kMaxCommandReachBytes) &&     // reach
+         r.String(drivers::kMaxCommandArgumentBytes) &&  // argument
+         r.I32(hmac_size) && hmac_size == static_cast<int32_t>(sizeof(drivers::Sha256Digest)) &&
+         r.Skip(sizeof(drivers::Sha256Digest)) && r.left() == 0;
 }
 
 }  // namespace canalid::drivers

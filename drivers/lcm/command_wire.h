@@ -3,7 +3,7 @@
 #include <cstdint>
 #include <span>
 
-#include "core/command_auth.h"
+#include "drivers/auth/command_auth.h"
 
 namespace canalid::drivers {
 
@@ -12,8 +12,8 @@ namespace canalid::drivers {
 /// (4 + 1024 + 1), hmac_size (4) and a 32-byte MAC. Strings are LCM-encoded as an int32 length
 /// that counts a terminating NUL, then the bytes and the NUL.
 inline constexpr std::size_t kMaxCommandMessageBytes =
-    8 + 8 + 8 + (4 + core::kMaxCommandSenderBytes + 1) + 1 + (4 + core::kMaxCommandReachBytes + 1) +
-    (4 + core::kMaxCommandArgumentBytes + 1) + 4 + 32;
+    8 + 8 + 8 + (4 + drivers::kMaxCommandSenderBytes + 1) + 1 +
+    (4 + drivers::kMaxCommandReachBytes + 1) + (4 + drivers::kMaxCommandArgumentBytes + 1) + 4 + 32;
 static_assert(kMaxCommandMessageBytes == 1228);
 
 /// True when `data` is a canalid.command_t that lcm-gen's decoder can take without a large

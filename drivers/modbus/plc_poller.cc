@@ -18,7 +18,7 @@ std::vector<RegisterSpan> Spans(const std::vector<PollChannel>& channels) {
   std::vector<RegisterSpan> spans;
   spans.reserve(channels.size());
   for (const PollChannel& c : channels) {
-    spans.push_back({c.kind, c.address, core::RegisterCount(c.scaling.type)});
+    spans.push_back({c.kind, c.address, drivers::RegisterCount(c.scaling.type)});
   }
   return spans;
 }
@@ -31,13 +31,13 @@ PollSample Prototype(std::size_t channels) {
   return s;
 }
 
-SampleQuality QualityOf(core::ScalingError error) {
+SampleQuality QualityOf(drivers::ScalingError error) {
   switch (error) {
-    case core::ScalingError::kNone:
+    case drivers::ScalingError::kNone:
       return SampleQuality::kValid;
-    case core::ScalingError::kOutOfRange:
+    case drivers::ScalingError::kOutOfRange:
       return SampleQuality::kOutOfRange;
-    case core::ScalingError::kNotFinite:
+    case drivers::ScalingError::kNotFinite:
       return SampleQuality::kNotFinite;
     default:
       return SampleQuality::kReadFailed;
@@ -65,7 +65,7 @@ void ValidatePollerConfig(const PollerConfig& c, double response_timeout_s) {
     const PollChannel& ch = c.channels[i];
     const std::string name = where + "channel " + std::to_string(i) + " '" + ch.name + "': ";
     try {
-      core::ValidateChannelScaling(ch.scaling);
+      drivers::ValidateChannelScaling(ch.scaling);
       if (ch.writable) core::ValidateSetpointLimits(ch.limits);
     } catch (const std::invalid_argument& e) {
       throw std::invalid_argument(name + e.what());
@@ -238,7 +238,7 @@ void PlcPoller::PollOnce() {
   for (std::size_t i = 0; i < config_.channels.size(); ++i) {
     const PollChannel& c = config_.channels[i];
     const ChannelLocation& loc = plan_.channels[i];
-    const int n = core::RegisterCount(c.scaling.type);
+    const int n = drivers::RegisterCount(c.scaling.type);
     const uint16_t* regs =
         block_registers_.data() + block_offsets_[static_cast<std::size_t>(loc.block)] + loc.offset;
     s.raw[i] = {regs[0], n == 2 ? regs[1] : uint16_t{0}};
@@ -247,7 +247,7 @@ void PlcPoller::PollOnce() {
       s.values[i] = 0.0;
       continue;
     }
-    const core::DecodedValue d = core::DecodeChannel(
+    const drivers::DecodedValue d = drivers::DecodeChannel(
         c.scaling, std::span<const uint16_t>(regs, static_cast<std::size_t>(n)));
     s.quality[i] = QualityOf(d.error);
     s.values[i] = d.ok() ? d.value : 0.0;
@@ -328,10 +328,10 @@ void PlcPoller::ExecuteWrite(const WriteRequest& request) {
     r.outcome = WriteOutcome::kNotFinite;
   } else {
     std::array<uint16_t, 2> regs{};
-    const int n = core::RegisterCount(c.scaling.type);
-    r.encode_error = core::EncodeChannel(
+    const int n = drivers::RegisterCount(c.scaling.type);
+    r.encode_error = drivers::EncodeChannel(
         c.scaling, limited.value, std::span<uint16_t>(regs.data(), static_cast<std::size_t>(n)));
-    if (r.encode_error != core::ScalingError::kNone) {
+    if (r.encode_error != drivers::ScalingError::kNone) {
       r.outcome = WriteOutcome::kEncodeFailed;
     } else {
       if (!port_->connected()) {

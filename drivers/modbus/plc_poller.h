@@ -10,8 +10,8 @@
 #include <thread>
 #include <vector>
 
-#include "core/channel_scaling.h"
-#include "core/setpoint_limiter.h"
+#include "core/experiment/setpoint_limiter.h"
+#include "drivers/modbus/channel_scaling.h"
 #include "drivers/modbus/plc_port.h"
 #include "drivers/modbus/read_plan.h"
 #include "drivers/modbus/reconnect_backoff.h"
@@ -24,7 +24,7 @@ struct PollChannel {
   std::string name;  ///< e.g. "pool2.level_m"
   RegisterKind kind = RegisterKind::kHolding;
   int address = 0;  ///< 0-based register address of the first word
-  core::ChannelScaling scaling;
+  drivers::ChannelScaling scaling;
   bool writable = false;        ///< setpoint writes allowed (holding registers only)
   core::SetpointLimits limits;  ///< clamp and rate limit of writes (used when writable)
 };
@@ -83,7 +83,7 @@ struct WriteResult {
   bool clamped = false;
   bool rate_limited = false;
   WriteOutcome outcome = WriteOutcome::kWritten;
-  core::ScalingError encode_error = core::ScalingError::kNone;
+  drivers::ScalingError encode_error = drivers::ScalingError::kNone;
   PlcStatus plc;
   double time_s = 0.0;  ///< wall clock when executed
 };
@@ -110,8 +110,8 @@ struct PollerCounters {
 /// that thread. The read plan is computed once in the constructor.
 ///
 /// Loop: connect (on failure wait ReconnectBackoff delays: initial, 2x, 4x ... up to the bound);
-/// read every block of the plan; decode each channel with core::DecodeChannel; hand the poll over;
-/// execute queued writes; wait for the next period (writes queued meanwhile run at once). A
+/// read every block of the plan; decode each channel with drivers::DecodeChannel; hand the poll
+/// over; execute queued writes; wait for the next period (writes queued meanwhile run at once). A
 /// kDisconnected read, or timeouts_before_reconnect consecutive timeouts, drops the link.
 ///
 /// Handoff to the consumer (the daemon's Asio thread): polls go into a lock-free SPSC ring of

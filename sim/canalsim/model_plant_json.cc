@@ -82,7 +82,7 @@ std::unique_ptr<SampledPlant> PlantFromModelJson(
   RequireInitialInputs(initial_inputs, source);
   const std::string kind = drivers::ModelKind(json, source);
   if (kind == "id") {
-    drivers::IdModelRecord r = drivers::IdModelFromJson(json, source);
+    drivers::IntegratorDelayModelRecord r = drivers::IntegratorDelayModelFromJson(json, source);
     // A model written without its sample time runs at the plant's.
     if (r.model.sample_time_s > 0.0) {
       RequireSampleTime(r.model.sample_time_s, sample_time_s, source);

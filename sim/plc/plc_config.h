@@ -3,7 +3,7 @@
 #include <string_view>
 #include <vector>
 
-#include "core/register_codec.h"
+#include "core/registers/register_codec.h"
 #include "sim/canal.h"
 
 namespace canalid::sim::plc {

@@ -4,7 +4,7 @@
 #include <span>
 #include <stdexcept>
 
-#include "core/register_codec.h"
+#include "core/registers/register_codec.h"
 
 namespace canalid::sim::plc {
 namespace {

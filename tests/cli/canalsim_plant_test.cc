@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "drivers/csv/csv_table.h"
-#include "support/run_program.h"
+#include "tests/support/run_program.h"
 
 namespace canalid::testing {
 namespace {

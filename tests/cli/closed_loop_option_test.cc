@@ -8,7 +8,7 @@
 
 #include "daemon/canalid/closed_loop_option.h"
 #include "daemon/canalid/input_error.h"
-#include "support/run_program.h"
+#include "tests/support/run_program.h"
 
 namespace canalid::testing {
 namespace {

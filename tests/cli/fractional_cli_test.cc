@@ -1,5 +1,5 @@
 // `canalid identify --model frac-foptd` and `--compare` on held-out gate-step experiments made
-// from the exact Mittag-Leffler step response (core/mittag_leffler.h, independent of the
+// from the exact Mittag-Leffler step response (core/fractional/mittag_leffler.h, independent of the
 // Oustaloup simulator the fit uses), run through the real program.
 #include <gtest/gtest.h>
 
@@ -12,13 +12,13 @@
 #include <string>
 #include <vector>
 
-#include "core/mittag_leffler.h"
-#include "support/run_program.h"
+#include "core/fractional/mittag_leffler.h"
+#include "tests/support/run_program.h"
 
 namespace canalid::testing {
 namespace {
 
-constexpr double kTs = 0.15;    // seed 2's flume: Ts = 0.15 s
+constexpr double kTs = 0.15;    // the flume paper's flume: Ts = 0.15 s
 constexpr int kSamples = 2400;  // 360 s per experiment
 constexpr double kNoiseMm = 0.15;
 constexpr int kStepSample = 40;  // the gate moves at 6 s
@@ -32,8 +32,8 @@ struct GateStep {
   double gate_to_mm;
 };
 
-// Inside seed 2's ranges (K 0.086..0.775, T 1.17..48, tau 2.25..5.7 s, alpha 0.6..1.25), gate
-// steps on its 5 mm grid giving level changes of 6..15 mm (40..100 sigma of the noise).
+// Inside the flume paper's ranges (K 0.086..0.775, T 1.17..48, tau 2.25..5.7 s, alpha 0.6..1.25),
+// gate steps on its 5 mm grid giving level changes of 6..15 mm (40..100 sigma of the noise).
 const std::vector<GateStep> kExperiments = {
     {0.372, 10.975, 4.05, 0.60, 20, 50}, {0.55, 6.0, 3.0, 0.70, 15, 40},
     {0.25, 20.0, 5.2, 0.90, 10, 50},     {0.45, 9.0, 2.5, 1.00, 45, 20},
@@ -171,8 +171,8 @@ TEST_F(FractionalCli, CompareOverAFolderPrintsSeed2sTable) {
   EXPECT_EQ(rows[2][0], "foptd");
   EXPECT_EQ(rows[3][0], "soptd");
   EXPECT_EQ(rows[4][0], "frac-foptd");
-  // Seed 2's headline: the fractional model has the lowest mean error (its 11 % here is more:
-  // half of these experiments are far from order 1).
+  // The flume paper's headline: the fractional model has the lowest mean error (its 11 % here is
+  // more: half of these experiments are far from order 1).
   EXPECT_LT(means[2], 0.89 * std::min(means[0], means[1]));
 
   const ProgramRun json_run = RunProgram(command + " --json", dir_);

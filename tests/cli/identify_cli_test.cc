@@ -6,7 +6,7 @@
 #include <random>
 #include <sstream>
 
-#include "support/run_program.h"
+#include "tests/support/run_program.h"
 
 namespace canalid::testing {
 namespace {

@@ -9,7 +9,7 @@
 #include <sstream>
 #include <string>
 
-#include "support/run_program.h"
+#include "tests/support/run_program.h"
 
 namespace canalid::testing {
 namespace {

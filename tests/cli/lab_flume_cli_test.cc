@@ -1,7 +1,7 @@
-// Seed 2's experiment on config/sim/lab-flume.toml: canalsim runs the gate step scenario and
-// `canalid identify --model foptd` fits it.  Truths: seed 2's nominal model and the ranges of its
-// 1080 experiments (shared/domain/README.md section 5), and the linearised flume model of its
-// Eq. [14] with this file's numbers.
+// The flume paper's experiment on config/sim/lab-flume.toml: canalsim runs the gate step scenario
+// and `canalid identify --model foptd` fits it.  Truths: the flume paper's nominal model and the
+// ranges of its 1080 experiments (shared/domain/README.md section 5), and the linearised flume
+// model of its Eq. [14] with this file's numbers.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -9,7 +9,7 @@
 #include <string>
 
 #include "drivers/csv/csv_table.h"
-#include "support/run_program.h"
+#include "tests/support/run_program.h"
 
 namespace canalid::testing {
 namespace {
@@ -35,10 +35,10 @@ TEST(LabFlumeCli, GateStepFitsAFoptdOfTheOrderOfSeed2) {
   const double gain = model["gain"].get<double>();
   const double time_constant = model["time_constant_s"].get<double>();
   const double delay = model["delay_s"].get<double>();
-  // Our flume approximates seed 2's (reservoir size, Cw, a straight 1-D pool; measured here:
-  // K 0.53, T 8.4 s, tau 3.1 s), so "of the order of" is: inside the ranges seed 2 found over
-  // its 1080 experiments (K 0.086-0.775, T 1.1-48.94 s, tau 2.25-5.7 s), and within a factor
-  // 1.5 of its nominal K0 = 0.372, T0 = 10.975 s, tau0 = 4.05 s.
+  // Our flume approximates the flume paper's (reservoir size, Cw, a straight 1-D pool; measured
+  // here: K 0.53, T 8.4 s, tau 3.1 s), so "of the order of" is: inside the ranges the flume paper
+  // found over its 1080 experiments (K 0.086-0.775, T 1.1-48.94 s, tau 2.25-5.7 s), and within a
+  // factor 1.5 of its nominal K0 = 0.372, T0 = 10.975 s, tau0 = 4.05 s.
   EXPECT_GT(gain, 0.086);
   EXPECT_LT(gain, 0.775);
   EXPECT_GT(gain, 0.372 / 1.5);
@@ -57,10 +57,10 @@ TEST(LabFlumeCli, GateStepFitsAFoptdOfTheOrderOfSeed2) {
 }
 
 TEST(PumpPilotCli, B1PrbsGivesAnIntegratorWithTheWaveTravelDelay) {
-  // Seed 1's experiment on pool P1 (PRBS on pump B1, the other pumps held).  The ID model's
+  // The LPV paper's experiment on pool P1 (PRBS on pump B1, the other pumps held).  The ID model's
   // delay must be the wave's travel time over the 12 m pool, L / (c + V) = 8.5 s at 20 cm,
-  // within one 0.5 s sample either way: seed 1 found 5-17 samples, 17 at its lowest level.  Its
-  // area must be of the order of the pool's 1.8 m2 surface: the reflected waves between the
+  // within one 0.5 s sample either way: the LPV paper found 5-17 samples, 17 at its lowest level.
+  // Its area must be of the order of the pool's 1.8 m2 surface: the reflected waves between the
   // pumps bias it (measured 2.3 m2), so only a factor 1.5 is asked.
   const auto dir = TestDirectory("pump-pilot-id");
   const std::string src = CANALID_SOURCE_DIR;

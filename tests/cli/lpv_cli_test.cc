@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "support/run_program.h"
-#include "support/simulate_round_trip.h"
+#include "tests/support/run_program.h"
+#include "tests/support/simulate_round_trip.h"
 
 namespace canalid::testing {
 namespace {
@@ -83,10 +83,10 @@ TEST_F(LpvCli, RecoversKnownQuadraticParameterLaws) {
   }
   EXPECT_NEAR(json["coefficients"]["nk"][0].get<double>(), 0.0, 1e-8);
   EXPECT_NEAR(json["coefficients"]["nk"][2].get<double>(), kNk, 1e-8);
-  // MAE per operating point (seed 1 Tables 8-9), local and LPV.  The interpolation is exact at
-  // the band centres, so both are equal; the first band starts at rest, so its MAE is ~0 (later
-  // runs start in the previous band's state, which the per-band simulation from rest does not
-  // know: their MAE is that initial transient, not a model error).
+  // MAE per operating point (the LPV paper's Tables 8-9), local and LPV.  The interpolation is
+  // exact at the band centres, so both are equal; the first band starts at rest, so its MAE is ~0
+  // (later runs start in the previous band's state, which the per-band simulation from rest does
+  // not know: their MAE is that initial transient, not a model error).
   ASSERT_EQ(json["metrics_per_band"].size(), 5u);
   for (std::size_t i = 0; i < 5; ++i) {
     const auto& band = json["metrics_per_band"][i];

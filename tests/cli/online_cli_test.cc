@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "support/run_program.h"
+#include "tests/support/run_program.h"
 
 namespace canalid::testing {
 namespace {
@@ -103,8 +103,8 @@ TEST(OnlineCli, IdOnFixedGateRecordWithoutP22EstimatesAOnePlusP22G) {
 // data alone, without p22: its step 3 fits the level on the flow simulated from the inflow
 // through the estimated loop sensitivity F_hat, so the level-driven part of q_out (which carries
 // IDZ's p22 g y into the IV and LS regressions) is not a regressor.  Measured 720 s, 33090 m2
-// (-3.0 %); the delay comes from the IV bank (see core::OnlineIdOptions::closed_loop for the
-// other choices, which fail here).  The open-loop records are unchanged under auto (above).
+// (-3.0 %); the delay comes from the IV bank (see core::OnlineIntegratorDelayOptions::closed_loop
+// for the other choices, which fail here).  The open-loop records are unchanged under auto (above).
 TEST(OnlineCli, IdOnFixedGateRecordThreeStepMeetsTheHeldOutTolerancesWithoutP22) {
   const std::string csv = Record("asce2-pool2-prbs-fixed-gate");
   const auto model =

@@ -22,7 +22,7 @@
 #include <string>
 #include <vector>
 
-#include "support/run_program.h"
+#include "tests/support/run_program.h"
 
 namespace canalid::testing {
 namespace {

@@ -17,8 +17,8 @@
 #include <string>
 #include <vector>
 
-#include "core/mittag_leffler.h"
-#include "support/run_program.h"
+#include "core/fractional/mittag_leffler.h"
+#include "tests/support/run_program.h"
 
 namespace canalid::testing {
 namespace {
@@ -116,8 +116,8 @@ std::vector<std::vector<double>> ReadData(const std::filesystem::path& path) {
   return rows;
 }
 
-// Seed 2's flume: a gate step at 6 s, Ts = 0.15 s, level from the exact Mittag-Leffler response
-// of K e^{-tau s}/(1 + T s^alpha) plus seeded noise (as tests/cli/fractional_cli_test.cc).
+// The flume paper's flume: a gate step at 6 s, Ts = 0.15 s, level from the exact Mittag-Leffler
+// response of K e^{-tau s}/(1 + T s^alpha) plus seeded noise (as tests/cli/fractional_cli_test.cc).
 constexpr double kGain = 0.55, kTimeConstant = 6.0, kDelay = 3.0, kAlpha = 0.7;
 std::string GateStepCsv() {
   constexpr double kTs = 0.15;

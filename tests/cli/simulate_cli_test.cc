@@ -9,10 +9,10 @@
 #include <string>
 #include <vector>
 
-#include "core/mittag_leffler.h"
-#include "support/run_program.h"
-#include "support/simulate_round_trip.h"
+#include "core/fractional/mittag_leffler.h"
 #include "tests/support/frac_step_reference.h"
+#include "tests/support/run_program.h"
+#include "tests/support/simulate_round_trip.h"
 
 namespace canalid::testing {
 namespace {
@@ -214,10 +214,10 @@ std::string UnitStepCsv(int rows, int step_row, double ts) {
 TEST_F(SimulateCli, HandWrittenMinimalFracFoptdMatchesTheMittagLefflerReference) {
   // The paper's form: gain, time_constant_s, alpha, delay_s only.  Offsets default to 0 and the
   // Oustaloup band to the fit's for this record (2 sections per decade over 1005 s at 0.25 s).
-  // Tolerance 0.1 % of K: core/fractional_simulator.h measured the default band's error against
-  // the Mittag-Leffler truth below 0.1 % of K inside seed 2's alpha range (0.28 % at 1.8), with
-  // 2 sections per decade about the same as 3; alpha = 1 is exact.  Measured here: 0.006 % of K
-  // at alpha 0.8, 0.009 % at 0.5, 1e-8 % at 1.
+  // Tolerance 0.1 % of K: core/fractional/fractional_simulator.h measured the default band's error
+  // against the Mittag-Leffler truth below 0.1 % of K inside the flume paper's alpha range (0.28 %
+  // at 1.8), with 2 sections per decade about the same as 3; alpha = 1 is exact.  Measured here:
+  // 0.006 % of K at alpha 0.8, 0.009 % at 0.5, 1e-8 % at 1.
   constexpr double kTs = 0.25;  // every reference time is a whole number of samples
   constexpr int kStepRow = 20;
   WriteFile(dir_ / "step.csv", UnitStepCsv(kStepRow + 4001, kStepRow, kTs));

@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "support/run_program.h"
+#include "tests/support/run_program.h"
 
 namespace canalid::testing {
 namespace {

@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "core/arx.h"
+#include "core/linear/arx.h"
 
 namespace canalid::core {
 namespace {

@@ -1,4 +1,4 @@
-#include "core/arx.h"
+#include "core/linear/arx.h"
 
 #include <gtest/gtest.h>
 
@@ -160,7 +160,7 @@ TEST(Arx, SimulationReproducesNoiseFreeDataAndPredictionGivesTheResiduals) {
 }
 
 TEST(Arx, StaticFitOnAnIntegratedInputWithOffset) {
-  // The ID-model fit of the domain brief: level = b * sum(q_tot) + c, as ARX with na = 0, one
+  // The integrator-delay fit: level = b * sum(q_tot) + c, as ARX with na = 0, one
   // input (the integrated flow, nb = 1, nk = 0) and a constant input for the offset.
   const int n = 200;
   Eigen::MatrixXd u(n, 2);

@@ -1,4 +1,4 @@
-#include "core/commensurate_state_space.h"
+#include "core/fractional/commensurate_state_space.h"
 
 #include <gtest/gtest.h>
 
@@ -9,7 +9,7 @@
 namespace canalid::core {
 namespace {
 
-// Seed 1, Table 3, pool P1, OP1: alpha = 0.5 (b1..b7) and alpha = 0.25 (c1..c15), nk = 17.
+// The LPV paper, Table 3, pool P1, OP1: alpha = 0.5 (b1..b7) and alpha = 0.25 (c1..c15), nk = 17.
 CommensurateModel SeedOneHalf() {
   CommensurateModel m;
   m.q = 2;
@@ -76,7 +76,7 @@ Eigen::VectorXd NaiveSimulation(const CommensurateModel& m, const Eigen::VectorX
   return y;
 }
 
-// Seed 1 excites with a PRBS around the operating point; at rest for the first 30 samples.
+// The LPV paper excites with a PRBS around the operating point; at rest for the first 30 samples.
 Eigen::VectorXd Prbs(int steps, unsigned seed) {
   std::mt19937 rng(seed);
   Eigen::VectorXd u = Eigen::VectorXd::Zero(steps);

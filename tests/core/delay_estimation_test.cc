@@ -1,10 +1,10 @@
-#include "core/delay_estimation.h"
+#include "core/linear/delay_estimation.h"
 
 #include <gtest/gtest.h>
 
 #include <random>
 
-#include "core/prbs.h"
+#include "core/signal/prbs.h"
 
 namespace canalid::core {
 namespace {
@@ -160,7 +160,7 @@ TEST(DelayEstimation, CorrelationAndScanAgreeOnThePoolRecord) {
 }
 
 TEST(DelayEstimation, IntegratorDelayPool) {
-  // ID model (domain brief section 2): y(k) - y(k-1) = b (q_in(k-nk) - q_out(k-1)), b = Ts/A with
+  // ID model (docs/references.md): y(k) - y(k-1) = b (q_in(k-nk) - q_out(k-1)), b = Ts/A with
   // Ts = 60 s and A = 5000 m2, PRBS inflow of +-0.1 m3/s (clock 8 samples: +-1.2 mm per sample),
   // random outflow changes, 1 mm level noise, nk = 14.  (With A = 20000 m2 and 3 mm noise the
   // per-sample signal is 0.07 of the noise on the increments and neither method is reliable on

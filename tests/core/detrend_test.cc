@@ -1,4 +1,4 @@
-#include "core/detrend.h"
+#include "core/signal/detrend.h"
 
 #include <gtest/gtest.h>
 

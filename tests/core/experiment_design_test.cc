@@ -1,4 +1,4 @@
-#include "core/experiment_design.h"
+#include "core/experiment/experiment_design.h"
 
 #include <gtest/gtest.h>
 

@@ -1,14 +1,14 @@
 // DecideRestart: each start-up rule on an interrupted experiment's guard; the reach runner that
 // applies the decision (restore first, hold, refuse, never a PRBS reading as the nominal); the
 // abort on a guard not persisted; and the decision `canalid replay` rebuilds from the message.
-#include "core/experiment_guard.h"
+#include "core/experiment/experiment_guard.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <limits>
 
-#include "core/reach_runner.h"
+#include "core/reach/reach_controller.h"
 
 namespace canalid::core {
 namespace {
@@ -117,8 +117,8 @@ TEST(DecideRestart, ACorruptGuardIsAnInterruptionWithAnUnknownNominal) {
             RestartDecision::Action::kRefuse);
 }
 
-ReachRunnerOptions RunnerOptions() {
-  ReachRunnerOptions o;
+ReachControllerOptions RunnerOptions() {
+  ReachControllerOptions o;
   o.name = "pool2";
   o.channels = {0, 1, 2, 3};
   o.pipeline.sample_time_s = 60.0;
@@ -148,8 +148,8 @@ ReachReadings Readings(double actuator) {
   return r;
 }
 
-TEST(ReachRunnerRestart, RestoresFirstThenCentresTheExperimentOnThePersistedNominal) {
-  ReachRunner runner(RunnerOptions());
+TEST(ReachControllerRestart, RestoresFirstThenCentresTheExperimentOnThePersistedNominal) {
+  ReachController runner(RunnerOptions());
   EXPECT_EQ(runner.ApplyRestart(DecideRestart(Context(), Found(1.532637))), "");
   // The actuator still holds the PRBS level: it is not the nominal.
   const ReachPollOutcome poll = runner.OnPoll(Readings(1.417689));
@@ -165,8 +165,8 @@ TEST(ReachRunnerRestart, RestoresFirstThenCentresTheExperimentOnThePersistedNomi
   EXPECT_NEAR(std::abs(*start->write_setpoint - 1.532637), 0.05, 1e-12);
 }
 
-TEST(ReachRunnerRestart, ARefusalNeverStartsAndTakesNoReadingAsNominal) {
-  ReachRunner runner(RunnerOptions());
+TEST(ReachControllerRestart, ARefusalNeverStartsAndTakesNoReadingAsNominal) {
+  ReachController runner(RunnerOptions());
   EXPECT_EQ(runner.ApplyRestart(DecideRestart(Context(), Corrupt())), "");
   const ReachPollOutcome poll = runner.OnPoll(Readings(1.417689));
   EXPECT_FALSE(poll.nominal_read);
@@ -177,7 +177,7 @@ TEST(ReachRunnerRestart, ARefusalNeverStartsAndTakesNoReadingAsNominal) {
 }
 
 TEST(ReachPipelineGuard, AGuardNotPersistedAbortsAndRestoresTheNominal) {
-  ReachRunner runner(RunnerOptions());
+  ReachController runner(RunnerOptions());
   runner.OnPoll(Readings(1.2));
   ASSERT_TRUE(runner.StartIfDue(true, true));
   const ReachActions a = runner.pipeline().OnGuardNotPersisted();

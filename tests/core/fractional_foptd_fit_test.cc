@@ -1,4 +1,4 @@
-#include "core/fractional_foptd_fit.h"
+#include "core/fractional/fractional_foptd_fit.h"
 
 #include <gtest/gtest.h>
 
@@ -6,12 +6,12 @@
 #include <random>
 #include <stdexcept>
 
-#include "core/fractional_foptd.h"
+#include "core/fractional/fractional_foptd.h"
 
 namespace canalid::core {
 namespace {
 
-constexpr double kTs = 0.15;  // seed 2: Ts = 0.15 s, 360 s per experiment
+constexpr double kTs = 0.15;  // the flume paper: Ts = 0.15 s, 360 s per experiment
 constexpr int kSamples = 2400;
 constexpr double kNoiseMm = 0.15;
 
@@ -20,8 +20,8 @@ struct Experiment {
   Eigen::VectorXd u, y, noise;
 };
 
-// A gate step from u_i to u_f (mm, seed 2's grid 10..50 mm) at sample step_index, level in mm
-// from the Mittag-Leffler closed form (not from the simulator the fit uses).
+// A gate step from u_i to u_f (mm, the flume paper's grid 10..50 mm) at sample step_index, level in
+// mm from the Mittag-Leffler closed form (not from the simulator the fit uses).
 Experiment GateStep(const FractionalFoptdParams& p, double u_i, double u_f, int step_index,
                     double noise_mm, std::mt19937& rng) {
   std::normal_distribution<double> noise(0.0, noise_mm);
@@ -35,8 +35,8 @@ Experiment GateStep(const FractionalFoptdParams& p, double u_i, double u_f, int 
   return e;
 }
 
-// Parameters drawn inside seed 2's ranges (K 0.086..0.775, T 1.17..48 s log-uniform, tau
-// 2.25..5.7 s, alpha 0.6..1.25) and a gate step on seed 2's 5 mm grid.
+// Parameters drawn inside the flume paper's ranges (K 0.086..0.775, T 1.17..48 s log-uniform, tau
+// 2.25..5.7 s, alpha 0.6..1.25) and a gate step on the flume paper's 5 mm grid.
 Experiment DrawExperiment(std::mt19937& rng, double min_change_mm, double noise_mm) {
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   std::uniform_int_distribution<int> gate(0, 8);
@@ -143,7 +143,7 @@ TEST(FractionalFoptdFitTest, IntegerFirstOrderDataGivesOrderOne) {
 }
 
 TEST(FractionalFoptdFitTest, StagedEstimateWithoutRefinementIsClose) {
-  // Seed 2's staged procedure alone (no joint LM): a coarse but sane starting point.
+  // The flume paper's staged procedure alone (no joint LM): a coarse but sane starting point.
   std::mt19937 rng(5);
   const Experiment e = GateStep({0.4, 10.0, 0.8, 4.0}, 20.0, 40.0, 10, 0.0, rng);
   FractionalFoptdFitOptions options;

@@ -1,4 +1,4 @@
-#include "core/fractional_simulator.h"
+#include "core/fractional/fractional_simulator.h"
 #include "tests/support/frac_step_reference.h"
 
 #include <gtest/gtest.h>
@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "core/fractional_foptd.h"
+#include "core/fractional/fractional_foptd.h"
 
 namespace canalid::core {
 namespace {
@@ -72,7 +72,8 @@ TEST(FractionalSimulatorTest, GrunwaldLetnikovMatchesTheReferenceCsv) {
 }
 
 TEST(FractionalSimulatorTest, OustaloupMatchesMittagLefflerAcrossOrders) {
-  // Seed 2's sampling (Ts = 0.15 s, 360 s) over and beyond its ranges, with sub-sample delays.
+  // The flume paper's sampling (Ts = 0.15 s, 360 s) over and beyond its ranges, with sub-sample
+  // delays.
   for (double alpha : {0.5, 0.6, 0.8, 0.95, 1.1, 1.25, 1.5, 1.8}) {
     for (double t_c : {1.17, 10.975, 48.0}) {
       for (double tau : {0.0, 2.25, 4.07}) {

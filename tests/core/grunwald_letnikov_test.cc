@@ -1,4 +1,4 @@
-#include "core/grunwald_letnikov.h"
+#include "core/fractional/grunwald_letnikov.h"
 
 #include <gtest/gtest.h>
 

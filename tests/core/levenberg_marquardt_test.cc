@@ -1,4 +1,4 @@
-#include "core/levenberg_marquardt.h"
+#include "core/numerics/levenberg_marquardt.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "core/lpv_model.h"
+#include "core/fractional/lpv_model.h"
 
 #include <gtest/gtest.h>
 
@@ -7,15 +7,15 @@
 #include <stdexcept>
 #include <string>
 
-#include "core/fractional_foptd.h"
+#include "core/fractional/fractional_foptd.h"
 
 namespace canalid::core {
 namespace {
 
-// Known laws, seed 1 style p1 theta^2 + p2 theta + p3 (highest degree first).
+// Known laws, the LPV paper style p1 theta^2 + p2 theta + p3 (highest degree first).
 const Eigen::Vector3d kA1(0.01, -0.08, -0.8);
 const Eigen::Vector3d kB1(0.002, 0.01, 0.05);
-const Eigen::Vector3d kNk(0.0, -2.0, 12.0);  // delay falls with theta as in seed 1's pool 1
+const Eigen::Vector3d kNk(0.0, -2.0, 12.0);  // delay falls with theta as in the LPV paper's pool 1
 
 double Poly(const Eigen::Vector3d& p, double t) { return p(0) * t * t + p(1) * t + p(2); }
 
@@ -126,8 +126,8 @@ TEST(LpvModelTest, FractionalLocalModelsAndMaePerOperatingPoint) {
   EXPECT_NEAR(frac.model.coefficients(2, 0), alpha(0), 0.005);
   EXPECT_NEAR(frac.model.coefficients(2, 1), alpha(1), 0.03);
   EXPECT_NEAR(frac.model.coefficients(2, 2), alpha(2), 0.05);
-  // MAE per operating point (seed 1 Tables 8-9): the fractional kind must beat a first-order
-  // ARX on fractional data at every point.
+  // MAE per operating point (the LPV paper's Tables 8-9): the fractional kind must beat a
+  // first-order ARX on fractional data at every point.
   const LpvIdentification arx = IdentifyLpv(u, y, theta, ts, edges, FirstOrderArxKind(60));
   ASSERT_EQ(arx.points.size(), 5u);
   for (size_t i = 0; i < 5; ++i) {

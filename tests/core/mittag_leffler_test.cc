@@ -1,4 +1,4 @@
-#include "core/mittag_leffler.h"
+#include "core/fractional/mittag_leffler.h"
 #include "tests/support/frac_step_reference.h"
 
 #include <gtest/gtest.h>

@@ -6,10 +6,10 @@
 #include <cstdlib>
 #include <new>
 
-#include "core/online_arx.h"
-#include "core/online_fractional.h"
-#include "core/online_id.h"
-#include "core/rls.h"
+#include "core/online/online_arx.h"
+#include "core/online/online_fractional.h"
+#include "core/online/online_integrator_delay.h"
+#include "core/online/rls.h"
 #include "tests/core/online_test_data.h"
 
 extern "C" void* __libc_malloc(std::size_t size);
@@ -109,7 +109,7 @@ INSTANTIATE_TEST_SUITE_P(All, AllocationByMethod,
 // Runs `bank` over 600 samples of a synthetic pool (a bad outflow at sample 300, a bad
 // level at `bad_level_sample` when >= 0), taking a snapshot after every update, and returns the
 // allocations made meanwhile.
-long IdBankAllocations(OnlineIdBank& bank, int bad_level_sample = -1) {
+long IntegratorDelayBankAllocations(OnlineIntegratorDelayBank& bank, int bad_level_sample = -1) {
   testdata::PoolSpec spec;
   spec.samples = 600;
   const testdata::PoolData d = testdata::MakePool(spec);
@@ -126,8 +126,8 @@ long IdBankAllocations(OnlineIdBank& bank, int bad_level_sample = -1) {
   return allocations;
 }
 
-OnlineIdOptions IdBankOptions() {
-  OnlineIdOptions o;
+OnlineIntegratorDelayOptions IntegratorDelayBankOptions() {
+  OnlineIntegratorDelayOptions o;
   o.sample_time_s = 60.0;
   o.max_delay_samples = 20;
   o.rls.forgetting = 0.99;  // re-centring every 100 samples is exercised too
@@ -135,32 +135,32 @@ OnlineIdOptions IdBankOptions() {
 }
 
 TEST(OnlineAllocation, IdBankUpdateAndSnapshotNeverAllocate) {
-  const OnlineIdOptions o = IdBankOptions();
-  OnlineIdBank bank(o);
-  EXPECT_EQ(IdBankAllocations(bank), 0);
+  const OnlineIntegratorDelayOptions o = IntegratorDelayBankOptions();
+  OnlineIntegratorDelayBank bank(o);
+  EXPECT_EQ(IntegratorDelayBankAllocations(bank), 0);
 }
 
 // The closed-loop variant: auto runs both banks through the decision, IV re-centring included.
 TEST(OnlineAllocation, ClosedLoopIdBankUpdateAndSnapshotNeverAllocate) {
-  OnlineIdOptions o = IdBankOptions();
+  OnlineIntegratorDelayOptions o = IntegratorDelayBankOptions();
   o.wave_front_term = true;
   o.closed_loop = ClosedLoopMode::kAuto;
   o.closed_loop_window_samples = 250;
   o.outflow_direct_gain_s_per_m2 = 0.02;
-  OnlineIdBank bank(o);
-  EXPECT_EQ(IdBankAllocations(bank), 0);
+  OnlineIntegratorDelayBank bank(o);
+  EXPECT_EQ(IntegratorDelayBankAllocations(bank), 0);
   EXPECT_TRUE(bank.health().closed_loop_decided);
 }
 
 // The three-step variant: step (2), the simulation, step (3) with re-centring, a bad flow and a
 // bad level, and the snapshots (covariance of step (3)) on every sample.
 TEST(OnlineAllocation, ThreeStepIdBankUpdateAndSnapshotNeverAllocate) {
-  OnlineIdOptions o = IdBankOptions();
+  OnlineIntegratorDelayOptions o = IntegratorDelayBankOptions();
   o.wave_front_term = true;
   o.closed_loop = ClosedLoopMode::kThreeStep;
   o.three_step.warmup_samples = 50;
-  OnlineIdBank bank(o);
-  EXPECT_EQ(IdBankAllocations(bank, 400), 0);
+  OnlineIntegratorDelayBank bank(o);
+  EXPECT_EQ(IntegratorDelayBankAllocations(bank, 400), 0);
   EXPECT_TRUE(bank.Snapshot().valid);
 }
 

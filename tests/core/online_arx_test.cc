@@ -1,4 +1,4 @@
-#include "core/online_arx.h"
+#include "core/online/online_arx.h"
 
 #include <gtest/gtest.h>
 

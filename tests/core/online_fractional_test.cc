@@ -1,4 +1,4 @@
-#include "core/online_fractional.h"
+#include "core/online/online_fractional.h"
 
 #include <gtest/gtest.h>
 
@@ -32,7 +32,7 @@ struct Data {
   std::vector<double> y;
 };
 
-// GL1 simulation of K e^{-d h s} / (1 + T s^alpha) with equation noise (domain brief section 6):
+// GL1 simulation of K e^{-d h s} / (1 + T s^alpha) with equation noise (docs/references.md):
 // y(k) = (K u(k-d) - c sum_{j=1..L} w_j y(k-j)) / (1 + c) + e(k), c = T h^-alpha.
 Data Simulate(double alpha, double gain, double time_constant, int samples, double noise) {
   const std::vector<double> w = Binomial(alpha, kMemory);

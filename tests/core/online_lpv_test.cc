@@ -1,4 +1,4 @@
-#include "core/online_lpv.h"
+#include "core/online/online_lpv.h"
 
 #include <gtest/gtest.h>
 

@@ -3,11 +3,11 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/splitmix64.h"
+#include "core/numerics/splitmix64.h"
 
 namespace canalid::core::testdata {
 
-/// SplitMix64 (core/splitmix64.h) with normal noise on top.
+/// SplitMix64 (core/numerics/splitmix64.h) with normal noise on top.
 class TestRandom {
  public:
   explicit TestRandom(std::uint64_t seed) : random_(seed) {}

@@ -1,4 +1,4 @@
-#include "core/oustaloup.h"
+#include "core/fractional/oustaloup.h"
 
 #include <gtest/gtest.h>
 
@@ -10,7 +10,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "core/fractional_delay.h"
+#include "core/signal/fractional_delay.h"
 
 namespace canalid::core {
 namespace {

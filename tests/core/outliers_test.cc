@@ -1,4 +1,4 @@
-#include "core/outliers.h"
+#include "core/signal/outliers.h"
 
 #include <gtest/gtest.h>
 
@@ -6,7 +6,7 @@
 #include <random>
 #include <set>
 
-#include "core/prbs.h"
+#include "core/signal/prbs.h"
 
 namespace canalid::core {
 namespace {

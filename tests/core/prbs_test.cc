@@ -1,4 +1,4 @@
-#include "core/prbs.h"
+#include "core/signal/prbs.h"
 
 #include <gtest/gtest.h>
 

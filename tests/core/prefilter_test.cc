@@ -1,4 +1,4 @@
-#include "core/prefilter.h"
+#include "core/signal/prefilter.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "core/process_model_fit.h"
+#include "core/linear/process_model_fit.h"
 
 #include <gtest/gtest.h>
 
@@ -39,7 +39,8 @@ Eigen::VectorXd Step(int n, int k0, double u0, double du) {
 }
 
 TEST(FitFoptd, RecoversExactParametersFromNoiseFreeStep) {
-  // Seed 2's nominal flume model, delay off the sample grid (4.1 s = 27.33 samples of 0.15 s).
+  // The flume paper's nominal flume model, delay off the sample grid (4.1 s = 27.33 samples of 0.15
+  // s).
   const double ts = 0.15;
   const int n = 2400, k0 = 40;
   const Eigen::VectorXd u = Step(n, k0, 0.20, 0.05);
@@ -53,7 +54,7 @@ TEST(FitFoptd, RecoversExactParametersFromNoiseFreeStep) {
 }
 
 TEST(FitFoptd, RecoversParametersFromNoisyStepWithinTolerance) {
-  // 0.15 mm noise (seed 2's sensor) on a 18.6 mm response: K within 1 %, T within 3 %, tau
+  // 0.15 mm noise (the flume paper's sensor) on a 18.6 mm response: K within 1 %, T within 3 %, tau
   // within 0.15 s. Tolerances are a few standard deviations of the estimator at this noise.
   const double ts = 0.15;
   const int n = 2400, k0 = 40;

@@ -1,4 +1,4 @@
-#include "core/process_models.h"
+#include "core/linear/process_models.h"
 
 #include <gtest/gtest.h>
 
@@ -23,7 +23,8 @@ double SoptdStep(double k, double t1, double t2, double tau, double t) {
 
 TEST(ProcessModels, FoptdStepMatchesClosedFormWithSubSampleDelay) {
   const double ts = 0.15;
-  const FoptdModel model{0.372, 10.975, 4.05};   // seed 2's nominal flume model; 4.05 = 27 Ts
+  const FoptdModel model{0.372, 10.975,
+                         4.05};  // the flume paper's nominal flume model; 4.05 = 27 Ts
   const FoptdModel shifted{0.372, 10.975, 4.1};  // 27.33 Ts: exercises the fractional part
   const Eigen::VectorXd u = Eigen::VectorXd::Ones(2400);
   for (const auto& m : {model, shifted}) {

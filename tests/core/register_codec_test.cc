@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <limits>
 
-#include "core/register_codec.h"
+#include "core/registers/register_codec.h"
 
 namespace canalid::core {
 namespace {

@@ -1,4 +1,4 @@
-#include "core/rls.h"
+#include "core/online/rls.h"
 
 #include <gtest/gtest.h>
 
@@ -8,7 +8,7 @@
 #include <limits>
 #include <vector>
 
-#include "core/splitmix64.h"
+#include "core/numerics/splitmix64.h"
 
 namespace canalid::core {
 namespace {

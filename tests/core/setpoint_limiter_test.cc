@@ -1,4 +1,4 @@
-#include "core/setpoint_limiter.h"
+#include "core/experiment/setpoint_limiter.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "core/splitmix64.h"
+#include "core/numerics/splitmix64.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "core/toml_reader.h"
+#include "core/toml/toml_reader.h"
 
 #include <gtest/gtest.h>
 

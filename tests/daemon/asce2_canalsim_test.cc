@@ -8,16 +8,16 @@
 #include <memory>
 #include <mutex>
 
-#include "core/daemon_plan.h"
 #include "daemon/canalidd/driver_config.h"
 #include "daemon/config/config_loader.h"
-#include "sim/serve_process.h"
+#include "daemon/config/plan_from_config.h"
+#include "tests/sim/serve_process.h"
 
 namespace canalid::daemon {
 namespace {
 
 TEST(Asce2CanalsimTest, PollerReadsPoolTwoAtItsSteadyState) {
-  const core::DaemonConfig config =
+  const config::DaemonConfig config =
       LoadDaemonConfig(std::string(CANALID_SOURCE_DIR) + "/config/canalidd-asce2.toml");
   const std::filesystem::path log =
       std::filesystem::path(CANALID_BINARY_DIR) / "asce2_canalsim_test.stderr";
@@ -78,7 +78,7 @@ TEST(Asce2CanalsimTest, PollerReadsPoolTwoAtItsSteadyState) {
 
   // The designed experiment fits around that opening: 7.5 % either way stays in [0.05, 2].
   const core::ExperimentPlan plan =
-      core::BuildExperimentPlan(config, config.experiments[0], sample.values[5]);
+      config::BuildExperimentPlan(config, config.experiments[0], sample.values[5]);
   EXPECT_DOUBLE_EQ(plan.prbs.amplitude, 0.075 * sample.values[5]);
 }
 

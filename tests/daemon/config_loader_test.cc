@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "core/daemon_plan.h"
 #include "daemon/canalidd/driver_config.h"
+#include "daemon/config/plan_from_config.h"
 
 namespace canalid::daemon {
 namespace {
@@ -47,19 +47,19 @@ std::vector<std::string> Issues(const std::string& text) {
 }
 
 TEST(ConfigLoaderTest, MinimalFileTakesTheDefaults) {
-  const core::DaemonConfig c = ParseDaemonConfig(kMinimal, "t.toml");
+  const config::DaemonConfig c = ParseDaemonConfig(kMinimal, "t.toml");
   EXPECT_EQ(c.daemon.state_directory, "/var/lib/canalidd");
-  EXPECT_EQ(c.daemon.log_level, core::LogLevel::kInfo);
+  EXPECT_EQ(c.daemon.log_level, config::LogLevel::kInfo);
   EXPECT_EQ(c.daemon.time_scale, 1.0);
   EXPECT_FALSE(c.daemon.heartbeat.has_value());
   EXPECT_EQ(c.lcm.url, "");
   EXPECT_EQ(c.lcm.channel_prefix, "CANALID_");
   ASSERT_EQ(c.plcs.size(), 1u);
-  EXPECT_EQ(c.plcs[0].transport, core::PlcTransport::kTcp);
+  EXPECT_EQ(c.plcs[0].transport, config::PlcTransport::kTcp);
   EXPECT_EQ(c.plcs[0].port, 502);
   EXPECT_EQ(c.plcs[0].poll_period_s, 1.0);
   ASSERT_EQ(c.channels.size(), 1u);
-  EXPECT_EQ(c.channels[0].type, core::RegisterType::kI16);
+  EXPECT_EQ(c.channels[0].type, drivers::RegisterType::kI16);
   EXPECT_EQ(c.channels[0].scale, 0.001);
   EXPECT_EQ(c.channels[0].valid_min, -INFINITY);
   EXPECT_FALSE(c.commands.enabled);
@@ -221,12 +221,12 @@ accepted = ["start_experiment", "reboot"]
 
 TEST(ConfigLoaderTest, RtuPlc) {
   const std::string channel = kMinimal.substr(kMinimal.find("[[channel]]"));
-  const core::DaemonConfig c = ParseDaemonConfig(
+  const config::DaemonConfig c = ParseDaemonConfig(
       "[[plc]]\nname = \"p\"\ntransport = \"rtu\"\ndevice = \"/dev/ttyUSB0\"\nbaud = 9600\n"
       "parity = \"N\"\ndata_bits = 7\nstop_bits = 2\nunit_id = 17\n" +
           channel,
       "t.toml");
-  EXPECT_EQ(c.plcs[0].transport, core::PlcTransport::kRtu);
+  EXPECT_EQ(c.plcs[0].transport, config::PlcTransport::kRtu);
   EXPECT_EQ(c.plcs[0].device, "/dev/ttyUSB0");
   EXPECT_EQ(c.plcs[0].baud, 9600);
   EXPECT_EQ(c.plcs[0].parity, 'N');
@@ -327,21 +327,21 @@ TEST(ConfigLoaderTest, UnreadableFile) {
   }
 }
 
-core::DaemonConfig LoadShipped(const char* name) {
+config::DaemonConfig LoadShipped(const char* name) {
   return LoadDaemonConfig(std::string(CANALID_SOURCE_DIR) + "/config/" + name);
 }
 
 TEST(ConfigLoaderTest, ShippedConfigsLoadAndRoundTrip) {
   for (const char* name : {"canalidd.example.toml", "canalidd-asce2.toml"}) {
     SCOPED_TRACE(name);
-    core::DaemonConfig c;
+    config::DaemonConfig c;
     try {
       c = LoadShipped(name);
     } catch (const ConfigError& e) {
       FAIL() << e.what();
     }
     const std::string text = RenderDaemonConfig(c);
-    const core::DaemonConfig again = ParseDaemonConfig(text, "rendered");
+    const config::DaemonConfig again = ParseDaemonConfig(text, "rendered");
     EXPECT_TRUE(again == c) << text;
     EXPECT_EQ(RenderDaemonConfig(again), text);
   }
@@ -350,12 +350,12 @@ TEST(ConfigLoaderTest, ShippedConfigsLoadAndRoundTrip) {
 // Numbers whose shortest decimal form needs 17 digits, infinities, strings with escapes, RTU and
 // explicit experiments: what the shipped files do not exercise.
 TEST(ConfigLoaderTest, RoundTripIsExact) {
-  core::DaemonConfig c = LoadShipped("canalidd-asce2.toml");
+  config::DaemonConfig c = LoadShipped("canalidd-asce2.toml");
   c.daemon.heartbeat->period_s = 0.1 + 0.2;  // 0.30000000000000004
   c.daemon.state_directory = "/var/lib/can\"al\\idd\t";
   c.lcm.url = "udpm://239.255.76.67:7667?ttl=1";
-  core::PlcConfig& plc = c.plcs[0];
-  plc.transport = core::PlcTransport::kRtu;
+  config::PlcConfig& plc = c.plcs[0];
+  plc.transport = config::PlcTransport::kRtu;
   plc.host = "127.0.0.1";  // the defaults of the keys an RTU file cannot have
   plc.port = 502;
   plc.connect_timeout_s = 1.0;
@@ -368,10 +368,10 @@ TEST(ConfigLoaderTest, RoundTripIsExact) {
   c.reaches[0].actuator_gain_m3s_per_unit = 14.5;
   c.reaches[0].online_models = {};
   c.reaches[0].rls_method = core::RlsMethod::kNlms;
-  core::ExperimentConfig& e = c.experiments.emplace_back();
+  config::ExperimentConfig& e = c.experiments.emplace_back();
   e.name = "x";
   e.reach = "pool2";
-  e.mode = core::ExperimentMode::kExplicit;
+  e.mode = config::ExperimentMode::kExplicit;
   e.amplitude = 0.05;
   e.clock_period_s = 360.0;  // a whole number of the demo's 60 s samples
   e.order = 5;
@@ -379,8 +379,8 @@ TEST(ConfigLoaderTest, RoundTripIsExact) {
   e.seed = 2147483647;
   c.commands.enabled = true;
   c.commands.key_file = "/etc/canalidd/key";
-  c.commands.accepted = {core::CommandKind::kAbortExperiment};
-  for (const core::ConfigProblem& p : core::Validate(c))
+  c.commands.accepted = {drivers::CommandKind::kAbortExperiment};
+  for (const config::ConfigProblem& p : config::Validate(c))
     ADD_FAILURE() << p.path << ": " << p.message;
   const std::string text = RenderDaemonConfig(c);
   EXPECT_TRUE(ParseDaemonConfig(text, "rendered") == c) << text;
@@ -401,9 +401,9 @@ std::string ReadSource(const char* relative) {
 TEST(ConfigLoaderTest, ExampleAndDocsDocumentEveryKey) {
   const std::string example = ReadSource("config/canalidd.example.toml");
   const std::string docs = ReadSource("docs/configuration.md");
-  core::DaemonConfig c = LoadShipped("canalidd.example.toml");
-  core::PlcConfig rtu = c.plcs[0];
-  rtu.transport = core::PlcTransport::kRtu;
+  config::DaemonConfig c = LoadShipped("canalidd.example.toml");
+  config::PlcConfig rtu = c.plcs[0];
+  rtu.transport = config::PlcTransport::kRtu;
   c.plcs.push_back(rtu);
   c.reaches[0].nominal_setpoint = 1.0;
   c.reaches[0].actuator_gain_m3s_per_unit = 1.0;
@@ -426,7 +426,7 @@ TEST(ConfigLoaderTest, ExampleAndDocsDocumentEveryKey) {
 // 300 + 16 r + 2 field (fields 0 inflow, 1 outflow, 2 downstream level, 3 gate position), the
 // gate setpoint of record r at holding 300 + 4 r; pool 2 is record 1, its inflow gate record 0.
 TEST(ConfigLoaderTest, Asce2MapsOntoThePoller) {
-  const core::DaemonConfig c = LoadShipped("canalidd-asce2.toml");
+  const config::DaemonConfig c = LoadShipped("canalidd-asce2.toml");
   ASSERT_EQ(c.plcs.size(), 1u);
   const drivers::PollerConfig poller = BuildPollerConfig(c, c.plcs[0]);
   EXPECT_EQ(poller.plc_name, "asce2");
@@ -452,7 +452,8 @@ TEST(ConfigLoaderTest, Asce2MapsOntoThePoller) {
   }
   // 2.1 m as canalsim serves it (docs/register-map.md: 0x4006 0x6666, abcd) decodes to 2.1 m.
   const uint16_t level_registers[] = {0x4006, 0x6666};
-  const core::DecodedValue level = core::DecodeChannel(poller.channels[3].scaling, level_registers);
+  const drivers::DecodedValue level =
+      drivers::DecodeChannel(poller.channels[3].scaling, level_registers);
   ASSERT_TRUE(level.ok());
   EXPECT_NEAR(level.value, 2.1, 1e-6);  // float32 resolution near 2 m is 2.4e-7 m
   const drivers::PollChannel& gate = poller.channels[5];
@@ -475,7 +476,7 @@ TEST(ConfigLoaderTest, Asce2MapsOntoThePoller) {
 
   // The demo's experiment: Ts = 0.1 s x 600 = 60 s; clock round(682 / 120) = 6 samples; order 6
   // (63 x 360 s = 22680 s >= 20 x 682 s, order 5's 11160 s is not); 10 samples of settling.
-  const core::ExperimentPlan plan = core::BuildExperimentPlan(c, c.experiments[0], 0.9);
+  const core::ExperimentPlan plan = config::BuildExperimentPlan(c, c.experiments[0], 0.9);
   EXPECT_EQ(plan.prbs.clock_period_samples, 6);
   EXPECT_EQ(plan.prbs.order, 6);
   EXPECT_EQ(plan.excite_samples, 378);
@@ -485,8 +486,8 @@ TEST(ConfigLoaderTest, Asce2MapsOntoThePoller) {
 }
 
 TEST(ConfigLoaderTest, RtuLinkSettings) {
-  core::PlcConfig plc;
-  plc.transport = core::PlcTransport::kRtu;
+  config::PlcConfig plc;
+  plc.transport = config::PlcTransport::kRtu;
   plc.device = "/dev/ttyUSB1";
   plc.baud = 9600;
   plc.parity = 'O';

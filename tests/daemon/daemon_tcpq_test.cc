@@ -22,7 +22,7 @@
 #include <vector>
 
 #include "canalid/command_t.hpp"
-#include "core/command_auth.h"
+#include "drivers/auth/command_auth.h"
 #include "drivers/lcm/command_sender.h"
 #include "tests/support/child_process.h"
 #include "tests/support/tcpq_test_hub.h"
@@ -162,12 +162,12 @@ TEST(DaemonTcpq, AFloodOfOversizeCommandsNeitherStallsTheLoopNorAllocates) {
       for (int i = 0; i < kFloodPerRound; ++i) {
         if (!TcpqTestHub::Publish(hub_side, channel, flood)) return;
       }
-      core::CommandFields fields;
+      drivers::CommandFields fields;
       fields.channel = channel;
       fields.utime_us = NowUs();
       fields.counter = fields.utime_us;
       fields.sender = "flood-test";
-      fields.kind = static_cast<int8_t>(core::CommandKind::kPublishConfig);
+      fields.kind = static_cast<int8_t>(drivers::CommandKind::kPublishConfig);
       fields.reach = "pool2";
       const canalid::command_t command = drivers::BuildSignedCommand(key_bytes, fields);
       std::vector<uint8_t> bytes(static_cast<std::size_t>(command.getEncodedSize()));

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "daemon/canalidd/key_file.h"
-#include "support/run_program.h"
+#include "tests/support/run_program.h"
 
 namespace canalid::daemon {
 namespace {
@@ -43,7 +43,7 @@ const std::string kHex = "00ff10Ab" + std::string(56, '1');
 
 TEST_F(KeyFileTest, SixtyFourHexDigitsWithOrWithoutANewline) {
   for (const std::string& text : {kHex, kHex + "\n"}) {
-    const core::SecretBytes key = ReadKeyFile(Write(text));
+    const drivers::SecretBytes key = ReadKeyFile(Write(text));
     ASSERT_EQ(key.size(), kCommandKeyBytes);
     const auto bytes = key.span();
     EXPECT_EQ(bytes[0], 0x00);
@@ -110,13 +110,13 @@ TEST_F(KeyFileTest, RefusesMissingFilesAndDirectoriesAndFollowsSymlinksToTheirCh
 }
 
 TEST(SecretBytes, WipesOnWipeAndMovesWithoutACopy) {
-  core::SecretBytes secret(std::vector<uint8_t>{1, 2, 3, 4});
+  drivers::SecretBytes secret(std::vector<uint8_t>{1, 2, 3, 4});
   const uint8_t* data = secret.span().data();
-  core::SecretBytes moved = std::move(secret);
+  drivers::SecretBytes moved = std::move(secret);
   EXPECT_TRUE(secret.empty());  // NOLINT(bugprone-use-after-move): the moved-from state is tested
   EXPECT_EQ(moved.span().data(), data);
   std::span<uint8_t> bytes = moved.mutable_span();
-  core::WipeBytes(bytes);
+  drivers::WipeBytes(bytes);
   EXPECT_EQ(bytes[0] | bytes[1] | bytes[2] | bytes[3], 0);
   moved.Wipe();
   EXPECT_TRUE(moved.empty());

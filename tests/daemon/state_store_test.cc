@@ -9,7 +9,7 @@
 #include <string>
 
 #include "daemon/canalidd/state_store.h"
-#include "support/run_program.h"
+#include "tests/support/run_program.h"
 
 namespace canalid::daemon {
 namespace {
@@ -236,8 +236,8 @@ TEST(StateStoreGuard, CorruptTruncatedOrInconsistentGuardsAreReportedAsCorrupt) 
 }
 
 // The reach's bank: Ts 60 s, delays 0..30 samples.
-core::OnlineIdOptions Bank() {
-  core::OnlineIdOptions o;
+core::OnlineIntegratorDelayOptions Bank() {
+  core::OnlineIntegratorDelayOptions o;
   o.sample_time_s = 60.0;
   o.min_delay_samples = 0;
   o.max_delay_samples = 30;
@@ -256,12 +256,12 @@ PersistedModel LoadOne(const std::filesystem::path& dir, const std::string& mode
 }
 
 TEST_F(StateStoreTest, ReloadedModelsAreValidatedLikeAnyInput) {
-  const core::OnlineIdOptions bank = Bank();
+  const core::OnlineIntegratorDelayOptions bank = Bank();
   // A good one: A = 60 / 0.00175886 = 34113 m2, nk 11.
   const std::string good =
       R"({"model": "id", "b": 0.00175886, "nk": 11, "sample_time_s": 60.0, "delay_s": 660.0,
           "area_m2": 34112.98})";
-  EXPECT_EQ(PersistedIdModelProblem(LoadOne(dir_, good), bank), "");
+  EXPECT_EQ(PersistedIntegratorDelayProblem(LoadOne(dir_, good), bank), "");
   const struct {
     const char* json;
     const char* problem;
@@ -285,12 +285,12 @@ TEST_F(StateStoreTest, ReloadedModelsAreValidatedLikeAnyInput) {
       {R"({"model": "foptd", "gain": 1, "time_constant_s": 10, "delay_s": 0})", "key 'model'"},
   };
   for (const auto& c : bad) {
-    const std::string problem = PersistedIdModelProblem(LoadOne(dir_, c.json), bank);
+    const std::string problem = PersistedIntegratorDelayProblem(LoadOne(dir_, c.json), bank);
     EXPECT_NE(problem.find(c.problem), std::string::npos) << c.json << "\n -> " << problem;
   }
   PersistedModel arx = LoadOne(dir_, good);
   arx.model_kind = "arx";
-  EXPECT_NE(PersistedIdModelProblem(arx, bank), "");
+  EXPECT_NE(PersistedIntegratorDelayProblem(arx, bank), "");
 }
 
 }  // namespace

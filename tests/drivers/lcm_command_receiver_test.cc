@@ -11,25 +11,25 @@
 #include <vector>
 
 #include "canalid/command_t.hpp"
-#include "core/command_auth.h"
+#include "drivers/auth/command_auth.h"
 #include "drivers/lcm/command_receiver.h"
 #include "drivers/lcm/command_sender.h"
 #include "drivers/lcm/command_wire.h"
 #include "drivers/lcm/fake_bus.h"
 #include "drivers/lcm/lcm_bus.h"
-#include "support/run_program.h"
+#include "tests/support/run_program.h"
 
 namespace canalid::drivers {
 namespace {
 
-using core::CommandVerdict;
+using drivers::CommandVerdict;
 constexpr int64_t kNowUs = 1'763'700'000'000'000;
 const std::string kChannel = "SITE1.CANALID_COMMAND";
 
 std::vector<uint8_t> Key(const std::string& s) { return {s.begin(), s.end()}; }
 
-core::CommandFields Fields(int64_t counter, int64_t utime_us = kNowUs, int8_t kind = 1) {
-  core::CommandFields f;
+drivers::CommandFields Fields(int64_t counter, int64_t utime_us = kNowUs, int8_t kind = 1) {
+  drivers::CommandFields f;
   f.channel = kChannel;
   f.utime_us = utime_us;
   f.counter = counter;
@@ -51,7 +51,7 @@ class ReceiverTest : public ::testing::Test {
   std::vector<uint8_t> key_ = Key("0123456789abcdef0123456789abcdef");
   FakeBus bus_;
   std::vector<uint8_t> buffer_;
-  core::CommandAuthenticator auth_{core::CommandAuthOptions{.enabled = true}, key_};
+  drivers::CommandAuthenticator auth_{drivers::CommandAuthOptions{.enabled = true}, key_};
   std::vector<AcceptedCommand> accepted_;
   CommandReceiver receiver_{bus_, kChannel, auth_, [] { return kNowUs; },
                             [this](const AcceptedCommand& c) { accepted_.push_back(c); }};
@@ -84,13 +84,13 @@ TEST_F(ReceiverTest, EveryVerdictIsCountedAndOnlyAcceptedOnesArePassedOn) {
   EXPECT_EQ(receiver_.rejected(), 6);
   EXPECT_EQ(bus_.handler_failures(), 0);
   ASSERT_EQ(accepted_.size(), 2u);
-  EXPECT_EQ(accepted_[0].kind, core::CommandKind::kStartExperiment);
+  EXPECT_EQ(accepted_[0].kind, drivers::CommandKind::kStartExperiment);
   EXPECT_EQ(accepted_[0].sender, "ops1");
   EXPECT_EQ(accepted_[0].reach, "pool2");
   EXPECT_EQ(accepted_[0].argument, "prbs");
   EXPECT_EQ(accepted_[0].counter, 1);
   EXPECT_EQ(accepted_[0].utime_us, kNowUs);
-  EXPECT_EQ(accepted_[1].kind, core::CommandKind::kResetEstimator);
+  EXPECT_EQ(accepted_[1].kind, drivers::CommandKind::kResetEstimator);
   EXPECT_EQ(accepted_[1].counter, 6);
 }
 
@@ -168,10 +168,10 @@ long PeakRssKib() {
 
 TEST(CommandWire, AcceptsGenuineMessagesAndRefusesEveryOversizeOrInconsistentLength) {
   const auto key = Key("0123456789abcdef0123456789abcdef");
-  core::CommandFields longest = Fields(1);
-  const std::string sender(core::kMaxCommandSenderBytes, 's');
-  const std::string reach(core::kMaxCommandReachBytes, 'r');
-  const std::string argument(core::kMaxCommandArgumentBytes, 'a');
+  drivers::CommandFields longest = Fields(1);
+  const std::string sender(drivers::kMaxCommandSenderBytes, 's');
+  const std::string reach(drivers::kMaxCommandReachBytes, 'r');
+  const std::string argument(drivers::kMaxCommandArgumentBytes, 'a');
   longest.sender = sender;
   longest.reach = reach;
   longest.argument = argument;
@@ -235,7 +235,7 @@ TEST_F(ReceiverTest, OversizeArraysAreMalformedWithoutDecoding) {
 TEST(CommandReceiver, AFloodOfOversizeMessagesNeitherAllocatesNorStallsTheLoop) {
   LcmBus bus("memq://");
   const auto key = Key("0123456789abcdef0123456789abcdef");
-  core::CommandAuthenticator auth(core::CommandAuthOptions{.enabled = true}, key);
+  drivers::CommandAuthenticator auth(drivers::CommandAuthOptions{.enabled = true}, key);
   int accepted = 0;
   CommandReceiver receiver(
       bus, kChannel, auth, [] { return kNowUs; }, [&](const AcceptedCommand&) { ++accepted; });
@@ -275,10 +275,10 @@ TEST(CommandReceiver, AFloodOfOversizeMessagesNeitherAllocatesNorStallsTheLoop) 
 TEST(CommandReceiver, ACommandSignedForAnotherSiteIsRefused) {
   FakeBus bus;
   const auto key = Key("0123456789abcdef0123456789abcdef");
-  core::CommandAuthenticator auth(core::CommandAuthOptions{.enabled = true}, key);
+  drivers::CommandAuthenticator auth(drivers::CommandAuthOptions{.enabled = true}, key);
   CommandReceiver receiver(
       bus, kChannel, auth, [] { return kNowUs; }, [](const AcceptedCommand&) {});
-  core::CommandFields site2 = Fields(1);
+  drivers::CommandFields site2 = Fields(1);
   site2.channel = "SITE2.CANALID_COMMAND";
   std::vector<uint8_t> buffer;
   // Signed for site 2 but delivered on site 1's channel (e.g. re-published by a listener).
@@ -291,7 +291,7 @@ TEST(CommandReceiver, ACommandSignedForAnotherSiteIsRefused) {
 TEST(CommandReceiver, DisabledCountsEveryCommand) {
   FakeBus bus;
   const auto key = Key("0123456789abcdef");
-  core::CommandAuthenticator off(core::CommandAuthOptions{}, key);
+  drivers::CommandAuthenticator off(drivers::CommandAuthOptions{}, key);
   int calls = 0;
   CommandReceiver receiver(
       bus, kChannel, off, [] { return kNowUs; }, [&](const AcceptedCommand&) { ++calls; });
@@ -305,7 +305,7 @@ TEST(CommandReceiver, DisabledCountsEveryCommand) {
 TEST(CommandReceiver, ThrowingCallbackOrClockIsCaughtAndCounted) {
   FakeBus bus;
   const auto key = Key("0123456789abcdef");
-  core::CommandAuthenticator auth(core::CommandAuthOptions{.enabled = true}, key);
+  drivers::CommandAuthenticator auth(drivers::CommandAuthOptions{.enabled = true}, key);
   bool clock_throws = false;
   CommandReceiver receiver(
       bus, kChannel, auth,
@@ -328,7 +328,7 @@ TEST(CommandReceiver, ThrowingCallbackOrClockIsCaughtAndCounted) {
 TEST(CommandReceiver, OverMemqLcm) {
   LcmBus bus("memq://");
   const auto key = Key("0123456789abcdef0123456789abcdef");
-  core::CommandAuthenticator auth(core::CommandAuthOptions{.enabled = true}, key);
+  drivers::CommandAuthenticator auth(drivers::CommandAuthOptions{.enabled = true}, key);
   std::vector<AcceptedCommand> accepted;
   CommandReceiver receiver(
       bus, kChannel, auth, [] { return kNowUs; },
@@ -372,7 +372,7 @@ class CommandProgram : public ::testing::Test {
   }
   // Reads one log through a receiver whose clock is the real one (the program signs with it; the
   // window is wide so a slow machine cannot make the genuine command stale).
-  void Receive(const std::string& log, core::CommandAuthenticator& auth,
+  void Receive(const std::string& log, drivers::CommandAuthenticator& auth,
                std::vector<AcceptedCommand>& accepted) {
     LcmBus bus("file://" + (dir_ / log).string() + "?speed=0");
     CommandReceiver receiver(
@@ -387,7 +387,7 @@ class CommandProgram : public ::testing::Test {
       if (bus.Handle(2.0) <= 0) break;
     }
     counts_.clear();
-    for (int v = 0; v < core::kNumCommandVerdicts; ++v) {
+    for (int v = 0; v < drivers::kNumCommandVerdicts; ++v) {
       counts_.push_back(receiver.count(static_cast<CommandVerdict>(v)));
     }
   }
@@ -412,13 +412,13 @@ TEST_F(CommandProgram, SignedCommandsEndToEnd) {
   for (std::size_t i = 0; i + 1 < hex_key.size(); i += 2) {
     daemon_key.push_back(static_cast<uint8_t>(std::stoi(hex_key.substr(i, 2), nullptr, 16)));
   }
-  core::CommandAuthenticator auth(
-      core::CommandAuthOptions{.enabled = true, .max_clock_skew_s = 600.0}, daemon_key);
+  drivers::CommandAuthenticator auth(
+      drivers::CommandAuthOptions{.enabled = true, .max_clock_skew_s = 600.0}, daemon_key);
   std::vector<AcceptedCommand> accepted;
   Receive("genuine.lcmlog", auth, accepted);
   EXPECT_EQ(Count(CommandVerdict::kAccepted), 1);
   ASSERT_EQ(accepted.size(), 1u);
-  EXPECT_EQ(accepted[0].kind, core::CommandKind::kStartExperiment);
+  EXPECT_EQ(accepted[0].kind, drivers::CommandKind::kStartExperiment);
   EXPECT_EQ(accepted[0].argument, "prbs");
   EXPECT_EQ(accepted[0].counter, 5);
   Receive("replay.lcmlog", auth, accepted);

@@ -10,11 +10,11 @@
 #include <string>
 #include <vector>
 
-#include "core/command_auth.h"
+#include "drivers/auth/command_auth.h"
 #include "drivers/lcm/command_receiver.h"
 #include "drivers/lcm/command_sender.h"
 #include "drivers/lcm/lcm_bus.h"
-#include "support/tcpq_test_hub.h"
+#include "tests/support/tcpq_test_hub.h"
 
 namespace canalid::drivers {
 namespace {
@@ -102,7 +102,7 @@ TEST(LcmTcpq, ASixteenMegabyteCommandIsRefusedAndTheNextGenuineOneAccepted) {
   const std::string channel = "SITE1.CANALID_COMMAND";
   const std::vector<uint8_t> key(32, 0x42);
   constexpr int64_t kNowUs = 1'763'700'000'000'000;
-  core::CommandAuthenticator auth(core::CommandAuthOptions{.enabled = true}, key);
+  drivers::CommandAuthenticator auth(drivers::CommandAuthOptions{.enabled = true}, key);
   int accepted = 0;
   CommandReceiver receiver(
       *c.bus, channel, auth, [] { return kNowUs; }, [&](const AcceptedCommand&) { ++accepted; });
@@ -118,8 +118,8 @@ TEST(LcmTcpq, ASixteenMegabyteCommandIsRefusedAndTheNextGenuineOneAccepted) {
     handled += std::max(0, c.bus->Handle(1.0));
   ASSERT_TRUE(sent.get());
   EXPECT_EQ(handled, 1);
-  EXPECT_EQ(receiver.count(core::CommandVerdict::kMalformed), 1);
-  core::CommandFields fields;
+  EXPECT_EQ(receiver.count(drivers::CommandVerdict::kMalformed), 1);
+  drivers::CommandFields fields;
   fields.channel = channel;
   fields.utime_us = kNowUs;
   fields.counter = 1;

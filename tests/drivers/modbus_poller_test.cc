@@ -2,7 +2,7 @@
 // typed errors, reconnect with backoff. The pymodbus suite repeats the I/O part over real TCP.
 #include <gtest/gtest.h>
 
-#include "support/notify_waiter.h"
+#include "tests/support/notify_waiter.h"
 
 #include <chrono>
 #include <cmath>
@@ -27,7 +27,7 @@ using enum RegisterKind;
 /// event, never on elapsed time.
 using Waiter = canalid::testing::NotifyWaiter;
 
-PollChannel Channel(const char* name, RegisterKind kind, int address, core::RegisterType type,
+PollChannel Channel(const char* name, RegisterKind kind, int address, drivers::RegisterType type,
                     double scale) {
   PollChannel c;
   c.name = name;
@@ -77,13 +77,13 @@ PollerConfig BaseConfig() {
   c.period_s = 0.005;
   c.backoff_initial_s = 0.001;
   c.backoff_max_s = 0.004;
-  c.channels.push_back(Channel("level_m", kHolding, 0, core::RegisterType::kU16, 0.001));
-  c.channels.push_back(Channel("flow_m3s", kInput, 10, core::RegisterType::kF32, 1.0));
-  PollChannel gate = Channel("gate_m", kHolding, 4, core::RegisterType::kU16, 0.001);
+  c.channels.push_back(Channel("level_m", kHolding, 0, drivers::RegisterType::kU16, 0.001));
+  c.channels.push_back(Channel("flow_m3s", kInput, 10, drivers::RegisterType::kF32, 1.0));
+  PollChannel gate = Channel("gate_m", kHolding, 4, drivers::RegisterType::kU16, 0.001);
   gate.writable = true;
   gate.limits = {0.0, 1.5, std::numeric_limits<double>::infinity()};
   c.channels.push_back(gate);
-  PollChannel slow = Channel("slow_gate_m", kHolding, 6, core::RegisterType::kU16, 0.001);
+  PollChannel slow = Channel("slow_gate_m", kHolding, 6, drivers::RegisterType::kU16, 0.001);
   slow.writable = true;
   slow.limits = {0.0, 1.5, 1e-6};  // 1 um/s: any test run moves it by far less than a count
   slow.scaling.max_value = 1.5;

@@ -12,8 +12,8 @@
 
 #include <gtest/gtest.h>
 
-#include "support/child_process.h"
-#include "support/notify_waiter.h"
+#include "tests/support/child_process.h"
+#include "tests/support/notify_waiter.h"
 
 #include <array>
 #include <chrono>
@@ -107,8 +107,8 @@ ModbusTcpConfig TcpConfig(int port) {
   return c;
 }
 
-PollChannel Channel(RegisterKind kind, int address, core::RegisterType type, core::WordOrder order,
-                    double scale) {
+PollChannel Channel(RegisterKind kind, int address, drivers::RegisterType type,
+                    core::WordOrder order, double scale) {
   PollChannel c;
   c.name = "ch" + std::to_string(address);
   c.kind = kind;
@@ -120,7 +120,7 @@ PollChannel Channel(RegisterKind kind, int address, core::RegisterType type, cor
 }
 
 PollerConfig ServerMapConfig() {
-  using enum core::RegisterType;
+  using enum drivers::RegisterType;
   using enum core::WordOrder;
   PollerConfig c;
   c.plc_name = "pymodbus";
@@ -229,7 +229,7 @@ TEST(ModbusPymodbus, PollerDecodesTheServerMapAndTypesExceptionBlocks) {
   ASSERT_TRUE(server.Start());
   PollerConfig config = ServerMapConfig();
   config.channels.push_back(
-      Channel(kHolding, 150, core::RegisterType::kU16, core::WordOrder::kHighWordFirst, 1.0));
+      Channel(kHolding, 150, drivers::RegisterType::kU16, core::WordOrder::kHighWordFirst, 1.0));
   Waiter waiter;
   PlcPoller poller(config, std::make_unique<ModbusPort>(TcpConfig(port)), waiter.Callback());
   ASSERT_EQ(poller.plan().blocks.size(), 3u);

@@ -9,7 +9,7 @@
 #include <utility>
 #include <vector>
 
-#include "core/fractional_foptd_fit.h"
+#include "core/fractional/fractional_foptd_fit.h"
 #include "drivers/json/model_json.h"
 
 namespace canalid::drivers {
@@ -130,13 +130,13 @@ TEST(ModelJsonReadTest, LpvArxIdAndProcessModelsRoundTrip) {
   bad_arx["b_coeffs"][1] = {0.3, 0.1};
   ExpectError([&] { ArxModelFromJson(bad_arx, "arx.json"); }, "key 'b_coeffs': list 1 has 2");
 
-  core::IdFitResult id;
+  core::IntegratorDelayFit id;
   id.model = {60.0 / 34113.0, 11, 60.0};
   id.wave_front_gain_s_per_m2 = 1e-5;
   id.offset_m = 2.1;
   id.drift_m_per_sample = 6e-6;
   id.first_sample = 40;
-  const IdModelRecord i = IdModelFromJson(ToJson(id), "id.json");
+  const IntegratorDelayModelRecord i = IntegratorDelayModelFromJson(ToJson(id), "id.json");
   EXPECT_EQ(i.model.b, id.model.b);
   EXPECT_EQ(i.model.nk, 11);
   EXPECT_DOUBLE_EQ(i.drift_m_per_s * 60.0, 6e-6);
@@ -189,7 +189,7 @@ nlohmann::json Minimal(const std::string& kind) {
 
 // Reads `json` with the reader of its kind (the result is dropped: only errors matter here).
 void Read(const nlohmann::json& json, const std::string& kind) {
-  if (kind == "id") IdModelFromJson(json, "m.json");
+  if (kind == "id") IntegratorDelayModelFromJson(json, "m.json");
   if (kind == "arx") ArxModelFromJson(json, "m.json");
   if (kind == "foptd") FoptdFromJson(json, "m.json");
   if (kind == "soptd") SoptdFromJson(json, "m.json");
@@ -199,7 +199,7 @@ void Read(const nlohmann::json& json, const std::string& kind) {
 }
 
 TEST(ModelJsonReadTest, MinimalFormsTakeTheDocumentedDefaults) {
-  const IdModelRecord id = IdModelFromJson(Minimal("id"), "m.json");
+  const IntegratorDelayModelRecord id = IntegratorDelayModelFromJson(Minimal("id"), "m.json");
   EXPECT_EQ(id.model.sample_time_s, 0.0);  // the caller's record's
   EXPECT_EQ(id.p21_s_per_m2, 0.0);
   EXPECT_EQ(id.offset_m, 0.0);

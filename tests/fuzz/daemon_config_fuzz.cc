@@ -9,7 +9,7 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using canalid::daemon::ConfigError;
-  canalid::core::DaemonConfig config;
+  canalid::config::DaemonConfig config;
   try {
     config = canalid::daemon::ParseDaemonConfig(canalid::fuzz::Text(data, size), "fuzz.toml");
   } catch (const ConfigError&) {

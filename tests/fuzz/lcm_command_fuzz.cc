@@ -1,6 +1,6 @@
 // Operator commands as the daemon receives them (drivers/lcm/command_receiver.h): the bytes are
 // published on a FakeBus to a CommandReceiver, which decodes them as canalid.command_t and
-// verifies them with a core::CommandAuthenticator under the fuzz key (lcm_seeds.cc signs the
+// verifies them with a drivers::CommandAuthenticator under the fuzz key (lcm_seeds.cc signs the
 // seeds with it).  Properties: every message is counted exactly once; an accepted command is the
 // one decoded.  Then, when the bytes decode, the same fields signed with the key and stamped with
 // the daemon's clock are sent again: the MAC of a well-formed command must verify (no bad_mac,
@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "core/command_auth.h"
+#include "drivers/auth/command_auth.h"
 #include "drivers/lcm/command_receiver.h"
 #include "drivers/lcm/command_sender.h"
 #include "drivers/lcm/fake_bus.h"
@@ -22,11 +22,11 @@
 
 namespace {
 
-using canalid::core::CommandVerdict;
+using canalid::drivers::CommandVerdict;
 using canalid::fuzz::Check;
 
 struct Outcome {
-  std::array<int64_t, canalid::core::kNumCommandVerdicts> counts{};
+  std::array<int64_t, canalid::drivers::kNumCommandVerdicts> counts{};
   int64_t callback_failures = 0;
   std::optional<canalid::drivers::AcceptedCommand> accepted;
   int64_t Total() const {
@@ -38,7 +38,7 @@ struct Outcome {
 
 Outcome Deliver(const uint8_t* data, std::size_t size) {
   canalid::drivers::FakeBus bus;
-  canalid::core::CommandAuthenticator authenticator({true, 30.0}, canalid::fuzz::kCommandKey);
+  canalid::drivers::CommandAuthenticator authenticator({true, 30.0}, canalid::fuzz::kCommandKey);
   Outcome outcome;
   canalid::drivers::CommandReceiver receiver(
       bus, canalid::fuzz::kCommandChannel, authenticator, [] { return canalid::fuzz::kNowUs; },
@@ -46,7 +46,7 @@ Outcome Deliver(const uint8_t* data, std::size_t size) {
   Check(bus.Publish(canalid::fuzz::kCommandChannel, std::span<const uint8_t>(data, size)),
         "the fake bus takes the message");
   Check(bus.Handle(0.0) == 1, "the message is delivered once");
-  for (int v = 0; v < canalid::core::kNumCommandVerdicts; ++v)
+  for (int v = 0; v < canalid::drivers::kNumCommandVerdicts; ++v)
     outcome.counts[static_cast<std::size_t>(v)] = receiver.count(static_cast<CommandVerdict>(v));
   outcome.callback_failures = receiver.callback_failures();
   Check(outcome.Total() == 1, "every message is counted exactly once");

@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "core/command_auth.h"
+#include "drivers/auth/command_auth.h"
 #include "drivers/lcm/command_sender.h"
 #include "tests/drivers/lcm_test_messages.h"
 #include "tests/fuzz/lcm_fuzz_key.h"

@@ -3,7 +3,7 @@
 // gap and block limits, then the register words of the replies.  The channels are planned with
 // PlanReads, each channel's registers are taken from its block's reply exactly as the poller
 // takes them (without bounds checks, so the plan must be right), and decoded with
-// core::DecodeChannel.  Properties: the plan covers every channel inside one block of its kind,
+// drivers::DecodeChannel.  Properties: the plan covers every channel inside one block of its kind,
 // blocks respect the Modbus limit, a valid value is finite and in range and encodes back.
 #include <algorithm>
 #include <cmath>
@@ -12,14 +12,13 @@
 #include <stdexcept>
 #include <vector>
 
-#include "core/channel_scaling.h"
+#include "drivers/modbus/channel_scaling.h"
 #include "drivers/modbus/read_plan.h"
 #include "tests/fuzz/fuzz_check.h"
 
 namespace {
 
 using canalid::fuzz::Check;
-namespace core = canalid::core;
 namespace drivers = canalid::drivers;
 
 // Reads fixed-size values off the front of the input; zeros once it is used up.
@@ -44,7 +43,7 @@ class Bytes {
 
 struct Channel {
   drivers::RegisterSpan span;
-  core::ChannelScaling scaling;
+  drivers::ChannelScaling scaling;
 };
 
 }  // namespace
@@ -60,10 +59,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const auto layout = in.Take<uint8_t>();
     c.span.kind =
         (layout & 1) != 0 ? drivers::RegisterKind::kInput : drivers::RegisterKind::kHolding;
-    c.scaling.type = static_cast<core::RegisterType>((layout >> 1) % 5);
+    c.scaling.type = static_cast<drivers::RegisterType>((layout >> 1) % 5);
     c.scaling.word_order =
-        (layout & 16) != 0 ? core::WordOrder::kLowWordFirst : core::WordOrder::kHighWordFirst;
-    c.span.count = core::RegisterCount(c.scaling.type);
+        (layout & 16) != 0 ? drivers::WordOrder::kLowWordFirst : drivers::WordOrder::kHighWordFirst;
+    c.span.count = drivers::RegisterCount(c.scaling.type);
     // Mostly addresses near each other (so blocks merge), sometimes anywhere (even invalid).
     const auto address = in.Take<uint16_t>();
     c.span.address = (layout & 32) != 0 ? address % 300 : static_cast<int>(address) + 1;
@@ -78,7 +77,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       c.scaling.max_value = in.Take<uint8_t>();
     }
     try {
-      core::ValidateChannelScaling(c.scaling);
+      drivers::ValidateChannelScaling(c.scaling);
     } catch (const std::invalid_argument&) {
       continue;  // the daemon rejects the configuration
     }
@@ -119,18 +118,18 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const std::span<const uint16_t> registers(
         image.data() + block_offsets[static_cast<std::size_t>(loc.block)] + loc.offset,
         static_cast<std::size_t>(c.span.count));
-    const core::DecodedValue d = core::DecodeChannel(c.scaling, registers);
-    Check(d.error != core::ScalingError::kWrongRegisterCount, "the channel's register count");
+    const drivers::DecodedValue d = drivers::DecodeChannel(c.scaling, registers);
+    Check(d.error != drivers::ScalingError::kWrongRegisterCount, "the channel's register count");
     if (d.ok()) {
       Check(std::isfinite(d.value), "a valid value is finite");
       Check(d.value >= c.scaling.min_value && d.value <= c.scaling.max_value,
             "a valid value is in range");
       uint16_t back[2] = {0, 0};
-      const core::ScalingError e = core::EncodeChannel(
+      const drivers::ScalingError e = drivers::EncodeChannel(
           c.scaling, d.value, std::span<uint16_t>(back, static_cast<std::size_t>(c.span.count)));
-      Check(e == core::ScalingError::kNone || e == core::ScalingError::kNotRepresentable,
+      Check(e == drivers::ScalingError::kNone || e == drivers::ScalingError::kNotRepresentable,
             "a valid value encodes (or its raw value does not fit the register type)");
-    } else if (d.error == core::ScalingError::kOutOfRange) {
+    } else if (d.error == drivers::ScalingError::kOutOfRange) {
       Check(std::isfinite(d.value) &&
                 (d.value < c.scaling.min_value || d.value > c.scaling.max_value),
             "an out-of-range value is finite and outside the range");

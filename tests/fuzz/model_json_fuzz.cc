@@ -30,7 +30,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string source = "fuzz.json";
   Expect([&] { drivers::ModelKind(json, source); });
   Expect([&] { drivers::ModelInputs(json, source); });
-  Expect([&] { drivers::IdModelFromJson(json, source); });
+  Expect([&] { drivers::IntegratorDelayModelFromJson(json, source); });
   Expect([&] { drivers::ArxModelFromJson(json, source); });
   Expect([&] { drivers::FoptdFromJson(json, source); });
   Expect([&] { drivers::SoptdFromJson(json, source); });

@@ -1,6 +1,7 @@
-// The two lab canals of config/sim: seed 2's flume (upstream level held by the pump's PID) and
-// seed 1's two-pool pump pilot.  Truths: the papers' nominal settings, mass conservation, the
-// closed-form storage slope dQ / (L b) of a pumped pool and its wave travel time L / (c + V).
+// The two lab canals of config/sim: the flume paper's flume (upstream level held by the pump's PID)
+// and the LPV paper's two-pool pump pilot.  Truths: the papers' nominal settings, mass
+// conservation, the closed-form storage slope dQ / (L b) of a pumped pool and its wave travel time
+// L / (c + V).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -26,8 +27,8 @@ TEST(LabFlume, LoadsAtThePapersNominalRegime) {
   ASSERT_EQ(canal.pools.size(), 2u);
   ASSERT_EQ(canal.level_controls.size(), 1u);
   SaintVenantCanal plant(canal);
-  // Seed 2's nominal regime: gate 15 mm, highest crest 33 mm (0.1 mm: the flow 0.30 L/s and
-  // Cw 1.7 were chosen to give them to a tenth of a millimetre).
+  // The flume paper's nominal regime: gate 15 mm, highest crest 33 mm (0.1 mm: the flow 0.30 L/s
+  // and Cw 1.7 were chosen to give them to a tenth of a millimetre).
   EXPECT_NEAR(plant.structure_setting(0), 0.015, 1e-4);
   EXPECT_NEAR(plant.structure_setting(1), 0.033, 1e-4);
   EXPECT_DOUBLE_EQ(plant.ControlledLevel(0), 0.070);
@@ -40,7 +41,7 @@ TEST(LabFlume, LoadsAtThePapersNominalRegime) {
 
 TEST(LabFlume, PumpPidHoldsTheUpstreamLevelThroughAGateStep) {
   SaintVenantCanal plant(Load("lab-flume.toml"));
-  // Seed 2's experiment: the gate from 15 to 20 mm, then 360 s at dt = 0.05 s.
+  // The flume paper's experiment: the gate from 15 to 20 mm, then 360 s at dt = 0.05 s.
   plant.SetStructureSetting(0, 0.020);
   double worst = 0.0, late_worst = 0.0, late_sum = 0.0;
   int late_n = 0;
@@ -213,7 +214,7 @@ TEST(PumpPilot, StartsStillAndB2StepDrainsP1AndFillsP2AfterTheWaveTravelTime) {
   EXPECT_LE(Arrival(r, r.y1, 10.0, rise), 10.0 + 1e-9);
   const double arrival = Arrival(r, r.y2, 10.0, rise) - 10.0;
   EXPECT_NEAR(arrival, travel, 0.15 * travel);
-  // Seed 1 identifies delays of 5 to 17 samples of 0.5 s (Table 3, 4): 2.5 to 8.5 s.
+  // The LPV paper identifies delays of 5 to 17 samples of 0.5 s (Table 3, 4): 2.5 to 8.5 s.
   EXPECT_LE(arrival, 8.5 + 0.5);
   // Integrators: the late slopes are -+ dq / (L b).  The waves bounce between the pumps (both
   // reflect), so the levels climb in stairs of one round trip 2 L / c = 17 s; a least-squares
@@ -223,8 +224,8 @@ TEST(PumpPilot, StartsStillAndB2StepDrainsP1AndFillsP2AfterTheWaveTravelTime) {
 }
 
 TEST(PumpPilot, B1StepRaisesOnlyP1AsTheDecoupledModelSays) {
-  // Seed 1 models the pools uncoupled (P12 = P21 = 0): with B2 holding its flow, P2 never sees
-  // a B1 step.
+  // The LPV paper models the pools uncoupled (P12 = P21 = 0): with B2 holding its flow, P2 never
+  // sees a B1 step.
   const double dq = 1e-4;
   const Record r = PilotStep(-1, dq);
   const double ramp = dq / (12.0 * 0.15);

@@ -16,9 +16,9 @@
 #include <utility>
 #include <vector>
 
-#include "core/fractional_foptd.h"
+#include "core/fractional/fractional_foptd.h"
 #include "drivers/csv/csv_table.h"
-#include "support/run_program.h"
+#include "tests/support/run_program.h"
 
 namespace canalid::sim {
 namespace {
@@ -482,7 +482,7 @@ TEST(FractionalFoptdPlant, HandWrittenMinimalModelFollowsTheMittagLefflerStep) {
   // The paper's keys only: offsets 0, and the band the fit chooses for 1000 samples (the plant
   // does not know its run's length).  A unit step at sample 20, checked to 1000 s (4000 samples,
   // well past the band's horizon) against the exact step response; 0.1 % of K, the default
-  // band's error inside seed 2's alpha range (core/fractional_simulator.h).
+  // band's error inside the flume paper's alpha range (core/fractional/fractional_simulator.h).
   const nlohmann::json model = {{"model", "frac-foptd"},
                                 {"gain", 0.372},
                                 {"time_constant_s", 10.975},

@@ -12,7 +12,7 @@
 #include "sim/config_reader.h"
 #include "sim/plc/plc_config.h"
 #include "sim/plc/plc_logic.h"
-#include "support/run_program.h"
+#include "tests/support/run_program.h"
 
 namespace canalid::sim::plc {
 namespace {

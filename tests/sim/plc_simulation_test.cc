@@ -6,7 +6,7 @@
 
 #include <string>
 
-#include "core/register_codec.h"
+#include "core/registers/register_codec.h"
 #include "sim/canal_config.h"
 #include "sim/plc/plc_config.h"
 #include "sim/plc/plc_simulation.h"

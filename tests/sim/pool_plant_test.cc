@@ -50,7 +50,7 @@ TEST(IdzPlant, PulseShorterThanTheDelayIsIntegratedExactly) {
   EXPECT_NEAR(plant.level_m(), 2.0 * 7.0 / 2000.0, 1e-14);
 }
 
-// Seed 2's nominal lab model: K 0.372, T 10.975 s, tau 4.05 s; the step response is
+// The flume paper's nominal lab model: K 0.372, T 10.975 s, tau 4.05 s; the step response is
 // K (1 - exp(-(t - tau)/T)) after the delay.
 TEST(FoptdPlant, StepResponseIsTheClosedForm) {
   FoptdPlant plant(0.372, 10.975, 4.05, 0.5, 0.0);

@@ -1,7 +1,7 @@
 // The transfer-function plants behind PoolPlant against closed forms that share no code with
-// them: the Mittag-Leffler step response of the fractional FOPTD (core/fractional_foptd.h,
-// series/integral evaluation), the exponential FOPTD step, and the ID level equation summed by
-// hand.
+// them: the Mittag-Leffler step response of the fractional FOPTD
+// (core/fractional/fractional_foptd.h, series/integral evaluation), the exponential FOPTD step, and
+// the ID level equation summed by hand.
 #include "sim/sampled_plant.h"
 
 #include <gtest/gtest.h>
@@ -37,8 +37,9 @@ double WorstStepError(const core::FractionalFoptdParams& params, double ts, int 
 }
 
 TEST(FractionalFoptdPlant, StepMatchesMittagLefflerClosedForm) {
-  // core/fractional_simulator.h measured the Oustaloup realisation within 0.1 % of K inside
-  // alpha 0.5-1.5 with its default band (0.28 % at 1.8): hold it to 0.3 % of the step's gain.
+  // core/fractional/fractional_simulator.h measured the Oustaloup realisation within 0.1 % of K
+  // inside alpha 0.5-1.5 with its default band (0.28 % at 1.8): hold it to 0.3 % of the step's
+  // gain.
   for (const double alpha : {0.6, 0.85, 1.3}) {
     const core::FractionalFoptdParams params{0.05, 40.0, alpha, 12.4};  // m per m3/s, s^alpha, s
     EXPECT_LE(WorstStepError(params, 2.0, 300), 0.003 * params.gain * kStep) << alpha;
@@ -82,7 +83,7 @@ TEST(FractionalFoptdPlant, StartsAtTheOffsetLevelOfItsFirstInput) {
 TEST(IdLevelPlant, FollowsTheLevelEquationSummedByHand) {
   // nk = 3, k0 = 2, b = Ts / A with A = 30000 m2, p21 = 0.02 s/m2, c = 2.1 m, d = 1e-5 m per
   // sample; inflow steps by 0.8 at sample 4, outflow by 0.5 at sample 6.
-  const core::IdModel model{60.0 / 30000.0, 3, 60.0};
+  const core::IntegratorDelayModel model{60.0 / 30000.0, 3, 60.0};
   IdLevelPlant plant(model, 0.02, 2.1, 1e-5, 2, kFlow0);
   double q_integrated = 0.0;
   double q_out_previous = kFlow0;
@@ -100,11 +101,11 @@ TEST(IdLevelPlant, FollowsTheLevelEquationSummedByHand) {
 }
 
 TEST(IdLevelPlant, ZeroDelayHasDirectFeedthrough) {
-  const core::IdModel model{0.001, 0, 10.0};
+  const core::IntegratorDelayModel model{0.001, 0, 10.0};
   IdLevelPlant plant(model, 0.5, 1.0, 0.0, 0, 5.0);
   // Q(0) = q_in(0) - q_out(-1) = 6 - 5: y = 0.001 + 0.5 * 6 + 1.
   EXPECT_NEAR(plant.Output(Eigen::Vector2d(6.0, 5.0)), 0.001 + 3.0 + 1.0, 1e-12);
-  EXPECT_THROW(IdLevelPlant(core::IdModel{0.001, -1, 10.0}, 0.0, 0.0, 0.0, 0, 5.0),
+  EXPECT_THROW(IdLevelPlant(core::IntegratorDelayModel{0.001, -1, 10.0}, 0.0, 0.0, 0.0, 0, 5.0),
                std::invalid_argument);
 }
 
@@ -125,7 +126,7 @@ TEST(ArxPlant, FirstOrderStepIsTheGeometricSeries) {
 }
 
 TEST(SampledPoolPlant, StepsWholeSamplesOnly) {
-  const core::IdModel model{0.002, 2, 60.0};
+  const core::IntegratorDelayModel model{0.002, 2, 60.0};
   auto make = [&] {
     return SampledPoolPlant(std::make_unique<IdLevelPlant>(model, 0.0, 2.0, 0.0, 0, kFlow0), kFlow0,
                             kFlow0);

@@ -14,8 +14,8 @@
 #include <string>
 #include <thread>
 
-#include "sim/serve_process.h"
-#include "support/run_program.h"
+#include "tests/sim/serve_process.h"
+#include "tests/support/run_program.h"
 
 namespace canalid::testing {
 namespace {

@@ -16,8 +16,8 @@
 #include <memory>
 #include <string>
 
-#include "sim/serve_process.h"
-#include "support/run_program.h"
+#include "tests/sim/serve_process.h"
+#include "tests/support/run_program.h"
 
 namespace canalid::testing {
 namespace {

@@ -6,9 +6,9 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "core/metrics.h"
+#include "core/numerics/metrics.h"
 #include "drivers/csv/csv_table.h"
-#include "support/run_program.h"
+#include "tests/support/run_program.h"
 
 namespace canalid::testing {
 

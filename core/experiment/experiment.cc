@@ -1,0 +1,211 @@
+#include "core/experiment/experiment.h"
+
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+#include <string>
+
+namespace canalid::core {
+namespace {
+
+bool Running(ExperimentPhase phase) {
+  return phase == ExperimentPhase::kSettling || phase == ExperimentPhase::kExciting;
+}
+
+ExperimentTransition Abort(const ExperimentPlan& plan, ExperimentState state, AbortReason reason) {
+  state.phase = ExperimentPhase::kAborted;
+  state.abort_reason = reason;
+  state.samples_in_phase = 0;
+  state.setpoint = plan.prbs.nominal;
+  ExperimentActions actions;
+  actions.write_setpoint = plan.prbs.nominal;
+  actions.restore_nominal = true;
+  actions.phase_changed = true;
+  return {std::move(state), actions};
+}
+
+ExperimentTransition Enter(ExperimentState state, ExperimentPhase phase) {
+  state.phase = phase;
+  state.samples_in_phase = 0;
+  ExperimentActions actions;
+  actions.phase_changed = true;
+  return {std::move(state), actions};
+}
+
+ExperimentTransition OnSample(const ExperimentPlan& plan, ExperimentState state,
+                              const ExperimentSample& s) {
+  if (!Running(state.phase)) return {std::move(state), {}};
+  if (!s.link_ok) return Abort(plan, std::move(state), AbortReason::kLinkLost);
+  if (std::isfinite(s.time_s)) {
+    const double gap = s.time_s - state.last_sample_time_s;
+    if (std::isfinite(state.last_sample_time_s) && (gap > plan.max_sample_gap_s || gap < 0.0)) {
+      state.sample_gap_s = gap;
+      return Abort(plan, std::move(state), AbortReason::kSampleGap);
+    }
+    state.last_sample_time_s = s.time_s;
+  }
+  if (!s.level_valid) {
+    if (++state.invalid_run > plan.max_invalid_samples) {
+      return Abort(plan, std::move(state), AbortReason::kSensorInvalid);
+    }
+  } else {
+    state.invalid_run = 0;
+    if (s.level_m < plan.level_min_m || s.level_m > plan.level_max_m) {
+      return Abort(plan, std::move(state), AbortReason::kLevelOutOfBand);
+    }
+  }
+  if (state.phase == ExperimentPhase::kSettling) {
+    if (++state.samples_in_phase < plan.settle_samples) return {std::move(state), {}};
+    ExperimentTransition t = Enter(std::move(state), ExperimentPhase::kExciting);
+    t.state.prbs.emplace(plan.prbs);
+    t.state.setpoint = t.state.prbs->Next();
+    t.actions.write_setpoint = t.state.setpoint;
+    return t;
+  }
+  // Exciting: this sample answers the setpoint written after the previous one.
+  ExperimentActions actions;
+  actions.record_sample = true;
+  if (++state.samples_in_phase >= plan.excite_samples) {
+    ExperimentTransition t = Enter(std::move(state), ExperimentPhase::kIdentifying);
+    t.state.setpoint = plan.prbs.nominal;
+    t.actions.record_sample = true;
+    t.actions.write_setpoint = plan.prbs.nominal;
+    t.actions.restore_nominal = true;
+    t.actions.start_identification = true;
+    return t;
+  }
+  state.setpoint = state.prbs->Next();
+  actions.write_setpoint = state.setpoint;
+  return {std::move(state), actions};
+}
+
+}  // namespace
+
+const char* ExperimentPhaseName(ExperimentPhase phase) {
+  switch (phase) {
+    case ExperimentPhase::kIdle:
+      return "idle";
+    case ExperimentPhase::kSettling:
+      return "settling";
+    case ExperimentPhase::kExciting:
+      return "exciting";
+    case ExperimentPhase::kIdentifying:
+      return "identifying";
+    case ExperimentPhase::kDone:
+      return "done";
+    case ExperimentPhase::kAborted:
+      return "aborted";
+  }
+  return "unknown";
+}
+
+const char* AbortReasonName(AbortReason reason) {
+  switch (reason) {
+    case AbortReason::kNone:
+      return "none";
+    case AbortReason::kLevelOutOfBand:
+      return "level out of band";
+    case AbortReason::kSensorInvalid:
+      return "level sensor invalid";
+    case AbortReason::kLinkLost:
+      return "PLC link lost";
+    case AbortReason::kWriteFailed:
+      return "setpoint write failed";
+    case AbortReason::kOperatorStop:
+      return "stopped by operator";
+    case AbortReason::kIdentificationFailed:
+      return "identification failed";
+    case AbortReason::kGuardNotPersisted:
+      return "experiment guard not persisted";
+    case AbortReason::kSampleGap:
+      return "sample gap";
+  }
+  return "unknown";
+}
+
+std::string AbortReasonText(const ExperimentPlan& plan, const ExperimentState& state) {
+  if (state.abort_reason != AbortReason::kSampleGap) return AbortReasonName(state.abort_reason);
+  char text[96];
+  if (state.sample_gap_s < 0.0) {
+    std::snprintf(text, sizeof text, "sample time went back by %.3g s", -state.sample_gap_s);
+  } else {
+    std::snprintf(text, sizeof text, "sample gap of %.3g s (bound %.3g s)", state.sample_gap_s,
+                  plan.max_sample_gap_s);
+  }
+  return text;
+}
+
+void ExperimentPlan::Validate() const {
+  prbs.Validate();
+  if (settle_samples < 0) {
+    throw std::invalid_argument("experiment settle_samples must be >= 0 (got " +
+                                std::to_string(settle_samples) + ")");
+  }
+  if (excite_samples < 1) {
+    throw std::invalid_argument("experiment excite_samples must be >= 1 (got " +
+                                std::to_string(excite_samples) + ")");
+  }
+  if (!(level_max_m > level_min_m)) {
+    throw std::invalid_argument("experiment level band: level_max_m (" +
+                                std::to_string(level_max_m) + ") must be above level_min_m (" +
+                                std::to_string(level_min_m) + ")");
+  }
+  if (max_invalid_samples < 0) {
+    throw std::invalid_argument("experiment max_invalid_samples must be >= 0");
+  }
+  if (!(max_sample_gap_s > 0.0)) {
+    throw std::invalid_argument("experiment max_sample_gap_s must be > 0 (got " +
+                                std::to_string(max_sample_gap_s) + ")");
+  }
+}
+
+ExperimentTransition Step(const ExperimentPlan& plan, const ExperimentState& state,
+                          const ExperimentEvent& event) {
+  switch (event.kind) {
+    case ExperimentEventKind::kStart: {
+      if (Running(state.phase) || state.phase == ExperimentPhase::kIdentifying) return {state, {}};
+      ExperimentState fresh;
+      fresh.setpoint = plan.prbs.nominal;
+      // The run's first sample must follow the last one before the start within the bound.
+      fresh.last_sample_time_s = event.sample.time_s;
+      ExperimentTransition t = Enter(std::move(fresh), ExperimentPhase::kSettling);
+      // Settling starts from the nominal setpoint, whatever the actuator was doing.
+      t.actions.write_setpoint = plan.prbs.nominal;
+      t.actions.restore_nominal = true;
+      if (plan.settle_samples == 0) {
+        t.state.phase = ExperimentPhase::kExciting;
+        t.state.prbs.emplace(plan.prbs);
+        t.state.setpoint = t.state.prbs->Next();
+        t.actions.write_setpoint = t.state.setpoint;
+        t.actions.restore_nominal = false;
+      }
+      return t;
+    }
+    case ExperimentEventKind::kStop:
+      if (Running(state.phase) || state.phase == ExperimentPhase::kIdentifying) {
+        return Abort(plan, state, AbortReason::kOperatorStop);
+      }
+      return {state, {}};
+    case ExperimentEventKind::kSample:
+      return OnSample(plan, state, event.sample);
+    case ExperimentEventKind::kWriteFailed:
+      if (Running(state.phase)) return Abort(plan, state, AbortReason::kWriteFailed);
+      return {state, {}};
+    case ExperimentEventKind::kGuardNotPersisted:
+      if (Running(state.phase)) return Abort(plan, state, AbortReason::kGuardNotPersisted);
+      return {state, {}};
+    case ExperimentEventKind::kIdentificationSucceeded:
+      if (state.phase == ExperimentPhase::kIdentifying) return Enter(state, ExperimentPhase::kDone);
+      return {state, {}};
+    case ExperimentEventKind::kIdentificationFailed:
+      if (state.phase == ExperimentPhase::kIdentifying) {
+        ExperimentTransition t = Enter(state, ExperimentPhase::kAborted);
+        t.state.abort_reason = AbortReason::kIdentificationFailed;
+        return t;
+      }
+      return {state, {}};
+  }
+  return {state, {}};
+}
+
+}  // namespace canalid::core

@@ -1,0 +1,87 @@
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "core/numerics/ring_buffer.h"
+#include "core/online/estimator_bank.h"
+#include "core/online/rls.h"
+
+namespace canalid::core {
+
+/// Largest na + nb of the online ARX estimators (snapshots use fixed-capacity storage).
+inline constexpr int kMaxOnlineArxParams = 16;
+/// A vector of at most kMaxOnlineArxParams values stored inline (no heap).
+using ArxParamVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxOnlineArxParams, 1>;
+
+struct OnlineArxOptions {
+  int na = 2;                 ///< >= 0
+  int nb = 2;                 ///< >= 1, na + nb <= kMaxOnlineArxParams
+  int min_delay_samples = 1;  ///< >= 0
+  int max_delay_samples = 1;  ///< >= min_delay_samples
+  RlsOptions rls;             ///< per candidate (n = na + nb)
+  BankSelectorOptions selector;
+  double input_abs_max = 1e9;   ///< |u| above it (or non-finite) is absurd
+  double output_abs_max = 1e9;  ///< |y| above it (or non-finite) is absurd
+
+  /// @throws std::invalid_argument naming the option out of range.
+  void Validate() const;
+};
+
+struct ArxSnapshot {
+  bool valid = false;
+  std::int64_t sample = -1;
+  int delay_samples = -1;
+  ArxParamVector a;      ///< a1..a_na (MATLAB sign convention)
+  ArxParamVector b;      ///< b1..b_nb
+  ArxParamVector a_std;  ///< standard deviations from sigma2 P
+  ArxParamVector b_std;
+  double prediction_error = 0.0;
+  double innovation_std = 0.0;
+  double loss = 0.0;
+  RlsHealth health;
+};
+
+struct ArxBankHealth {
+  std::int64_t samples = 0;
+  std::int64_t bad_inputs = 0;   ///< the regressions that would contain them are skipped
+  std::int64_t bad_outputs = 0;  ///< ditto
+  int switches = 0;
+};
+
+/// Online ARX  y(k) + a1 y(k-1) + ... + a_na y(k-na) = b1 u(k-nk) + ... + b_nb u(k-nk-nb+1) + e(k)
+/// (MATLAB's convention) with one Rls<Dynamic> per candidate nk and a BankSelector choosing nk.
+/// Regressor phi(k) = [-y(k-1) .. -y(k-na), u(k-nk) .. u(k-nk-nb+1)], used from
+/// k = k_start = max(na, max_delay_samples + nb - 1) on (the same rows for every candidate), so
+/// with lambda = 1 and a large P0 each candidate equals batch least squares on those rows.
+/// A non-finite or absurd u or y is never used: every regression containing it is skipped (the
+/// bad value is kept out of the state, and the estimators see only clean rows).
+/// Allocates only in the constructor.  Deterministic.
+class OnlineArxBank final {
+ public:
+  /// @throws std::invalid_argument on a bad option.
+  explicit OnlineArxBank(const OnlineArxOptions& options);
+
+  /// One sample of input u(k) and output y(k).  Returns true when the candidates were updated.
+  bool Update(double u, double y);
+
+  ArxSnapshot Snapshot() const;
+  ArxSnapshot CandidateSnapshot(int delay_samples) const;
+  int selected_delay_samples() const;
+  const ArxBankHealth& health() const { return health_; }
+
+ private:
+  OnlineArxOptions options_;
+  int n_;
+  std::vector<Rls<Eigen::Dynamic>> estimators_;
+  BankSelector selector_;
+  RingBuffer<double> u_history_;
+  RingBuffer<double> y_history_;
+  Eigen::VectorXd phi_;
+  std::int64_t k_ = -1;
+  std::int64_t k_start_ = 0;
+  std::int64_t last_bad_u_ = -1000000000;
+  std::int64_t last_bad_y_ = -1000000000;
+  ArxBankHealth health_;
+};
+
+}  // namespace canalid::core

@@ -1,0 +1,393 @@
+#include "core/online/online_integrator_delay.h"
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+#include "core/online/option_checks.h"
+
+namespace canalid::core {
+namespace {
+
+[[noreturn]] void Fail(const char* name, double value, const char* range) {
+  ThrowOptionOutOfRange("OnlineIntegratorDelayOptions", name, value, range);
+}
+
+}  // namespace
+
+void IntegratorDelayHealthOptions::Validate() const {
+  if (!(condition_max > 1.0)) Fail("health.condition_max", condition_max, "> 1");
+  if (!(information_min_per_p0 >= 0.0 && std::isfinite(information_min_per_p0))) {
+    Fail("health.information_min_per_p0", information_min_per_p0, "finite, >= 0");
+  }
+}
+
+int IntegratorDelaySnapshotFlags(const IntegratorDelaySnapshot& s,
+                                 const OnlineIntegratorDelayOptions& options) {
+  if (!s.valid) return 0;
+  int flags = 0;
+  if (!std::isfinite(s.b) || !std::isfinite(s.c_m) || !std::isfinite(s.d_m) ||
+      !std::isfinite(s.area_m2) || !std::isfinite(s.health.trace_p)) {
+    flags |= kFlagNan;
+  }
+  if (s.health.wound_up) flags |= kFlagWindup;
+  if (!(s.information_min >=
+        options.health.information_min_per_p0 / options.rls.initial_covariance)) {
+    flags |= kFlagLowExcitation;
+  }
+  if (!(s.condition_number <= options.health.condition_max)) flags |= kFlagIllConditioned;
+  if (s.health.frozen) flags |= kFlagFrozen;
+  if (CheckIntegratorDelayBounds(s.area_m2, s.delay_samples, options) != IdBoundsViolation::kNone) {
+    flags |= kFlagOutOfBounds;
+  }
+  return flags;
+}
+
+IdBoundsViolation CheckIntegratorDelayBounds(double area_m2, int delay_samples,
+                                             const OnlineIntegratorDelayOptions& o) {
+  if (!(area_m2 > 0.0 && std::isfinite(area_m2))) return IdBoundsViolation::kArea;
+  if (delay_samples < o.min_delay_samples || delay_samples > o.max_delay_samples) {
+    return IdBoundsViolation::kOutsideBank;
+  }
+  if (delay_samples == o.max_delay_samples ||
+      (delay_samples == o.min_delay_samples && o.min_delay_samples > 0)) {
+    return IdBoundsViolation::kAtBankEdge;
+  }
+  return IdBoundsViolation::kNone;
+}
+
+std::string IntegratorDelayBoundsProblem(double area_m2, int delay_samples,
+                                         const OnlineIntegratorDelayOptions& o) {
+  std::ostringstream m;
+  switch (CheckIntegratorDelayBounds(area_m2, delay_samples, o)) {
+    case IdBoundsViolation::kNone:
+      break;
+    case IdBoundsViolation::kArea:
+      m << "area_m2 " << area_m2 << " is not > 0 and finite";
+      break;
+    case IdBoundsViolation::kOutsideBank:
+      m << "delay " << delay_samples << " samples is outside the bank [" << o.min_delay_samples
+        << ", " << o.max_delay_samples << "]";
+      break;
+    case IdBoundsViolation::kAtBankEdge:
+      m << "delay " << delay_samples << " samples is at the edge of the bank ["
+        << o.min_delay_samples << ", " << o.max_delay_samples
+        << "]: the true delay may lie outside it";
+      break;
+  }
+  return m.str();
+}
+
+void OnlineIntegratorDelayOptions::Validate() const {
+  if (!(sample_time_s > 0.0 && std::isfinite(sample_time_s))) {
+    Fail("sample_time_s", sample_time_s, "finite, > 0");
+  }
+  if (min_delay_samples < 0) Fail("min_delay_samples", min_delay_samples, ">= 0");
+  if (max_delay_samples < min_delay_samples || max_delay_samples > 100000) {
+    Fail("max_delay_samples", max_delay_samples, "min_delay_samples..100000");
+  }
+  if (!(flow_abs_max_m3s > 0.0)) Fail("flow_abs_max_m3s", flow_abs_max_m3s, "> 0");
+  if (!(level_abs_max_m > 0.0)) Fail("level_abs_max_m", level_abs_max_m, "> 0");
+  if (closed_loop_window_samples < 3 || closed_loop_window_samples > 1000000000) {
+    Fail("closed_loop_window_samples", closed_loop_window_samples, "3..1e9");
+  }
+  if (!(outflow_direct_gain_s_per_m2 >= 0.0 && outflow_direct_gain_s_per_m2 <= 10.0)) {
+    Fail("outflow_direct_gain_s_per_m2", outflow_direct_gain_s_per_m2, "0..10");
+  }
+  rls.Validate(wave_front_term ? 4 : 3);
+  selector.Validate();
+  health.Validate();
+  if (closed_loop == ClosedLoopMode::kThreeStep) three_step.Validate();
+}
+
+OnlineIntegratorDelayBank::OnlineIntegratorDelayBank(const OnlineIntegratorDelayOptions& options)
+    : options_(options),
+      selector_((options.Validate(), options.max_delay_samples - options.min_delay_samples + 1),
+                options.selector),
+      iv_selector_(options.max_delay_samples - options.min_delay_samples + 1, options.selector),
+      q_in_history_(options.max_delay_samples + 1) {
+  const int n = options_.max_delay_samples - options_.min_delay_samples + 1;
+  const auto un = static_cast<std::size_t>(n);
+  three_step_active_ = options_.closed_loop == ClosedLoopMode::kThreeStep;
+  // kThreeStep runs the IV bank for its delay choice (OnlineIntegratorDelayOptions::closed_loop).
+  ls_active_ =
+      options_.closed_loop == ClosedLoopMode::kOff || options_.closed_loop == ClosedLoopMode::kAuto;
+  iv_active_ = options_.closed_loop != ClosedLoopMode::kOff;
+  health_.closed_loop = options_.closed_loop == ClosedLoopMode::kOn || three_step_active_;
+  health_.closed_loop_decided = options_.closed_loop != ClosedLoopMode::kAuto;
+  if (ls_active_ && options_.wave_front_term) wave_estimators_.assign(un, Rls<4>(options_.rls));
+  if (ls_active_ && !options_.wave_front_term) estimators_.assign(un, Rls<3>(options_.rls));
+  if (iv_active_ && options_.wave_front_term) {
+    iv_wave_estimators_.assign(un, IvRls<4>(options_.rls));
+  }
+  if (iv_active_ && !options_.wave_front_term) iv_estimators_.assign(un, IvRls<3>(options_.rls));
+  q_integrated_.assign(un, 0.0);
+  q_centre_.assign(un, 0.0);
+  qin_integrated_.assign(un, 0.0);
+  qin_centre_.assign(un, 0.0);
+  k0_ = options_.max_delay_samples + 1;
+  const double lambda = options_.rls.forgetting;
+  if (options_.recentre_samples > 0) {
+    recentre_period_ = options_.recentre_samples;
+  } else if (options_.recentre_samples == 0 && lambda < 1.0) {
+    recentre_period_ = static_cast<int>(std::ceil(1.0 / (1.0 - lambda)));
+  }
+  if (three_step_active_) {
+    ThreeStepOptions t = options_.three_step;
+    t.regression = options_.rls;
+    t.regression.lower.resize(0);
+    t.regression.upper.resize(0);
+    t.sensitivity.forgetting = lambda;
+    t.recentre_samples = recentre_period_;
+    three_step_.assign(un, OnlineThreeStep(t));
+  }
+}
+
+bool OnlineIntegratorDelayBank::Update(double q_in_m3s, double q_out_m3s, double level_m) {
+  const double flow_max = options_.flow_abs_max_m3s;
+  const bool in_ok = FiniteWithin(q_in_m3s, flow_max);
+  const bool out_ok = FiniteWithin(q_out_m3s, flow_max);
+  if (!have_good_ && !(in_ok && out_ok)) {
+    ++health_.dropped_samples;
+    return false;
+  }
+  if (!in_ok || !out_ok) ++health_.bad_flow_samples;
+  if (!have_good_) q_ref_ = q_in_m3s;
+  if (in_ok) q_in_good_ = q_in_m3s;
+  if (out_ok) q_out_good_ = q_out_m3s;
+  have_good_ = true;
+  ++k_;
+  ++health_.samples;
+  q_in_history_.Push(q_in_good_);
+  const bool deciding = !health_.closed_loop_decided;
+  if (deciding) detector_.AddInflow(q_in_good_);
+  bool updated = false;
+  if (k_ >= k0_) {
+    const double t = static_cast<double>(k_ - k0_);
+    if (recentre_period_ > 0 && t - t_centre_ >= recentre_period_) Recentre();
+    for (int i = 0; i < num_candidates(); ++i) {
+      const auto ui = static_cast<std::size_t>(i);
+      const double delayed_inflow = q_in_history_[options_.min_delay_samples + i];
+      q_integrated_[ui] += delayed_inflow - q_out_previous_;
+      qin_integrated_[ui] += delayed_inflow - q_ref_;
+    }
+    const bool level_ok = FiniteWithin(level_m, options_.level_abs_max_m);
+    if (!level_ok) ++health_.bad_level_samples;
+    const double y_fit = level_m + options_.outflow_direct_gain_s_per_m2 * q_out_good_;
+    if (three_step_active_) {
+      // Runs on bad levels too: its flow integrators must stay continuous.
+      for (int i = 0; i < num_candidates(); ++i) {
+        const double u = q_in_history_[options_.min_delay_samples + i];
+        three_step_[static_cast<std::size_t>(i)].Update(u, u - q_out_previous_, y_fit, level_ok);
+      }
+    }
+    if (level_ok) {
+      const double y = y_fit;
+      if (ls_active_ && options_.wave_front_term) UpdateCandidates(wave_estimators_, t, y);
+      if (ls_active_ && !options_.wave_front_term) UpdateCandidates(estimators_, t, y);
+      if (iv_active_ && options_.wave_front_term) UpdateIvCandidates(iv_wave_estimators_, t, y);
+      if (iv_active_ && !options_.wave_front_term) UpdateIvCandidates(iv_estimators_, t, y);
+      if (ls_active_) selector_.Commit();
+      if (iv_active_) iv_selector_.Commit();
+      updated = true;
+      if (deciding) {
+        detector_.AddOutflowLevel(q_out_good_, level_m);
+        if (detector_.samples() >= options_.closed_loop_window_samples) Decide();
+      }
+    }
+  }
+  health_.switches = reported_selector().switches();
+  q_out_previous_ = q_out_good_;
+  return updated;
+}
+
+void OnlineIntegratorDelayBank::Decide() {
+  health_.closed_loop_decided = true;
+  health_.outflow_level_correlation = detector_.OutflowLevelCorrelation();
+  health_.outflow_moves = detector_.OutflowMoves();
+  health_.closed_loop = detector_.ClosedLoop();
+  // The losing bank stops; its estimators keep their memory but are never read again.
+  ls_active_ = !health_.closed_loop;
+  iv_active_ = health_.closed_loop;
+}
+
+template <int N>
+void OnlineIntegratorDelayBank::UpdateIvCandidates(std::vector<IvRls<N>>& estimators, double t,
+                                                   double level_m) {
+  for (int i = 0; i < num_candidates(); ++i) {
+    const auto ui = static_cast<std::size_t>(i);
+    const int nk = options_.min_delay_samples + i;
+    Eigen::Matrix<double, N, 1> phi;
+    Eigen::Matrix<double, N, 1> z;
+    const double tc = t - t_centre_;
+    const double qin = qin_integrated_[ui] - qin_centre_[ui];
+    if constexpr (N == 4) {
+      phi << q_integrated_[ui] - q_centre_[ui], q_in_history_[nk], 1.0, tc;
+      z << qin, q_in_history_[nk], 1.0, tc;
+    } else {
+      phi << q_integrated_[ui] - q_centre_[ui], 1.0, tc;
+      z << qin, 1.0, tc;
+    }
+    const auto result = estimators[ui].Update(phi, z, level_m);
+    iv_selector_.Record(i, result.prediction_error);
+  }
+}
+
+template <int N>
+void OnlineIntegratorDelayBank::UpdateCandidates(std::vector<Rls<N>>& estimators, double t,
+                                                 double level_m) {
+  for (int i = 0; i < num_candidates(); ++i) {
+    const auto ui = static_cast<std::size_t>(i);
+    const int nk = options_.min_delay_samples + i;
+    Eigen::Matrix<double, N, 1> phi;
+    if constexpr (N == 4) {
+      phi << q_integrated_[ui] - q_centre_[ui], q_in_history_[nk], 1.0, t - t_centre_;
+    } else {
+      phi << q_integrated_[ui] - q_centre_[ui], 1.0, t - t_centre_;
+    }
+    const auto result = estimators[ui].Update(phi, level_m);
+    selector_.Record(i, result.prediction_error);
+  }
+}
+
+template <int N>
+Eigen::Matrix<double, N, N> OnlineIntegratorDelayBank::CentreShift(double dq, double dt) {
+  // The offset is the second-last parameter and the drift the last, with or without p21; the
+  // wave-front regressor q_in(k - nk) is bounded and needs no centre.
+  constexpr int kOffset = N - 2;
+  Eigen::Matrix<double, N, N> transform = Eigen::Matrix<double, N, N>::Identity();
+  transform(kOffset, 0) = dq;
+  transform(kOffset, N - 1) = dt;
+  return transform;
+}
+
+void OnlineIntegratorDelayBank::Recentre() {
+  // New centre at the current sample.  c' = c + b Q_c + d t_c, so moving the centre by
+  // (dQ, dt) maps theta by an exact linear T; the fit itself is unchanged.  The instrument is
+  // re-centred the same way (S, with dQin), which leaves the IV estimate unchanged too.
+  const double t_new = static_cast<double>(k_ - k0_);
+  const double dt = t_new - t_centre_;
+  for (int i = 0; i < num_candidates(); ++i) {
+    const auto ui = static_cast<std::size_t>(i);
+    const double dq = q_integrated_[ui] - q_centre_[ui];
+    const double dqin = qin_integrated_[ui] - qin_centre_[ui];
+    if (ls_active_ && options_.wave_front_term)
+      wave_estimators_[ui].Transform(CentreShift<4>(dq, dt));
+    if (ls_active_ && !options_.wave_front_term) estimators_[ui].Transform(CentreShift<3>(dq, dt));
+    if (iv_active_ && options_.wave_front_term) {
+      iv_wave_estimators_[ui].Transform(CentreShift<4>(dq, dt), CentreShift<4>(dqin, dt));
+    }
+    if (iv_active_ && !options_.wave_front_term) {
+      iv_estimators_[ui].Transform(CentreShift<3>(dq, dt), CentreShift<3>(dqin, dt));
+    }
+    q_centre_[ui] = q_integrated_[ui];
+    qin_centre_[ui] = qin_integrated_[ui];
+  }
+  t_centre_ = t_new;
+}
+
+int OnlineIntegratorDelayBank::selected_delay_samples() const {
+  const int s = reported_selector().selected();
+  return s < 0 ? -1 : options_.min_delay_samples + s;
+}
+
+IntegratorDelaySnapshot OnlineIntegratorDelayBank::Snapshot() const {
+  const int nk = selected_delay_samples();
+  if (nk < 0) return IntegratorDelaySnapshot{};
+  return CandidateSnapshot(nk);
+}
+
+IntegratorDelaySnapshot OnlineIntegratorDelayBank::CandidateSnapshot(int delay_samples) const {
+  IntegratorDelaySnapshot s;
+  const int i = delay_samples - options_.min_delay_samples;
+  if (i < 0 || i >= num_candidates()) return s;
+  const auto ui = static_cast<std::size_t>(i);
+  s.sample = k_;
+  s.delay_samples = delay_samples;
+  s.delay_s = delay_samples * options_.sample_time_s;
+  if (three_step_active_) {
+    FillThreeStepSnapshot(three_step_[ui], s);
+  } else if (health_.closed_loop) {
+    if (options_.wave_front_term) {
+      FillSnapshot<4>(iv_wave_estimators_[ui], ui, s);
+    } else {
+      FillSnapshot<3>(iv_estimators_[ui], ui, s);
+    }
+  } else if (options_.wave_front_term) {
+    FillSnapshot<4>(wave_estimators_[ui], ui, s);
+  } else {
+    FillSnapshot<3>(estimators_[ui], ui, s);
+  }
+  s.loss = reported_selector().loss(i);
+  s.flags = IntegratorDelaySnapshotFlags(s, options_);
+  return s;
+}
+
+void OnlineIntegratorDelayBank::FillThreeStepSnapshot(const OnlineThreeStep& t,
+                                                      IntegratorDelaySnapshot& s) const {
+  const auto& rls = t.regression();
+  s.valid = rls.health().updates > 0;
+  s.b = t.b();
+  s.wave_front_gain_s_per_m2 = 0.0;
+  s.c_m = t.c_m();
+  s.d_m = t.d_m();
+  s.area_m2 = options_.sample_time_s / s.b;
+  t.StandardDeviations(s.b_std, s.c_std_m, s.d_std_m);
+  s.area_std_m2 = options_.sample_time_s * s.b_std / (s.b * s.b);
+  s.prediction_error_m = rls.last_prediction_error();
+  s.innovation_std_m = std::sqrt(rls.innovation_variance());
+  s.health = rls.health();
+  Eigen::Matrix<double, OnlineThreeStep::kParams, OnlineThreeStep::kParams> p;
+  rls.Covariance(p);
+  FillConditioning<OnlineThreeStep::kParams>(p, s);
+}
+
+template <int N>
+void OnlineIntegratorDelayBank::FillConditioning(const Eigen::Matrix<double, N, N>& p,
+                                                 IntegratorDelaySnapshot& s) {
+  // Fixed size: the solver lives on the stack, nothing is allocated.
+  if (!p.allFinite()) {
+    s.condition_number = std::numeric_limits<double>::infinity();
+    s.information_min = 0.0;
+    return;
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> eig(p, Eigen::EigenvaluesOnly);
+  const double lo = eig.eigenvalues()(0);
+  const double hi = eig.eigenvalues()(N - 1);
+  s.condition_number = lo > 0.0 ? hi / lo : std::numeric_limits<double>::infinity();
+  s.information_min = hi > 0.0 ? 1.0 / hi : 0.0;
+}
+
+template <int N, typename Estimator>
+void OnlineIntegratorDelayBank::FillSnapshot(const Estimator& rls, std::size_t ui,
+                                             IntegratorDelaySnapshot& s) const {
+  constexpr int kOffset = N - 2;
+  constexpr int kDrift = N - 1;
+  s.valid = rls.health().updates > 0;
+  const Eigen::Matrix<double, N, 1>& th = rls.theta();
+  const double qc = q_centre_[ui];
+  s.b = th(0);
+  if constexpr (N == 4) s.wave_front_gain_s_per_m2 = th(1);
+  s.d_m = th(kDrift);
+  s.c_m = th(kOffset) - th(0) * qc - th(kDrift) * t_centre_;
+  s.area_m2 = options_.sample_time_s / s.b;
+  Eigen::Matrix<double, N, N> p;
+  rls.Covariance(p);
+  const double s2 = rls.innovation_variance();
+  Eigen::Matrix<double, N, 1> a = Eigen::Matrix<double, N, 1>::Zero();  // c = a' theta
+  a(0) = -qc;
+  a(kOffset) = 1.0;
+  a(kDrift) = -t_centre_;
+  s.b_std = std::sqrt(std::max(0.0, s2 * p(0, 0)));
+  s.d_std_m = std::sqrt(std::max(0.0, s2 * p(kDrift, kDrift)));
+  s.c_std_m = std::sqrt(std::max(0.0, s2 * a.dot(p * a)));
+  s.area_std_m2 = options_.sample_time_s * s.b_std / (s.b * s.b);
+  s.prediction_error_m = rls.last_prediction_error();
+  s.innovation_std_m = std::sqrt(s2);
+  s.health = rls.health();
+  FillConditioning<N>(p, s);
+}
+
+}  // namespace canalid::core

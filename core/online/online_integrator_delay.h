@@ -1,0 +1,244 @@
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/integrator_delay/closed_loop_detector.h"
+#include "core/integrator_delay/integrator_delay_model.h"
+#include "core/numerics/ring_buffer.h"
+#include "core/online/estimator_bank.h"
+#include "core/online/online_three_step.h"
+#include "core/online/rls.h"
+#include "core/online/rls_iv.h"
+
+namespace canalid::core {
+
+/// Bits of IntegratorDelaySnapshot::flags, the same values as canalid.model_snapshot_t's FLAG_*
+/// (see docs/lcm-channels.md).
+inline constexpr int kFlagNan = 1;             ///< a parameter or P is NaN or infinite
+inline constexpr int kFlagWindup = 2;          ///< RlsHealth::wound_up: trace(P) above n p0
+inline constexpr int kFlagLowExcitation = 4;   ///< information_min < information_min_per_p0 / p0
+inline constexpr int kFlagIllConditioned = 8;  ///< condition_number > condition_max
+inline constexpr int kFlagFrozen = 16;         ///< the last sample carried no information
+inline constexpr int kFlagOutOfBounds = 32;    ///< A <= 0 or not finite, or nk at a bank edge
+
+/// Thresholds of the health flags of IntegratorDelaySnapshot (OnlineIntegratorDelayBank::Snapshot).
+struct IntegratorDelayHealthOptions {
+  /// kFlagIllConditioned above it: the 2-norm condition number of the estimator's P.
+  double condition_max = 1e12;
+  /// kFlagLowExcitation below information_min_per_p0 / p0: the smallest eigenvalue of P^-1 (the
+  /// information matrix of the data in the estimator's memory, plus the prior's 1 / p0 and what
+  /// forgetting leaves of it).  100: some direction of theta has gained less than ~99 times the
+  /// prior's information, i.e. the data has not identified all parameters.
+  double information_min_per_p0 = 100.0;
+  /// @throws std::invalid_argument naming the option out of range.
+  void Validate() const;
+};
+
+/// Options of OnlineIntegratorDelayBank.
+struct OnlineIntegratorDelayOptions {
+  double sample_time_s = 1.0;  ///< Ts > 0
+  int min_delay_samples = 0;   ///< smallest candidate nk >= 0
+  int max_delay_samples = 0;   ///< largest candidate nk >= min_delay_samples
+  RlsOptions rls;              ///< per candidate (n = 3, or 4 with wave_front_term); UD, lambda 1
+  /// Adds IDZ's wave-front regressor q_in(k - nk) (gain p21) as in the batch FitIntegratorDelay, so
+  /// that with lambda = 1 and a large P0 the bank equals FitIntegratorDelay's open-loop fit.  Off
+  /// by default here (the daemon's configured banks keep the 3-parameter form); `canalid identify
+  /// --online` turns it on.
+  bool wave_front_term = false;
+  BankSelectorOptions selector;
+  /// Re-centring period of the regressor (samples): 0 = automatic, i.e. never for lambda = 1 and
+  /// ceil(1 / (1 - lambda)) (one memory length) otherwise; < 0 = never.
+  int recentre_samples = 0;
+  double flow_abs_max_m3s = 1e5;  ///< |q| above it (or non-finite) is an absurd flow
+  double level_abs_max_m = 1e4;   ///< |y| above it (or non-finite) is an absurd level
+  /// Closed loop (a downstream gate whose outflow follows the level, so the measured total flow
+  /// in Q_nk is correlated with the level's errors).  kOn: every candidate is fitted by
+  /// instrumental-variable RLS (IvRls, same regressor phi) with the instrument
+  ///   z = [Qin_nk(k), q_in(k - nk), 1, k - k0]  (without q_in(k - nk) when !wave_front_term),
+  ///   Qin_nk(k) = sum_{j=k0..k} (q_in(j - nk) - q_ref),  q_ref the first good inflow,
+  /// i.e. the integrated delayed inflow, the excitation, which does not see the level's errors
+  /// (FitIntegratorDelay's IV cross-check; with lambda = 1 and a large P0 each candidate equals the
+  /// batch IV estimate (Z' Phi)^-1 Z' y).  kOff (default, the daemon's behaviour): least squares
+  /// (Rls). kAuto: both run until closed_loop_window_samples regression samples from k0 have been
+  /// seen, then ClosedLoopDetector (FitIntegratorDelay's test: outflow std above 2 % of the
+  /// inflow's and |corr(detrended q_out, detrended level)| > 0.3, over those samples) picks one for
+  /// good; the snapshots report the least-squares bank until then.  The per-sample cost doubles
+  /// during the window.  The IV estimators take forgetting, P0, trace_max, the box and the sample
+  /// guards from `rls`; its method and innovation guards do not apply (IvRls: exponential
+  /// forgetting only). See outflow_direct_gain_s_per_m2 for what closed-loop data cannot give.
+  /// kThreeStep: the three-step method online (OnlineThreeStep, one per
+  /// candidate, fed u = q_in(k - nk), t = u - q_out(k - 1) and the fitted output from k0 on);
+  /// snapshots report the three-step estimate (p21 = 0, as the batch's closed-loop fit) at the nk
+  /// chosen by the IV bank, which runs alongside (as for kOn).  Step (1) needs a delay criterion
+  /// the loop does not bias; measured on the fixed-gate ASCE canal 2 pool 2 record (true 682 s):
+  /// the IV bank's choice is 720 s (the batch scan's too), the least-squares bank's 780 s (there
+  /// the zero-DC-gain F_hat never comes out stable and step 3 has no flow to fit), a selector on
+  /// the three-step candidates' own level errors 540 s (area 23641 m^2, -31 %).
+  /// Step (3) takes forgetting, P0 and the sample guards from `rls` (not its box), step (2) its
+  /// forgetting; the rest from three_step.
+  ClosedLoopMode closed_loop = ClosedLoopMode::kOff;
+  ThreeStepOptions three_step;  ///< kThreeStep only; regression and recentre_samples are set here
+  int closed_loop_window_samples = 200;  ///< kAuto's decision window, 3..1e9 samples
+  /// IDZ's direct outflow gain p22 (s/m^2, >= 0; Litrico & Fromion 2004, from the geometry): the
+  /// fitted output is y(k) + p22 q_out(k) instead of y(k).  In open loop q_out is (nearly)
+  /// constant and p22 q_out goes into c.  In closed loop with a gate q_out ~ q0 + g y, the term
+  /// becomes p22 g y and cannot be told apart from b: with p22 = 0 the estimate is that of
+  /// A (1 + p22 g) (measured: 44889 m^2 = 34113 x 1.32 on ASCE canal 2 pool 2, g = 14.6 m^2/s),
+  /// and no estimator of this regression can do better from the data alone.  Snapshots' c is
+  /// then the offset of y + p22 q_out.  0 = plain ID.
+  double outflow_direct_gain_s_per_m2 = 0.0;
+  IntegratorDelayHealthOptions health;  ///< thresholds of IntegratorDelaySnapshot::flags
+
+  /// @throws std::invalid_argument naming the option out of range.
+  void Validate() const;
+};
+
+/// One candidate's (or the selected) integrator-delay model.
+struct IntegratorDelaySnapshot {
+  bool valid = false;        ///< false until the first regression sample
+  std::int64_t sample = -1;  ///< index k of the last sample (0 = first sample given)
+  int delay_samples = -1;    ///< nk
+  double delay_s = 0.0;      ///< nk Ts
+  double b = 0.0;            ///< backwater coefficient (s/m^2 per sample): level per m^3/s x sample
+  double wave_front_gain_s_per_m2 = 0.0;  ///< p21 (0 without wave_front_term)
+  double c_m = 0.0;                       ///< offset at k = k0
+  double d_m = 0.0;                       ///< drift per sample
+  double area_m2 = 0.0;                   ///< Ts / b
+  double b_std = 0.0;                     ///< standard deviations from sigma2 P
+  double c_std_m = 0.0;
+  double d_std_m = 0.0;
+  double area_std_m2 = 0.0;         ///< Ts b_std / b^2 (first order)
+  double prediction_error_m = 0.0;  ///< last a-priori error
+  double innovation_std_m = 0.0;    ///< sqrt(sigma2)
+  double loss = 0.0;                ///< the selector's weighted squared a-priori error
+  RlsHealth health;
+  /// 2-norm condition number of the estimator's P (exact: a fixed-size eigen decomposition).
+  double condition_number = 1.0;
+  /// Smallest eigenvalue of P^-1, 1 / lambda_max(P): the information in the least excited
+  /// direction of theta (regressor units squared over sigma2).
+  double information_min = 0.0;
+  int flags = 0;  ///< kFlag* bits, IntegratorDelaySnapshotFlags of this snapshot
+};
+
+/// The health flags of a snapshot of a bank with these options (kFlag*):
+///   kFlagNan: b, c, d, A or trace(P) not finite;  kFlagWindup: health.wound_up;
+///   kFlagLowExcitation: information_min < options.health.information_min_per_p0 / p0;
+///   kFlagIllConditioned: condition_number > options.health.condition_max (or not finite);
+///   kFlagFrozen: health.frozen;
+///   kFlagOutOfBounds: A <= 0 or not finite, or nk = max_delay_samples, or nk = min_delay_samples
+///     > 0 (at an edge of the bank the true delay may lie outside it).
+/// An invalid snapshot (no update yet) has no flags.  Pure, no allocation.
+int IntegratorDelaySnapshotFlags(const IntegratorDelaySnapshot& snapshot,
+                                 const OnlineIntegratorDelayOptions& options);
+/// Which physical bound of a bank with these options an integrator-delay model breaks: A not
+/// finite or <= 0, nk outside [min, max], or nk at an edge as in kFlagOutOfBounds.  The same rule
+/// flags published models and keeps models from the state.  Pure, no allocation (it runs on every
+/// snapshot).
+enum class IdBoundsViolation : std::uint8_t { kNone, kArea, kOutsideBank, kAtBankEdge };
+IdBoundsViolation CheckIntegratorDelayBounds(double area_m2, int delay_samples,
+                                             const OnlineIntegratorDelayOptions& options);
+/// CheckIntegratorDelayBounds as a sentence for a log line (empty when inside); allocates.
+std::string IntegratorDelayBoundsProblem(double area_m2, int delay_samples,
+                                         const OnlineIntegratorDelayOptions& options);
+
+/// Bank health beyond the per-estimator RlsHealth.
+struct IntegratorDelayBankHealth {
+  bool closed_loop = false;                ///< the reported bank is the IV (closed-loop) one
+  bool closed_loop_decided = false;        ///< kAuto has decided (always true for kOn and kOff)
+  double outflow_level_correlation = 0.0;  ///< kAuto: ClosedLoopDetector's r (at the decision)
+  bool outflow_moves = false;              ///< kAuto: ClosedLoopDetector::OutflowMoves()
+  std::int64_t samples = 0;                ///< samples accepted into the time base
+  std::int64_t bad_flow_samples = 0;       ///< flows replaced by the last good ones
+  std::int64_t bad_level_samples = 0;      ///< no regression update on these samples
+  std::int64_t dropped_samples = 0;        ///< bad flows before any good one: not used at all
+  int switches = 0;                        ///< delay changes made by the selector
+};
+
+/// Online integrator-delay (ID) identification of a canal pool with a bank over the delay nk.
+/// For the samples k = 0, 1, ... of inflow q_in (m^3/s), outflow q_out (m^3/s) and level y (m):
+///   v_nk(k) = q_in(k - nk) - q_out(k - 1),   Q_nk(k) = sum_{j=k0..k} v_nk(j)  (m^3/s x samples),
+///   y(k) = b Q_nk(k) + c + d (k - k0),       k0 = max_delay_samples + 1,
+/// or, with wave_front_term, y(k) = b Q_nk(k) + p21 q_in(k - nk) + c + d (k - k0) (Rls<4>, the
+/// batch FitIntegratorDelay's open-loop regression),
+/// i.e. the level against the integrated total flow with an offset and a drift (the low-frequency
+/// form of y(k) - y(k-1) = b (q_in(k - nk) - q_out(k - 1))), fitted by one Rls<3> per candidate
+/// from k = k0 on (one IvRls per candidate in closed loop, see
+/// OnlineIntegratorDelayOptions::closed_loop). With lambda = 1 and a large P0 each candidate equals
+/// batch least squares on the rows phi = [Q_nk(k), 1, k - k0], k = k0..K.  area_m2 = Ts / b,
+/// delay_s = nk Ts.
+///
+/// Forgetting < 1: Q_nk and k - k0 grow without bound while the memory does not, so the
+/// regressor is re-centred every recentre_samples: internally phi = [Q - Q_c, 1, (k - k0) - t_c]
+/// and theta = [b, c + b Q_c + d t_c, d], changed exactly by Rls::Transform at each new centre;
+/// snapshots always report c and d in the batch convention above.
+///
+/// A non-finite or absurd flow is replaced by the last good value of that flow (so the
+/// integrators stay continuous) and counted; a bad level skips the regression update for that
+/// sample.  The selector (BankSelector) picks nk by the weighted a-priori error with hysteresis.
+/// Allocates only in the constructor; Update and the snapshots never allocate.  Deterministic.
+class OnlineIntegratorDelayBank final {
+ public:
+  /// @throws std::invalid_argument on a bad option.
+  explicit OnlineIntegratorDelayBank(const OnlineIntegratorDelayOptions& options);
+
+  /// One sample.  Returns true when the candidates were updated (k >= k0 and a good level).
+  bool Update(double q_in_m3s, double q_out_m3s, double level_m);
+
+  /// The selected candidate (valid = false before the selector's first choice).
+  IntegratorDelaySnapshot Snapshot() const;
+  /// Candidate with delay nk.  @pre min_delay_samples <= nk <= max_delay_samples.
+  IntegratorDelaySnapshot CandidateSnapshot(int delay_samples) const;
+  int selected_delay_samples() const;
+  int num_candidates() const { return options_.max_delay_samples - options_.min_delay_samples + 1; }
+  const IntegratorDelayBankHealth& health() const { return health_; }
+  const OnlineIntegratorDelayOptions& options() const { return options_; }
+
+ private:
+  template <int N>
+  void UpdateCandidates(std::vector<Rls<N>>& estimators, double t, double level_m);
+  template <int N>
+  void UpdateIvCandidates(std::vector<IvRls<N>>& estimators, double t, double level_m);
+  template <int N>
+  static Eigen::Matrix<double, N, N> CentreShift(double dq, double dt);
+  void Recentre();
+  void Decide();
+  void FillThreeStepSnapshot(const OnlineThreeStep& t, IntegratorDelaySnapshot& s) const;
+  template <int N, typename Estimator>
+  void FillSnapshot(const Estimator& rls, std::size_t ui, IntegratorDelaySnapshot& s) const;
+  template <int N>
+  static void FillConditioning(const Eigen::Matrix<double, N, N>& p, IntegratorDelaySnapshot& s);
+  const BankSelector& reported_selector() const {
+    return health_.closed_loop ? iv_selector_ : selector_;
+  }
+
+  OnlineIntegratorDelayOptions options_;
+  std::vector<Rls<3>> estimators_;            // without the wave-front term
+  std::vector<Rls<4>> wave_estimators_;       // with it
+  std::vector<IvRls<3>> iv_estimators_;       // closed loop, without the wave-front term
+  std::vector<IvRls<4>> iv_wave_estimators_;  // closed loop, with it
+  std::vector<OnlineThreeStep> three_step_;   // closed loop, three-step method
+  std::vector<double> q_integrated_;          // Q_nk(k)
+  std::vector<double> q_centre_;              // Q_c per candidate
+  std::vector<double> qin_integrated_;        // instrument Qin_nk(k)
+  std::vector<double> qin_centre_;            // its centre
+  BankSelector selector_;                     // least-squares bank
+  BankSelector iv_selector_;                  // IV bank
+  ClosedLoopDetector detector_;
+  bool ls_active_ = true;
+  bool iv_active_ = false;
+  bool three_step_active_ = false;
+  double q_ref_ = 0.0;
+  RingBuffer<double> q_in_history_;
+  double q_in_good_ = 0.0;
+  double q_out_good_ = 0.0;
+  double q_out_previous_ = 0.0;
+  bool have_good_ = false;
+  std::int64_t k_ = -1;
+  std::int64_t k0_ = 0;
+  double t_centre_ = 0.0;
+  int recentre_period_ = 0;
+  IntegratorDelayBankHealth health_;
+};
+
+}  // namespace canalid::core

@@ -1,0 +1,126 @@
+#pragma once
+#include <functional>
+#include <limits>
+#include <optional>
+#include <string>
+
+#include "core/experiment/experiment_guard.h"
+#include "core/reach/reach_sample_processor.h"
+
+namespace canalid::core {
+
+/// Where a reach's values sit in its PLC's poll (indices into the PLC's channel list; -1: none).
+struct ReachChannels {
+  int q_in = -1;
+  int q_out = -1;
+  int level = -1;
+  int actuator = -1;
+};
+
+/// Everything a reach runs, derived from the configuration (daemon/config/plan_from_config.h builds
+/// it).
+struct ReachControllerOptions {
+  std::string name;
+  ReachChannels channels;
+  ReachSampleProcessorOptions pipeline;  ///< no experiment: it comes from experiment_for_nominal
+  /// The actuator's nominal setpoint; none: its first valid reading.
+  std::optional<double> nominal_setpoint;
+  /// The reach's experiment for a nominal setpoint (empty: the reach is never excited).
+  /// @throws std::invalid_argument when the nominal leaves no room for the PRBS inside the limits.
+  std::function<ExperimentPlan(double nominal_setpoint)> experiment_for_nominal;
+  bool start_experiment_on_start = false;
+  std::string experiment_name;  ///< the reach's experiment (empty: none), for its guard
+};
+
+/// One poll of a reach's PLC as the reach reads it: the four channel values (engineering units)
+/// with their validity, and the poll's status.
+struct ReachReadings {
+  double q_in_m3s = 0.0, q_out_m3s = 0.0, level_m = 0.0, actuator = 0.0;
+  bool q_in_valid = false, q_out_valid = false, level_valid = false, actuator_valid = false;
+  bool link_ok = true;    ///< the PLC answered (a disconnected poll is not)
+  bool status_ok = true;  ///< every block of the poll was read
+  double time_s = std::numeric_limits<double>::quiet_NaN();  ///< when the poll was taken (s)
+};
+
+/// The reach's readings from a poll's values and per-channel validity (`valid(i)` for channel i).
+template <class Values, class Valid>
+ReachReadings ReadReach(const ReachChannels& c, const Values& values, Valid valid, bool link_ok,
+                        bool status_ok, double time_s) {
+  ReachReadings r;
+  auto read = [&](int channel, double* value, bool* ok) {
+    *ok = channel >= 0 && valid(static_cast<std::size_t>(channel));
+    *value = *ok ? values[static_cast<std::size_t>(channel)] : 0.0;
+  };
+  read(c.q_in, &r.q_in_m3s, &r.q_in_valid);
+  read(c.q_out, &r.q_out_m3s, &r.q_out_valid);
+  read(c.level, &r.level_m, &r.level_valid);
+  read(c.actuator, &r.actuator, &r.actuator_valid);
+  r.link_ok = link_ok;
+  r.status_ok = status_ok;
+  r.time_s = time_s;
+  return r;
+}
+
+/// What one poll did to a reach, for the caller to act on and report.
+struct ReachPollOutcome {
+  ReachActions actions;
+  /// The nominal setpoint was read from this poll (the actuator's first valid reading).
+  std::optional<double> nominal_read;
+  /// Why the reach has no experiment around that nominal (empty: it has one, or none planned).
+  std::string plan_error;
+};
+
+/// The per-poll decisions of one reach, shared by the daemon (live) and `canalid replay` (from a
+/// log), so the two run the same code on the same samples: the nominal setpoint read from the
+/// actuator's first valid value when the configuration gives none, the experiment plan around it,
+/// the ReachSampleProcessor step, and the start of an on_start experiment at the first complete
+/// poll. Pure and deterministic; allocates only when a plan is installed (once).
+class ReachController final {
+ public:
+  /// @throws std::invalid_argument on bad pipeline options.
+  explicit ReachController(ReachControllerOptions options);
+
+  /// Steps the reach with one poll.  The caller acts on `actions` (writes, record complete: call
+  /// pipeline().IdentifyRecord()) and then calls StartIfDue().
+  ReachPollOutcome OnPoll(const ReachReadings& readings);
+  /// Starts the on_start experiment once: after a poll with every block read, when the nominal is
+  /// known, excitation_allowed() and `allowed` (the daemon is not stopping).  Returns the start's
+  /// actions, or none.
+  std::optional<ReachActions> StartIfDue(bool status_ok, bool allowed);
+
+  /// Applies the start-up decision on an interrupted experiment (DecideRestart), before the first
+  /// poll: adopts its nominal (installing the experiment around it; returns the plan error, empty
+  /// when none), never takes a reading as the nominal when it refuses, and holds experiments until
+  /// OnRestoreConfirmed() when it restores first.
+  std::string ApplyRestart(const RestartDecision& decision);
+  /// The PLC confirmed the restore of ApplyRestart: experiments may start (unless refused).
+  void OnRestoreConfirmed() { held_ = false; }
+  /// An experiment may start now (not refused at start-up, no restore pending confirmation).
+  bool excitation_allowed() const { return !refused_ && !held_; }
+
+  /// Sets the nominal setpoint and installs the experiment around it; returns why there is no
+  /// experiment (empty when there is one or none is planned).
+  std::string SetNominal(double nominal);
+
+  ReachSampleProcessor& pipeline() { return pipeline_; }
+  const ReachSampleProcessor& pipeline() const { return pipeline_; }
+  const ReachControllerOptions& options() const { return options_; }
+  const std::string& name() const { return options_.name; }
+  bool nominal_known() const { return nominal_known_; }
+  double nominal() const { return nominal_; }
+  /// The error of the plan installed at construction from a configured nominal (empty: none).
+  const std::string& initial_plan_error() const { return initial_plan_error_; }
+
+ private:
+  ReachControllerOptions options_;
+  ReachSampleProcessor pipeline_;
+  bool nominal_known_ = false;
+  double nominal_ = 0.0;
+  bool started_ = false;
+  bool refused_ = false;
+  bool held_ = false;
+  bool adopt_reading_ = true;
+  std::string initial_plan_error_;
+};
+
+}  // namespace canalid::core

@@ -1,0 +1,137 @@
+#include "core/reach/reach_sample_processor.h"
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace canalid::core {
+
+ReachSampleProcessor::ReachSampleProcessor(const ReachSampleProcessorOptions& options)
+    : options_(options) {
+  if (!(options_.sample_time_s > 0.0))
+    throw std::invalid_argument("reach sample_time_s must be > 0");
+  options_.online_id.sample_time_s = options_.sample_time_s;
+  if (options_.online_id_enabled) online_id_.emplace(options_.online_id);
+  if (options_.experiment) SetExperimentPlan(*options_.experiment);
+}
+
+ReachActions ReachSampleProcessor::Apply(const ExperimentEvent& event) {
+  ReachActions actions;
+  if (!options_.experiment) return actions;
+  ExperimentTransition t = Step(*options_.experiment, experiment_state_, event);
+  const bool starting = event.kind == ExperimentEventKind::kStart && t.actions.phase_changed;
+  experiment_state_ = std::move(t.state);
+  if (starting) recorded_ = 0;
+  actions.write_setpoint = t.actions.write_setpoint;
+  actions.restore_nominal = t.actions.restore_nominal;
+  actions.experiment_phase_changed = t.actions.phase_changed;
+  actions.experiment_record_complete = t.actions.start_identification;
+  record_this_sample_ = t.actions.record_sample;
+  return actions;
+}
+
+ReachActions ReachSampleProcessor::OnSample(const ReachSample& s) {
+  ++samples_;
+  last_time_s_ = s.time_s;
+  bool online_updated = false;
+  if (online_id_) {
+    // Invalid values go in as NaN: the bank holds the integrators on the last good flows and
+    // skips the regression on a bad level, and counts both.
+    constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
+    online_updated =
+        online_id_->Update(s.q_in_valid ? s.q_in_m3s : kNan, s.q_out_valid ? s.q_out_m3s : kNan,
+                           s.level_valid ? s.level_m : kNan);
+  }
+  ExperimentEvent event;
+  event.kind = ExperimentEventKind::kSample;
+  // Flows feed the record too, so the experiment needs them as much as the level.
+  event.sample = {s.level_m, s.level_valid && s.q_in_valid && s.q_out_valid, s.link_ok, s.time_s};
+  ReachActions actions = Apply(event);
+  if (record_this_sample_) {
+    // A tolerated invalid sample (max_invalid_samples) repeats the previous values.
+    const Eigen::Index i = recorded_++;
+    const bool valid = s.level_valid && s.q_in_valid && s.q_out_valid;
+    record_q_in_(i) = valid || i == 0 ? s.q_in_m3s : record_q_in_(i - 1);
+    record_q_out_(i) = valid || i == 0 ? s.q_out_m3s : record_q_out_(i - 1);
+    record_level_(i) = valid || i == 0 ? s.level_m : record_level_(i - 1);
+  }
+  actions.online_updated = online_updated;
+  return actions;
+}
+
+ReachActions ReachSampleProcessor::StartExperiment() {
+  ExperimentEvent event;
+  event.kind = ExperimentEventKind::kStart;
+  event.sample.time_s = last_time_s_;
+  return Apply(event);
+}
+
+ReachActions ReachSampleProcessor::StopExperiment() {
+  ExperimentEvent event;
+  event.kind = ExperimentEventKind::kStop;
+  return Apply(event);
+}
+
+ReachActions ReachSampleProcessor::OnLinkLost() {
+  ExperimentEvent event;
+  event.kind = ExperimentEventKind::kSample;
+  event.sample.link_ok = false;
+  return Apply(event);
+}
+
+ReachActions ReachSampleProcessor::OnWriteFailed() {
+  ExperimentEvent event;
+  event.kind = ExperimentEventKind::kWriteFailed;
+  return Apply(event);
+}
+
+ReachActions ReachSampleProcessor::OnGuardNotPersisted() {
+  ExperimentEvent event;
+  event.kind = ExperimentEventKind::kGuardNotPersisted;
+  return Apply(event);
+}
+
+void ReachSampleProcessor::ResetOnlineEstimator() {
+  if (online_id_) online_id_.emplace(options_.online_id);
+}
+
+bool ReachSampleProcessor::SetExperimentPlan(const ExperimentPlan& plan) {
+  const ExperimentPhase phase = experiment_state_.phase;
+  if (phase == ExperimentPhase::kSettling || phase == ExperimentPhase::kExciting ||
+      phase == ExperimentPhase::kIdentifying) {
+    return false;
+  }
+  plan.Validate();
+  options_.experiment = plan;
+  const auto n = static_cast<Eigen::Index>(plan.excite_samples);
+  record_q_in_.resize(n);
+  record_q_out_.resize(n);
+  record_level_.resize(n);
+  recorded_ = 0;
+  return true;
+}
+
+std::optional<IntegratorDelayIdentification> ReachSampleProcessor::IdentifyRecord(
+    ReachActions* actions) {
+  ExperimentEvent event;
+  std::optional<IntegratorDelayIdentification> result;
+  try {
+    result = IdentifyIntegratorDelay(record_q_in_.head(recorded_), record_q_out_.head(recorded_),
+                                     record_level_.head(recorded_), options_.sample_time_s,
+                                     options_.batch);
+    const IntegratorDelayModel& m = result->fit.model;
+    identification_problem_ = IntegratorDelayBoundsProblem(m.area_m2(), m.nk, options_.online_id);
+    if (!std::isfinite(m.b)) identification_problem_ = "b is not finite";
+    event.kind = identification_problem_.empty() ? ExperimentEventKind::kIdentificationSucceeded
+                                                 : ExperimentEventKind::kIdentificationFailed;
+  } catch (const std::invalid_argument& e) {
+    result.reset();
+    identification_problem_ = e.what();
+    event.kind = ExperimentEventKind::kIdentificationFailed;
+  }
+  const ReachActions done = Apply(event);
+  if (actions != nullptr) *actions = done;
+  return result;
+}
+
+}  // namespace canalid::core

@@ -1,0 +1,105 @@
+#pragma once
+#include <Eigen/Core>
+#include <limits>
+#include <optional>
+#include <string>
+
+#include "core/experiment/experiment.h"
+#include "core/integrator_delay/identify_integrator_delay.h"
+#include "core/online/online_integrator_delay.h"
+
+namespace canalid::core {
+
+/// One poll's values for one reach, already scaled to engineering units.
+struct ReachSample {
+  double q_in_m3s = 0.0;
+  double q_out_m3s = 0.0;
+  double level_m = 0.0;
+  bool q_in_valid = false;
+  bool q_out_valid = false;
+  bool level_valid = false;
+  bool link_ok = true;  ///< the PLC answered this poll
+  /// When the poll was taken (s; the daemon's wall clock, replay's log time; NaN: unknown).
+  /// A running experiment aborts on a gap (ExperimentPlan::max_sample_gap_s).
+  double time_s = std::numeric_limits<double>::quiet_NaN();
+};
+
+struct ReachSampleProcessorOptions {
+  double sample_time_s = 1.0;              ///< plant seconds between samples
+  OnlineIntegratorDelayOptions online_id;  ///< sample_time_s is overwritten with the one above
+  bool online_id_enabled = true;
+  std::optional<ExperimentPlan> experiment;    ///< none: this reach never excites its actuator
+  IntegratorDelayIdentificationOptions batch;  ///< identification at the end of each experiment
+};
+
+/// What the daemon must do after a sample or a command.
+struct ReachActions {
+  std::optional<double> write_setpoint;  ///< to the reach's actuator, now
+  bool restore_nominal = false;
+  bool experiment_phase_changed = false;
+  bool experiment_record_complete = false;  ///< call IdentifyRecord()
+  bool online_updated = false;              ///< the online estimate moved: publish it
+};
+
+/// Everything one reach does per sample, as plain data in and out (no I/O, no clocks): the online
+/// ID estimator bank, the experiment state machine with its safety rules, and the record of the
+/// running experiment (preallocated for the plan's length: nothing is allocated per sample).
+/// Deterministic: the same samples and commands give the same actions and estimates, which is
+/// what lets `canalid replay` reproduce a live run from its log.
+class ReachSampleProcessor final {
+ public:
+  /// @throws std::invalid_argument on bad options.
+  explicit ReachSampleProcessor(const ReachSampleProcessorOptions& options);
+
+  ReachActions OnSample(const ReachSample& sample);
+  /// Starts at the time of the last sample: the next one must follow within the plan's gap bound.
+  ReachActions StartExperiment();
+  ReachActions StopExperiment();
+  /// The PLC link is down and no samples come (the poller is reconnecting): abort if running.
+  /// Nothing else changes (no estimator update, no sample counted).
+  ReachActions OnLinkLost();
+  /// A setpoint write of this reach failed: abort if exciting.
+  ReachActions OnWriteFailed();
+  /// The guard that must precede an excitation write could not be persisted: abort if running.
+  ReachActions OnGuardNotPersisted();
+  /// Installs (or replaces) the experiment plan, e.g. once the actuator's nominal setpoint has
+  /// been read from the PLC.  Allocates the record for the plan's length (not per sample).
+  /// Returns false, changing nothing, while an experiment runs.
+  /// @throws std::invalid_argument if the plan is invalid.
+  bool SetExperimentPlan(const ExperimentPlan& plan);
+
+  /// Restarts the online estimator from its initial state (operator command, detected change).
+  void ResetOnlineEstimator();
+
+  /// Batch identification of the completed record (ID model pipeline); then the experiment
+  /// ends done (a model inside the bounds of the reach's delay bank, IntegratorDelayBoundsProblem)
+  /// or aborted (kIdentificationFailed; the result, if any, is still returned for the operator to
+  /// see, and identification_problem() says why it is not the reach's model).
+  /// @pre a record is complete.
+  std::optional<IntegratorDelayIdentification> IdentifyRecord(ReachActions* actions);
+  /// Why the last IdentifyRecord gave no usable model (empty when it did).
+  const std::string& identification_problem() const { return identification_problem_; }
+  /// The bounds a model of this reach must satisfy (the online bank's delay range and Ts).
+  const OnlineIntegratorDelayOptions& model_bounds() const { return options_.online_id; }
+
+  const ExperimentState& experiment_state() const { return experiment_state_; }
+  const std::optional<ExperimentPlan>& experiment_plan() const { return options_.experiment; }
+  const OnlineIntegratorDelayBank* online_id() const { return online_id_ ? &*online_id_ : nullptr; }
+  Eigen::Index recorded_samples() const { return recorded_; }
+  std::int64_t samples() const { return samples_; }
+
+ private:
+  ReachActions Apply(const ExperimentEvent& event);
+
+  ReachSampleProcessorOptions options_;
+  std::optional<OnlineIntegratorDelayBank> online_id_;
+  ExperimentState experiment_state_;
+  Eigen::VectorXd record_q_in_, record_q_out_, record_level_;
+  Eigen::Index recorded_ = 0;
+  bool record_this_sample_ = false;
+  std::int64_t samples_ = 0;
+  double last_time_s_ = std::numeric_limits<double>::quiet_NaN();  // of the last sample
+  std::string identification_problem_;
+};
+
+}  // namespace canalid::core

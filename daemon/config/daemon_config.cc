@@ -1,0 +1,592 @@
+#include "daemon/config/daemon_config.h"
+
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <set>
+#include <stdexcept>
+
+#include "core/experiment/experiment_design.h"
+#include "core/signal/prbs.h"
+
+namespace canalid::config {
+using namespace canalid::core;  // NOLINT(google-build-using-namespace): the maths the schema uses
+using namespace canalid::drivers;  // NOLINT(google-build-using-namespace): scaling, commands
+namespace {
+
+constexpr std::array kLogLevels{LogLevel::kError, LogLevel::kWarn, LogLevel::kInfo,
+                                LogLevel::kDebug};
+constexpr std::array kTransports{PlcTransport::kTcp, PlcTransport::kRtu};
+constexpr std::array kRoles{ChannelRole::kLevel, ChannelRole::kFlow,      ChannelRole::kGate,
+                            ChannelRole::kPump,  ChannelRole::kHeartbeat, ChannelRole::kOther};
+constexpr std::array kTables{RegisterTable::kInput, RegisterTable::kHolding};
+constexpr std::array kTypes{RegisterType::kU16, RegisterType::kI16, RegisterType::kU32,
+                            RegisterType::kI32, RegisterType::kF32};
+constexpr std::array kWordOrders{WordOrder::kHighWordFirst, WordOrder::kLowWordFirst};
+constexpr std::array kModels{OnlineModel::kId, OnlineModel::kArx};
+constexpr std::array kClosedLoopModes{ClosedLoopMode::kAuto, ClosedLoopMode::kOn,
+                                      ClosedLoopMode::kOff};
+constexpr std::array kRlsMethods{RlsMethod::kUdDirectional, RlsMethod::kUdExponential,
+                                 RlsMethod::kExponential,   RlsMethod::kDirectional,
+                                 RlsMethod::kConstantTrace, RlsMethod::kStabilised,
+                                 RlsMethod::kKalman,        RlsMethod::kNlms};
+constexpr std::array kModes{ExperimentMode::kDesign, ExperimentMode::kExplicit};
+constexpr std::array kStarts{ExperimentStart::kManual, ExperimentStart::kOnStart};
+constexpr std::array kCommandKinds{CommandKind::kStartExperiment, CommandKind::kAbortExperiment,
+                                   CommandKind::kResetEstimator, CommandKind::kPublishConfig};
+
+// Largest online delay bank (estimators = max delay in samples + 1): bounds memory and CPU.
+constexpr double kMaxDelaySamples = 2000.0;
+
+std::string Num(double value) {
+  if (std::isnan(value)) return "nan";
+  if (std::isinf(value)) return value > 0 ? "inf" : "-inf";
+  std::array<char, 32> buffer{};
+  const auto result = std::to_chars(buffer.data(), buffer.data() + buffer.size(), value);
+  return std::string(buffer.data(), result.ptr);
+}
+
+std::string Quoted(const std::string& s) { return "\"" + s + "\""; }
+
+bool ValidName(const std::string& name) {
+  if (name.empty() || name.size() > 64) return false;
+  for (char c : name) {
+    const bool ok =
+        (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_';
+    if (!ok) return false;
+  }
+  return true;
+}
+
+class Collector {
+ public:
+  void Add(std::string path, std::string message) {
+    problems_.push_back({std::move(path), std::move(message)});
+  }
+  // lo <= value <= hi (bounds inclusive unless open_lo/open_hi), finite unless hi is inf.
+  void Range(const std::string& path, double value, double lo, double hi, bool open_lo = false,
+             bool open_hi = false) {
+    const bool ok = !std::isnan(value) && (open_lo ? value > lo : value >= lo) &&
+                    (open_hi ? value < hi : value <= hi);
+    if (!ok) {
+      Add(path, Num(value) + " is out of range (allowed: " + (open_lo ? "(" : "[") + Num(lo) +
+                    ", " + Num(hi) + (open_hi ? ")" : "]") + ")");
+    }
+  }
+  void IntRange(const std::string& path, std::int64_t value, std::int64_t lo, std::int64_t hi) {
+    if (value < lo || value > hi) {
+      Add(path, std::to_string(value) + " is out of range (allowed: " + std::to_string(lo) + ".." +
+                    std::to_string(hi) + ")");
+    }
+  }
+  void Name(const std::string& path, const std::string& name) {
+    if (!ValidName(name)) {
+      Add(path, Quoted(name) + " is not a valid name (allowed: 1 to 64 of A-Z a-z 0-9 _)");
+    }
+  }
+  std::vector<ConfigProblem> Take() { return std::move(problems_); }
+
+ private:
+  std::vector<ConfigProblem> problems_;
+};
+
+std::string Index(const char* array, std::size_t i) {
+  return std::string(array) + "[" + std::to_string(i) + "]";
+}
+
+void ValidateDaemon(const DaemonConfig& c, Collector& out) {
+  const DaemonSection& d = c.daemon;
+  if (d.state_directory.empty() || d.state_directory.front() != '/') {
+    out.Add("daemon.state_directory",
+            Quoted(d.state_directory) + " is not an absolute path (allowed: /...)");
+  }
+  out.Range("daemon.time_scale", d.time_scale, 0.0, 10000.0, true);
+  if (d.heartbeat) {
+    out.Range("daemon.heartbeat.period_s", d.heartbeat->period_s, 0.0, 3600.0, true);
+    const ChannelConfig* ch = c.FindChannel(d.heartbeat->channel);
+    if (ch == nullptr) {
+      out.Add("daemon.heartbeat.channel",
+              "unknown channel " + Quoted(d.heartbeat->channel) + " (allowed: a [[channel]] name)");
+    } else if (ch->role != ChannelRole::kHeartbeat || !ch->writable) {
+      out.Add("daemon.heartbeat.channel",
+              "channel " + Quoted(ch->name) +
+                  " is not a writable heartbeat channel (allowed: role = \"heartbeat\", writable = "
+                  "true)");
+    }
+  }
+  const std::string& url = c.lcm.url;
+  const bool url_ok = url.empty() || url.starts_with("udpm://") || url.starts_with("memq://") ||
+                      url.starts_with("file://") || url.starts_with("tcpq://");
+  if (!url_ok) {
+    out.Add("lcm.url",
+            Quoted(url) + " is not an LCM URL (allowed: \"\", udpm://, memq://, file://, tcpq://)");
+  }
+  const std::string& prefix = c.lcm.channel_prefix;
+  bool prefix_ok = prefix.size() <= 32;
+  for (char ch : prefix) {
+    prefix_ok = prefix_ok && ((ch >= 'a' && ch <= 'z') || (ch >= 'A' && ch <= 'Z') ||
+                              (ch >= '0' && ch <= '9') || ch == '_');
+  }
+  if (!prefix_ok) {
+    out.Add("lcm.channel_prefix",
+            Quoted(prefix) + " is not a channel prefix (allowed: 0 to 32 of A-Z a-z 0-9 _)");
+  }
+}
+
+void ValidatePlcs(const DaemonConfig& c, Collector& out) {
+  if (c.plcs.empty()) out.Add("plc", "no [[plc]] table (allowed: at least one)");
+  std::set<std::string> names;
+  for (std::size_t i = 0; i < c.plcs.size(); ++i) {
+    const PlcConfig& p = c.plcs[i];
+    const std::string at = Index("plc", i) + ".";
+    out.Name(at + "name", p.name);
+    if (!names.insert(p.name).second) out.Add(at + "name", "duplicate plc name " + Quoted(p.name));
+    if (p.transport == PlcTransport::kTcp) {
+      if (p.host.empty()) out.Add(at + "host", "is empty (allowed: a host name or address)");
+      out.IntRange(at + "port", p.port, 1, 65535);
+      out.IntRange(at + "unit_id", p.unit_id, 0, 255);
+      out.Range(at + "connect_timeout_s", p.connect_timeout_s, 0.0, 60.0, true);
+    } else {
+      if (p.device.empty()) out.Add(at + "device", "is empty (allowed: a serial device path)");
+      out.IntRange(at + "baud", p.baud, 300, 4000000);
+      if (p.parity != 'N' && p.parity != 'E' && p.parity != 'O') {
+        out.Add(at + "parity", Quoted(std::string(1, p.parity)) +
+                                   " is not a parity (allowed: \"N\", \"E\", \"O\")");
+      }
+      out.IntRange(at + "data_bits", p.data_bits, 5, 8);
+      out.IntRange(at + "stop_bits", p.stop_bits, 1, 2);
+      out.IntRange(at + "unit_id", p.unit_id, 1, 247);
+    }
+    out.Range(at + "response_timeout_s", p.response_timeout_s, 0.0, 60.0, true);
+    if (std::isfinite(p.response_timeout_s)) {
+      out.Range(at + "poll_period_s", p.poll_period_s, p.response_timeout_s, 3600.0, true);
+    }
+    out.Range(at + "backoff_initial_s", p.backoff_initial_s, 0.0, 3600.0, true);
+    out.Range(at + "backoff_max_s", p.backoff_max_s,
+              std::isfinite(p.backoff_initial_s) ? p.backoff_initial_s : 0.0, 3600.0);
+    out.IntRange(at + "max_gap_registers", p.max_gap_registers, 0, 125);
+    out.IntRange(at + "timeouts_before_reconnect", p.timeouts_before_reconnect, 1, 1000);
+    bool has_channel = false;
+    for (const ChannelConfig& ch : c.channels) has_channel = has_channel || ch.plc == p.name;
+    if (!has_channel) {
+      out.Add(at + "name", "plc " + Quoted(p.name) + " has no channel (allowed: at least one)");
+    }
+  }
+}
+
+void ValidateChannels(const DaemonConfig& c, Collector& out) {
+  std::set<std::string> names;
+  for (std::size_t i = 0; i < c.channels.size(); ++i) {
+    const ChannelConfig& ch = c.channels[i];
+    const std::string at = Index("channel", i) + ".";
+    out.Name(at + "name", ch.name);
+    if (!names.insert(ch.name).second) {
+      out.Add(at + "name", "duplicate channel name " + Quoted(ch.name));
+    }
+    if (c.FindPlc(ch.plc) == nullptr) {
+      out.Add(at + "plc", "unknown plc " + Quoted(ch.plc) + " (allowed: a [[plc]] name)");
+    }
+    out.IntRange(at + "address", ch.address, 0, 65536 - RegisterCount(ch.type));
+    if (!(std::isfinite(ch.scale) && ch.scale != 0.0)) {
+      out.Add(at + "scale", Num(ch.scale) + " is out of range (allowed: finite and nonzero)");
+    }
+    if (!std::isfinite(ch.offset)) {
+      out.Add(at + "offset", Num(ch.offset) + " is out of range (allowed: finite)");
+    }
+    if (std::isnan(ch.valid_min)) {
+      out.Add(at + "valid_min", "nan is out of range (allowed: a number, -inf = no bound)");
+    }
+    if (std::isnan(ch.valid_max) || ch.valid_max < ch.valid_min) {
+      out.Add(at + "valid_max", Num(ch.valid_max) + " is out of range (allowed: >= valid_min " +
+                                    Num(ch.valid_min) + ")");
+    }
+    if (!ch.writable) continue;
+    if (ch.table != RegisterTable::kHolding) {
+      out.Add(at + "writable",
+              "an input register cannot be written (allowed: register = "
+              "\"holding\")");
+    }
+    const ChannelScaling scaling{ch.type,   ch.word_order, ch.scale,
+                                 ch.offset, ch.valid_min,  ch.valid_max};
+    const bool scaling_ok = std::isfinite(ch.scale) && ch.scale != 0.0 &&
+                            std::isfinite(ch.offset) && ch.valid_min <= ch.valid_max;
+    auto check_setpoint = [&](const char* key, double value) {
+      if (!std::isfinite(value) || value < ch.valid_min || value > ch.valid_max) {
+        out.Add(at + key, Num(value) + " is out of range (allowed: [" + Num(ch.valid_min) + ", " +
+                              Num(ch.valid_max) + "], finite)");
+        return;
+      }
+      std::array<uint16_t, 2> registers{};
+      if (scaling_ok &&
+          EncodeChannel(scaling, value, std::span(registers.data(), RegisterCount(ch.type))) !=
+              ScalingError::kNone) {
+        out.Add(at + key, Num(value) + " does not fit register type " + Quoted(EnumName(ch.type)) +
+                              " with this scale and offset");
+      }
+    };
+    check_setpoint("setpoint_min", ch.setpoint_min);
+    check_setpoint("setpoint_max", ch.setpoint_max);
+    if (std::isfinite(ch.setpoint_min) && ch.setpoint_max < ch.setpoint_min) {
+      out.Add(at + "setpoint_max", Num(ch.setpoint_max) +
+                                       " is out of range (allowed: >= "
+                                       "setpoint_min " +
+                                       Num(ch.setpoint_min) + ")");
+    }
+    // Two writers of one register would defeat each other's clamp and rate limit.
+    for (std::size_t j = 0; j < i; ++j) {
+      const ChannelConfig& other = c.channels[j];
+      if (other.writable && other.plc == ch.plc && other.table == ch.table &&
+          ch.address < other.address + RegisterCount(other.type) &&
+          other.address < ch.address + RegisterCount(ch.type)) {
+        out.Add(at + "address", std::to_string(ch.address) + " overlaps writable channel " +
+                                    Quoted(other.name) + " (allowed: one writer per register)");
+      }
+    }
+    if (!(ch.max_rate_per_s > 0.0)) {
+      out.Add(at + "max_rate_per_s",
+              Num(ch.max_rate_per_s) + " is out of range (allowed: > 0, inf = no limit)");
+    }
+  }
+}
+
+// A reach's channel reference: exists, has one of `roles`, is writable if asked.
+const ChannelConfig* CheckReachChannel(const DaemonConfig& c, const std::string& path,
+                                       const std::string& name,
+                                       std::initializer_list<ChannelRole> roles, bool writable,
+                                       Collector& out) {
+  const ChannelConfig* ch = c.FindChannel(name);
+  if (ch == nullptr) {
+    out.Add(path, "unknown channel " + Quoted(name) + " (allowed: a [[channel]] name)");
+    return nullptr;
+  }
+  bool role_ok = false;
+  std::string allowed;
+  for (ChannelRole r : roles) {
+    role_ok = role_ok || ch->role == r;
+    allowed += (allowed.empty() ? "" : " or ") + Quoted(EnumName(r));
+  }
+  if (!role_ok) {
+    out.Add(path, "channel " + Quoted(name) + " has role " + Quoted(EnumName(ch->role)) +
+                      " (allowed: " + allowed + ")");
+  }
+  if (writable && !ch->writable) {
+    out.Add(path, "channel " + Quoted(name) + " is not writable (allowed: writable = true)");
+  }
+  return ch;
+}
+
+void ValidateReaches(const DaemonConfig& c, Collector& out) {
+  std::set<std::string> names;
+  for (std::size_t i = 0; i < c.reaches.size(); ++i) {
+    const ReachConfig& r = c.reaches[i];
+    const std::string at = Index("reach", i) + ".";
+    out.Name(at + "name", r.name);
+    if (!names.insert(r.name).second)
+      out.Add(at + "name", "duplicate reach name " + Quoted(r.name));
+    const ChannelConfig* level =
+        CheckReachChannel(c, at + "level", r.level, {ChannelRole::kLevel}, false, out);
+    const ChannelConfig* others[] = {
+        CheckReachChannel(c, at + "inflow", r.inflow, {ChannelRole::kFlow}, false, out),
+        CheckReachChannel(c, at + "outflow", r.outflow, {ChannelRole::kFlow}, false, out),
+        CheckReachChannel(c, at + "actuator", r.actuator, {ChannelRole::kGate, ChannelRole::kPump},
+                          true, out)};
+    const char* keys[] = {"inflow", "outflow", "actuator"};
+    // One poller delivers all of a reach's values in the same sample.
+    for (int k = 0; k < 3; ++k) {
+      if (level != nullptr && others[k] != nullptr && others[k]->plc != level->plc) {
+        out.Add(at + keys[k], "channel " + Quoted(others[k]->name) + " is on plc " +
+                                  Quoted(others[k]->plc) + " (allowed: the level's plc " +
+                                  Quoted(level->plc) + ")");
+      }
+    }
+    const ChannelConfig* actuator = others[2];
+    if (r.nominal_setpoint && actuator != nullptr && actuator->writable) {
+      out.Range(at + "nominal_setpoint", *r.nominal_setpoint, actuator->setpoint_min,
+                actuator->setpoint_max);
+    }
+    if (r.actuator_gain_m3s_per_unit) {
+      const double g = *r.actuator_gain_m3s_per_unit;
+      if (!(std::isfinite(g) && g != 0.0)) {
+        out.Add(at + "actuator_gain_m3s_per_unit",
+                Num(g) + " is out of range (allowed: finite and nonzero)");
+      }
+    }
+    out.Range(at + "nominal_inflow_m3s", r.nominal_inflow_m3s, 0.0, 1e5, true);
+    out.Range(at + "expected_delay_s", r.expected_delay_s, 0.0, 1e6, true);
+    if (!std::isfinite(r.level_min_m)) {
+      out.Add(at + "level_min_m", Num(r.level_min_m) + " is out of range (allowed: finite)");
+    }
+    if (!(std::isfinite(r.level_max_m) && r.level_max_m > r.level_min_m)) {
+      out.Add(at + "level_max_m", Num(r.level_max_m) +
+                                      " is out of range (allowed: finite, > "
+                                      "level_min_m " +
+                                      Num(r.level_min_m) + ")");
+    }
+    std::set<OnlineModel> models;
+    for (std::size_t m = 0; m < r.online_models.size(); ++m) {
+      if (!models.insert(r.online_models[m]).second) {
+        out.Add(at + "online_models[" + std::to_string(m) + "]",
+                "duplicate model " + Quoted(EnumName(r.online_models[m])) + " (allowed: each of " +
+                    AllowedNames<OnlineModel>() + " once)");
+      }
+    }
+    out.Range(at + "forgetting", r.forgetting, 0.0, 1.0, true);
+    out.Range(at + "min_delay_s", r.min_delay_s, 0.0, 1e6);
+    if (std::isfinite(r.min_delay_s) && r.min_delay_s >= 0.0) {
+      double hi = 1e6;
+      if (c.FindReachPlc(r) != nullptr) {
+        // A bad poll period or time scale is reported on its own key, not again here.
+        const double ts = ReachSampleTimeS(c, r);
+        if (ts > 0.0 && std::isfinite(ts)) hi = kMaxDelaySamples * ts;
+      }
+      if (r.max_delay_s < r.min_delay_s || !(r.max_delay_s <= hi)) {
+        out.Add(at + "max_delay_s", Num(r.max_delay_s) +
+                                        " is out of range (allowed: [min_delay_s " +
+                                        Num(r.min_delay_s) + ", " + Num(hi) + "], " +
+                                        Num(kMaxDelaySamples) + " samples)");
+      }
+    }
+  }
+}
+
+void ValidateExperiments(const DaemonConfig& c, Collector& out) {
+  std::set<std::string> names;
+  for (std::size_t i = 0; i < c.experiments.size(); ++i) {
+    const ExperimentConfig& e = c.experiments[i];
+    const std::string at = Index("experiment", i) + ".";
+    out.Name(at + "name", e.name);
+    if (!names.insert(e.name).second) {
+      out.Add(at + "name", "duplicate experiment name " + Quoted(e.name));
+    }
+    const ReachConfig* reach = c.FindReach(e.reach);
+    if (reach == nullptr) {
+      out.Add(at + "reach", "unknown reach " + Quoted(e.reach) + " (allowed: a [[reach]] name)");
+    }
+    double ts = 0.0;
+    if (reach != nullptr) {
+      try {
+        ts = ReachSampleTimeS(c, *reach);
+      } catch (const std::invalid_argument&) {
+        ts = 0.0;  // the reach's own problems are reported above
+      }
+    }
+    int order = e.order;
+    if (e.mode == ExperimentMode::kDesign) {
+      out.Range(at + "amplitude_percent", e.amplitude_percent, 5.0, 10.0);
+      out.Range(at + "duration_factor", e.duration_factor, 5.0, 20.0);
+      // Only a design whose inputs are all in range can fail for its own reasons.
+      const bool inputs_ok =
+          reach != nullptr && ts > 0.0 && e.amplitude_percent >= 5.0 &&
+          e.amplitude_percent <= 10.0 && e.duration_factor >= 5.0 && e.duration_factor <= 20.0 &&
+          reach->nominal_inflow_m3s > 0.0 && std::isfinite(reach->nominal_inflow_m3s) &&
+          reach->expected_delay_s > 0.0 && std::isfinite(reach->expected_delay_s);
+      if (inputs_ok) {
+        ExperimentDesignRequest request;
+        request.nominal_flow_m3s = reach->nominal_inflow_m3s;
+        request.expected_delay_s = reach->expected_delay_s;
+        request.sample_time_s = ts;
+        request.amplitude_percent = e.amplitude_percent;
+        request.duration_factor = e.duration_factor;
+        try {
+          order = DesignPrbsExperiment(request).order;
+        } catch (const std::invalid_argument& error) {
+          out.Add(at + "mode",
+                  std::string("no design for reach ") + Quoted(e.reach) + ": " + error.what());
+          order = 0;
+        }
+      }
+    } else {
+      if (!(std::isfinite(e.amplitude) && e.amplitude > 0.0)) {
+        out.Add(at + "amplitude", Num(e.amplitude) + " is out of range (allowed: > 0, finite)");
+      }
+      out.IntRange(at + "order", e.order, kMinLfsrOrder, kMaxLfsrOrder);
+      out.IntRange(at + "periods", e.periods, 1, 1000);
+      if (ts > 0.0) {
+        const double samples = e.clock_period_s / ts;
+        if (!(samples >= 1.0 && samples <= 1e6 &&
+              std::abs(samples - std::round(samples)) <= 1e-9 * samples)) {
+          out.Add(at + "clock_period_s",
+                  Num(e.clock_period_s) +
+                      " is not a whole number of samples (allowed: n * sample time " + Num(ts) +
+                      " s, n >= 1)");
+        }
+      }
+    }
+    if (e.seed < 1 || e.seed > 0x7fffffff) {
+      out.IntRange(at + "seed", e.seed, 1, 0x7fffffff);
+    } else if (order >= kMinLfsrOrder && order <= kMaxLfsrOrder &&
+               (e.seed & ((std::int64_t{1} << order) - 1)) == 0) {
+      out.Add(at + "seed", std::to_string(e.seed) + " has no nonzero bit among the low " +
+                               std::to_string(order) + " (the LFSR order) (allowed: seed mod 2^" +
+                               std::to_string(order) + " != 0)");
+    }
+    if (e.start == ExperimentStart::kOnStart) {
+      for (std::size_t j = 0; j < i; ++j) {
+        if (c.experiments[j].start == ExperimentStart::kOnStart &&
+            c.experiments[j].reach == e.reach) {
+          out.Add(at + "start", "experiment " + Quoted(c.experiments[j].name) + " already starts " +
+                                    "reach " + Quoted(e.reach) +
+                                    " on start (allowed: one per reach)");
+        }
+      }
+    }
+    out.Range(at + "settle_s", e.settle_s, 0.0, 1e7);
+    out.IntRange(at + "max_invalid_samples", e.max_invalid_samples, 0, 1000);
+    out.Range(at + "max_sample_gap_periods", e.max_sample_gap_periods, 1.1, 1000.0);
+  }
+}
+
+void ValidateCommands(const DaemonConfig& c, Collector& out) {
+  const CommandsSection& k = c.commands;
+  if (k.enabled && (k.key_file.empty() || k.key_file.front() != '/')) {
+    out.Add("commands.key_file",
+            Quoted(k.key_file) + " is not an absolute path (allowed: /..., required when enabled)");
+  }
+  out.Range("commands.max_clock_skew_s", k.max_clock_skew_s, 0.0, 3600.0, true);
+  std::set<CommandKind> kinds;
+  for (std::size_t i = 0; i < k.accepted.size(); ++i) {
+    if (!kinds.insert(k.accepted[i]).second) {
+      out.Add("commands.accepted[" + std::to_string(i) + "]",
+              "duplicate command " + Quoted(EnumName(k.accepted[i])));
+    }
+  }
+}
+
+template <class E, std::size_t N>
+const char* NameIn(E value, const std::array<E, N>& values, const char* const (&names)[N]) {
+  for (std::size_t i = 0; i < N; ++i) {
+    if (values[i] == value) return names[i];
+  }
+  return "?";
+}
+
+}  // namespace
+
+const PlcConfig* DaemonConfig::FindPlc(const std::string& name) const {
+  for (const PlcConfig& p : plcs) {
+    if (p.name == name) return &p;
+  }
+  return nullptr;
+}
+const ChannelConfig* DaemonConfig::FindChannel(const std::string& name) const {
+  for (const ChannelConfig& c : channels) {
+    if (c.name == name) return &c;
+  }
+  return nullptr;
+}
+const ReachConfig* DaemonConfig::FindReach(const std::string& name) const {
+  for (const ReachConfig& r : reaches) {
+    if (r.name == name) return &r;
+  }
+  return nullptr;
+}
+const ExperimentConfig* DaemonConfig::FindExperiment(const std::string& name) const {
+  for (const ExperimentConfig& e : experiments) {
+    if (e.name == name) return &e;
+  }
+  return nullptr;
+}
+const PlcConfig* DaemonConfig::FindReachPlc(const ReachConfig& reach) const {
+  const ChannelConfig* level = FindChannel(reach.level);
+  return level == nullptr ? nullptr : FindPlc(level->plc);
+}
+
+std::vector<ConfigProblem> Validate(const DaemonConfig& config) {
+  Collector out;
+  ValidateDaemon(config, out);
+  ValidatePlcs(config, out);
+  ValidateChannels(config, out);
+  ValidateReaches(config, out);
+  ValidateExperiments(config, out);
+  ValidateCommands(config, out);
+  return out.Take();
+}
+
+double ReachSampleTimeS(const DaemonConfig& config, const ReachConfig& reach) {
+  const PlcConfig* plc = config.FindReachPlc(reach);
+  if (plc == nullptr) {
+    throw std::invalid_argument("reach " + Quoted(reach.name) + ": level channel " +
+                                Quoted(reach.level) + " does not resolve to a plc");
+  }
+  return plc->poll_period_s * config.daemon.time_scale;
+}
+
+const char* EnumName(LogLevel v) {
+  return NameIn(v, kLogLevels, {"error", "warn", "info", "debug"});
+}
+const char* EnumName(PlcTransport v) { return NameIn(v, kTransports, {"tcp", "rtu"}); }
+const char* EnumName(ChannelRole v) {
+  return NameIn(v, kRoles, {"level", "flow", "gate", "pump", "heartbeat", "other"});
+}
+const char* EnumName(RegisterTable v) { return NameIn(v, kTables, {"input", "holding"}); }
+const char* EnumName(RegisterType v) {
+  return NameIn(v, kTypes, {"u16", "i16", "u32", "i32", "f32"});
+}
+const char* EnumName(WordOrder v) { return NameIn(v, kWordOrders, {"high_first", "low_first"}); }
+const char* EnumName(OnlineModel v) { return NameIn(v, kModels, {"id", "arx"}); }
+const char* EnumName(RlsMethod v) {
+  return NameIn(v, kRlsMethods,
+                {"ud_directional", "ud_exponential", "exponential", "directional", "constant_trace",
+                 "stabilised", "kalman", "nlms"});
+}
+const char* EnumName(ClosedLoopMode v) {
+  return NameIn(v, kClosedLoopModes, {"auto", "on", "off"});
+}
+const char* EnumName(ExperimentMode v) { return NameIn(v, kModes, {"design", "explicit"}); }
+const char* EnumName(ExperimentStart v) { return NameIn(v, kStarts, {"manual", "on_start"}); }
+const char* EnumName(CommandKind v) {
+  return NameIn(v, kCommandKinds,
+                {"start_experiment", "abort_experiment", "reset_estimator", "publish_config"});
+}
+
+template <>
+std::span<const LogLevel> AllValues<LogLevel>() {
+  return kLogLevels;
+}
+template <>
+std::span<const PlcTransport> AllValues<PlcTransport>() {
+  return kTransports;
+}
+template <>
+std::span<const ChannelRole> AllValues<ChannelRole>() {
+  return kRoles;
+}
+template <>
+std::span<const RegisterTable> AllValues<RegisterTable>() {
+  return kTables;
+}
+template <>
+std::span<const RegisterType> AllValues<RegisterType>() {
+  return kTypes;
+}
+template <>
+std::span<const WordOrder> AllValues<WordOrder>() {
+  return kWordOrders;
+}
+template <>
+std::span<const OnlineModel> AllValues<OnlineModel>() {
+  return kModels;
+}
+template <>
+std::span<const RlsMethod> AllValues<RlsMethod>() {
+  return kRlsMethods;
+}
+template <>
+std::span<const ClosedLoopMode> AllValues<ClosedLoopMode>() {
+  return kClosedLoopModes;
+}
+template <>
+std::span<const ExperimentMode> AllValues<ExperimentMode>() {
+  return kModes;
+}
+template <>
+std::span<const ExperimentStart> AllValues<ExperimentStart>() {
+  return kStarts;
+}
+template <>
+std::span<const CommandKind> AllValues<CommandKind>() {
+  return kCommandKinds;
+}
+
+}  // namespace canalid::config

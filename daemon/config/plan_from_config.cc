@@ -1,0 +1,126 @@
+#include "daemon/config/plan_from_config.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+
+#include "core/experiment/experiment_design.h"
+
+namespace canalid::config {
+using namespace canalid::core;  // NOLINT(google-build-using-namespace): the maths the schema uses
+
+ExperimentDesign DesignExperiment(const DaemonConfig& config, const ExperimentConfig& experiment) {
+  const ReachConfig* reach = config.FindReach(experiment.reach);
+  if (experiment.mode != ExperimentMode::kDesign || reach == nullptr) {
+    throw std::invalid_argument("experiment \"" + experiment.name +
+                                "\": not a design-mode experiment of a known reach");
+  }
+  ExperimentDesignRequest request;
+  request.nominal_flow_m3s = reach->nominal_inflow_m3s;
+  request.expected_delay_s = reach->expected_delay_s;
+  request.sample_time_s = ReachSampleTimeS(config, *reach);
+  request.amplitude_percent = experiment.amplitude_percent;
+  request.duration_factor = experiment.duration_factor;
+  return DesignPrbsExperiment(request);
+}
+
+ExperimentPlan BuildExperimentPlan(const DaemonConfig& config, const ExperimentConfig& experiment,
+                                   double nominal_setpoint) {
+  const std::string where = "experiment \"" + experiment.name + "\": ";
+  const ReachConfig* reach = config.FindReach(experiment.reach);
+  if (reach == nullptr) throw std::invalid_argument(where + "unknown reach " + experiment.reach);
+  const ChannelConfig* actuator = config.FindChannel(reach->actuator);
+  if (actuator == nullptr)
+    throw std::invalid_argument(where + "unknown actuator " + reach->actuator);
+  const double ts = ReachSampleTimeS(config, *reach);
+
+  ExperimentPlan plan;
+  plan.prbs.nominal = nominal_setpoint;
+  plan.prbs.seed = static_cast<std::uint32_t>(experiment.seed);
+  if (experiment.mode == ExperimentMode::kDesign) {
+    const ExperimentDesign design = DesignExperiment(config, experiment);
+    plan.prbs.amplitude = reach->actuator_gain_m3s_per_unit
+                              ? design.amplitude_m3s / std::abs(*reach->actuator_gain_m3s_per_unit)
+                              : experiment.amplitude_percent / 100.0 * std::abs(nominal_setpoint);
+    plan.prbs.clock_period_samples = design.clock_period_samples;
+    plan.prbs.order = design.order;
+    plan.excite_samples = design.num_samples;
+  } else {
+    plan.prbs.amplitude = experiment.amplitude;
+    plan.prbs.clock_period_samples = static_cast<int>(std::lround(experiment.clock_period_s / ts));
+    plan.prbs.order = experiment.order;
+    plan.excite_samples = static_cast<std::int64_t>(experiment.periods) *
+                          ((std::int64_t{1} << experiment.order) - 1) *
+                          plan.prbs.clock_period_samples;
+  }
+  if (!(plan.prbs.amplitude > 0.0)) {
+    throw std::invalid_argument(where + "PRBS amplitude " + std::to_string(plan.prbs.amplitude) +
+                                " (actuator units) must be > 0 (nominal setpoint " +
+                                std::to_string(nominal_setpoint) + ")");
+  }
+  const double low = nominal_setpoint - plan.prbs.amplitude;
+  const double high = nominal_setpoint + plan.prbs.amplitude;
+  if (!(low >= actuator->setpoint_min && high <= actuator->setpoint_max)) {
+    throw std::invalid_argument(where + "nominal " + std::to_string(nominal_setpoint) + " +- " +
+                                std::to_string(plan.prbs.amplitude) + " leaves the actuator's [" +
+                                std::to_string(actuator->setpoint_min) + ", " +
+                                std::to_string(actuator->setpoint_max) + "]");
+  }
+  // The small tolerance keeps settle_s = n Ts at n samples despite rounding in the division.
+  plan.settle_samples = static_cast<std::int64_t>(std::ceil(experiment.settle_s / ts - 1e-9));
+  plan.level_min_m = reach->level_min_m;
+  plan.level_max_m = reach->level_max_m;
+  plan.max_invalid_samples = experiment.max_invalid_samples;
+  // Samples carry the poll's wall time: the bound is in wall seconds (Ts / time_scale).
+  plan.max_sample_gap_s = experiment.max_sample_gap_periods * ts / config.daemon.time_scale;
+  plan.Validate();
+  return plan;
+}
+
+OnlineIntegratorDelayOptions BuildOnlineIntegratorDelayOptions(const DaemonConfig& config,
+                                                               const ReachConfig& reach) {
+  OnlineIntegratorDelayOptions options;
+  options.sample_time_s = ReachSampleTimeS(config, reach);
+  options.min_delay_samples =
+      static_cast<int>(std::lround(reach.min_delay_s / options.sample_time_s));
+  options.max_delay_samples =
+      static_cast<int>(std::lround(reach.max_delay_s / options.sample_time_s));
+  options.rls.method = reach.rls_method;
+  options.rls.forgetting = reach.forgetting;
+  options.Validate();
+  return options;
+}
+
+ReachControllerOptions BuildReachControllerOptions(
+    const std::shared_ptr<const DaemonConfig>& config, const ReachConfig& reach,
+    const std::function<int(const std::string& channel)>& channel_index) {
+  ReachControllerOptions options;
+  options.name = reach.name;
+  options.channels.q_in = channel_index(reach.inflow);
+  options.channels.q_out = channel_index(reach.outflow);
+  options.channels.level = channel_index(reach.level);
+  options.channels.actuator = channel_index(reach.actuator);
+  ReachSampleProcessorOptions& pipeline = options.pipeline;
+  pipeline.sample_time_s = ReachSampleTimeS(*config, reach);
+  pipeline.online_id_enabled = std::find(reach.online_models.begin(), reach.online_models.end(),
+                                         OnlineModel::kId) != reach.online_models.end();
+  pipeline.online_id = BuildOnlineIntegratorDelayOptions(*config, reach);
+  pipeline.batch.fit.min_nk = pipeline.online_id.min_delay_samples;
+  pipeline.batch.fit.max_nk = pipeline.online_id.max_delay_samples;
+  pipeline.batch.fit.closed_loop = reach.closed_loop;
+  options.nominal_setpoint = reach.nominal_setpoint;
+  for (const ExperimentConfig& experiment : config->experiments) {
+    if (experiment.reach != reach.name) continue;
+    options.start_experiment_on_start = experiment.start == ExperimentStart::kOnStart;
+    options.experiment_name = experiment.name;
+    options.experiment_for_nominal = [config, name = experiment.name](double nominal) {
+      return BuildExperimentPlan(*config, *config->FindExperiment(name), nominal);
+    };
+    break;
+  }
+  return options;
+}
+
+}  // namespace canalid::config
