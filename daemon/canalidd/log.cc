@@ -7,14 +7,32 @@
 
 namespace canalid::daemon {
 namespace {
-std::atomic<int> g_level{static_cast<int>(LogLevel::kInfo)};
+
+// syslog(3) priorities: LOG_ERR, LOG_WARNING, LOG_INFO, LOG_DEBUG.
+int SyslogPriority(LogLevel level) {
+  switch (level) {
+    case LogLevel::kError:
+      return 3;
+    case LogLevel::kWarn:
+      return 4;
+    case LogLevel::kInfo:
+      return 6;
+    case LogLevel::kDebug:
+      return 7;
+  }
+  return 6;
 }
 
-void SetLogLevel(LogLevel level) { g_level = static_cast<int>(level); }
+std::atomic<int> g_priority{SyslogPriority(LogLevel::kInfo)};
+
+}  // namespace
+
+void SetLogLevel(LogLevel level) { g_priority = SyslogPriority(level); }
 
 void Log(LogLevel level, std::string_view message) {
-  if (static_cast<int>(level) > g_level.load()) return;
-  std::string line = "<" + std::to_string(static_cast<int>(level)) + ">canalidd: ";
+  const int priority = SyslogPriority(level);
+  if (priority > g_priority.load()) return;
+  std::string line = "<" + std::to_string(priority) + ">canalidd: ";
   line.append(message);
   line.push_back('\n');
   // One write(2) per line keeps lines from different threads whole.

@@ -19,25 +19,11 @@ namespace {
 constexpr int kExitConfig = 78;  // EX_CONFIG
 constexpr int kExitSoftware = 70;
 
-canalid::daemon::LogLevel ToLogLevel(canalid::core::LogLevel level) {
-  switch (level) {
-    case canalid::core::LogLevel::kError:
-      return canalid::daemon::LogLevel::kError;
-    case canalid::core::LogLevel::kWarn:
-      return canalid::daemon::LogLevel::kWarning;
-    case canalid::core::LogLevel::kInfo:
-      return canalid::daemon::LogLevel::kInfo;
-    case canalid::core::LogLevel::kDebug:
-      return canalid::daemon::LogLevel::kDebug;
-  }
-  return canalid::daemon::LogLevel::kInfo;
-}
-
 // Loads, validates and plans; prints every problem and returns nothing when the file is bad.
 std::optional<canalid::daemon::DaemonPlan> LoadPlan(const std::string& path,
-                                                    canalid::core::LogLevel* level) {
+                                                    canalid::config::LogLevel* level) {
   try {
-    const canalid::core::DaemonConfig config = canalid::daemon::LoadDaemonConfig(path);
+    const canalid::config::DaemonConfig config = canalid::daemon::LoadDaemonConfig(path);
     if (level != nullptr) *level = config.daemon.log_level;
     return canalid::daemon::BuildDaemonPlan(config, path,
                                             canalid::daemon::RenderDaemonConfig(config));
@@ -103,7 +89,7 @@ int main(int argc, char** argv) {
     return kExitConfig;
   }
 
-  canalid::core::LogLevel level = canalid::core::LogLevel::kInfo;
+  canalid::config::LogLevel level = canalid::config::LogLevel::kInfo;
   std::optional<canalid::daemon::DaemonPlan> plan = LoadPlan(config_path, &level);
   if (!plan) return kExitConfig;
   if (check_only) {
@@ -118,7 +104,7 @@ int main(int argc, char** argv) {
     std::cout << config_path << ": valid\n";
     return 0;
   }
-  canalid::daemon::SetLogLevel(ToLogLevel(level));
+  canalid::daemon::SetLogLevel(level);
   try {
     std::unique_ptr<canalid::drivers::LcmBus> bus;
     std::string bus_url;
