@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
 # Checks the unit files in systemd/: `systemd-analyze verify` must print nothing (any stderr line
-# is a failure), and canalidd.service must reach an offline security exposure of 3.0 or less.
+# is a failure), every service sets MemoryMax= and TasksMax= (lcm-logger's unwritten queue below
+# its MemoryMax), and canalidd.service must reach an offline security exposure of 3.0 or less.
 # verify needs every ExecStart binary to exist, so the units are checked as copies whose
 # /usr/local/bin/ paths point into a temporary root, where each program is a link to the one built
 # in this tree (a program that is not built is a failure, not a placeholder).
 # Usage: verify_units.sh SOURCE_DIR BINARY_DIR
 set -euo pipefail
-source_dir=$1
+source_dir=$(cd "$1" && pwd)
 binary_dir=$2
 max_exposure=3.0
 command -v systemd-analyze >/dev/null ||
@@ -47,6 +48,30 @@ for unit in *.service; do
     echo "ok   verify $unit"
   fi
 done
+
+# Every service bounds its memory and tasks (a leak or a runaway stops at the unit, not the host).
+for unit in "$source_dir"/systemd/*.service; do
+  for key in MemoryMax TasksMax; do
+    if grep -qE "^$key=[0-9]+[KMG]?$" "$unit"; then
+      echo "ok   $(basename "$unit") sets $key"
+    else
+      echo "FAIL $(basename "$unit") sets no $key"
+      status=1
+    fi
+  done
+done
+# lcm-logger's queue of unwritten messages stays inside its unit's MemoryMax.
+logger=$source_dir/systemd/canalid-logger@.service
+if [ -f "$logger" ]; then
+  queue_mb=$(grep -oE -- '--max-unwritten-mb=[0-9]+' "$logger" | cut -d= -f2 || true)
+  memory_mb=$(grep -oE '^MemoryMax=[0-9]+M$' "$logger" | grep -oE '[0-9]+' || true)
+  if [ -n "$queue_mb" ] && [ -n "$memory_mb" ] && [ "$queue_mb" -lt "$memory_mb" ]; then
+    echo "ok   canalid-logger@.service queues ${queue_mb} MB < MemoryMax ${memory_mb} MB"
+  else
+    echo "FAIL canalid-logger@.service: --max-unwritten-mb (${queue_mb:-none}) must be set below MemoryMax in M (${memory_mb:-none})"
+    status=1
+  fi
+fi
 
 # The original unit (the security check does not need the binary).
 line=$(systemd-analyze security --offline=true "$source_dir/systemd/canalidd.service" 2>&1 |
