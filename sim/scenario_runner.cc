@@ -5,7 +5,7 @@
 #include <string>
 
 #include "core/numerics/splitmix64.h"
-#include "sim/prbs_sequence.h"
+#include "core/signal/prbs.h"
 
 namespace canalid::sim {
 namespace {
@@ -63,6 +63,16 @@ void Apply(SaintVenantCanal* plant, const InputRef& input, double value) {
   }
 }
 
+// One period of the event's m-sequence (core/signal/prbs.h, the daemon's experiments' generator):
+// the scenario's seed, any value, picks the nonzero start state seed mod (2^n - 1) + 1.
+std::vector<int> OnePeriod(int order, std::uint64_t seed) {
+  const std::uint64_t states = (std::uint64_t{1} << order) - 1;
+  core::MaximalLengthSequence sequence(order, static_cast<std::uint32_t>(seed % states + 1));
+  std::vector<int> period(static_cast<std::size_t>(sequence.period()));
+  for (int& value : period) value = sequence.Next();
+  return period;
+}
+
 }  // namespace
 
 double InputValue(const Scenario& scenario, const std::vector<std::vector<int>>& prbs,
@@ -100,7 +110,7 @@ RunSummary RunScenario(const Scenario& scenario, std::uint64_t seed, std::ostrea
   std::vector<std::vector<int>> prbs(scenario.events.size());
   for (std::size_t k = 0; k < scenario.events.size(); ++k) {
     const Event& e = scenario.events[k];
-    if (e.kind == Event::Kind::kPrbs) prbs[k] = PrbsSequence(e.order, e.seed);
+    if (e.kind == Event::Kind::kPrbs) prbs[k] = OnePeriod(e.order, e.seed);
   }
   // Every input an event touches, with its initial (steady-state) value.
   std::vector<std::pair<InputRef, double>> inputs;

@@ -230,8 +230,18 @@ void OnlineIntegratorDelayBank::UpdateIvCandidates(std::vector<IvRls<N>>& estima
       phi << q_integrated_[ui] - q_centre_[ui], 1.0, tc;
       z << qin, 1.0, tc;
     }
+    double constrained_error = 0.0;
+    const bool constrained =
+        N == 4 && options_.wave_front_non_negative && estimators[ui].theta()(1) < 0.0;
+    if (constrained) {
+      constrained_error =
+          level_m - phi.dot(Constrained<N>(estimators[ui].theta(), estimators[ui].gain_matrix()));
+    }
     const auto result = estimators[ui].Update(phi, z, level_m);
-    iv_selector_.Record(i, result.prediction_error);
+    // The selector sees the error of the estimate the snapshot reports (p21 >= 0).
+    iv_selector_.Record(i, constrained && std::isfinite(result.prediction_error)
+                               ? constrained_error
+                               : result.prediction_error);
   }
 }
 
@@ -247,9 +257,34 @@ void OnlineIntegratorDelayBank::UpdateCandidates(std::vector<Rls<N>>& estimators
     } else {
       phi << q_integrated_[ui] - q_centre_[ui], 1.0, t - t_centre_;
     }
+    double constrained_error = 0.0;
+    const bool constrained =
+        N == 4 && options_.wave_front_non_negative && estimators[ui].theta()(1) < 0.0;
+    if (constrained) {
+      Eigen::Matrix<double, N, N> p;
+      estimators[ui].Covariance(p);
+      constrained_error = level_m - phi.dot(Constrained<N>(estimators[ui].theta(), p));
+    }
     const auto result = estimators[ui].Update(phi, level_m);
-    selector_.Record(i, result.prediction_error);
+    // The selector sees the error of the estimate the snapshot reports (p21 >= 0).
+    selector_.Record(i, constrained && std::isfinite(result.prediction_error)
+                            ? constrained_error
+                            : result.prediction_error);
   }
+}
+
+template <int N>
+Eigen::Matrix<double, N, 1> OnlineIntegratorDelayBank::Constrained(
+    const Eigen::Matrix<double, N, 1>& theta, const Eigen::Matrix<double, N, N>& g) const {
+  if constexpr (N == 4) {
+    // The p21 = 0 solution of the same normal (or instrument) equations: theta - g e2 p21 / g22.
+    if (options_.wave_front_non_negative && theta(1) < 0.0 && g(1, 1) > 0.0) {
+      Eigen::Matrix<double, N, 1> c = theta - g.col(1) * (theta(1) / g(1, 1));
+      c(1) = 0.0;
+      return c;
+    }
+  }
+  return theta;
 }
 
 template <int N>
@@ -366,15 +401,29 @@ void OnlineIntegratorDelayBank::FillSnapshot(const Estimator& rls, std::size_t u
   constexpr int kOffset = N - 2;
   constexpr int kDrift = N - 1;
   s.valid = rls.health().updates > 0;
-  const Eigen::Matrix<double, N, 1>& th = rls.theta();
+  Eigen::Matrix<double, N, N> p;
+  rls.Covariance(p);
+  Eigen::Matrix<double, N, 1> th = rls.theta();
+  if constexpr (N == 4) {
+    if (options_.wave_front_non_negative && th(1) < 0.0) {
+      // The constrained estimate and its covariance P - P e2 e2' P / P22 (for the IV bank the
+      // gain's constraint, with the unconstrained covariance's P22 rows removed likewise).
+      Eigen::Matrix<double, N, N> g;
+      if constexpr (requires { rls.gain_matrix(); }) {
+        g = rls.gain_matrix();
+      } else {
+        g = p;
+      }
+      th = Constrained<N>(th, g);
+      if (p(1, 1) > 0.0) p -= p.col(1) * p.row(1) / p(1, 1);
+    }
+  }
   const double qc = q_centre_[ui];
   s.b = th(0);
   if constexpr (N == 4) s.wave_front_gain_s_per_m2 = th(1);
   s.d_m = th(kDrift);
   s.c_m = th(kOffset) - th(0) * qc - th(kDrift) * t_centre_;
   s.area_m2 = options_.sample_time_s / s.b;
-  Eigen::Matrix<double, N, N> p;
-  rls.Covariance(p);
   const double s2 = rls.innovation_variance();
   Eigen::Matrix<double, N, 1> a = Eigen::Matrix<double, N, 1>::Zero();  // c = a' theta
   a(0) = -qc;

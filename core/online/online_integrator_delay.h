@@ -46,6 +46,16 @@ struct OnlineIntegratorDelayOptions {
   /// by default here (the daemon's configured banks keep the 3-parameter form); `canalid identify
   /// --online` turns it on.
   bool wave_front_term = false;
+  /// p21 >= 0 as in the batch fit (FitIntegratorDelay refits without the wave-front column when
+  /// its gain comes out negative); wave_front_term only.  Each candidate's recursion stays
+  /// unconstrained; when its p21 is negative, its snapshot and the a-priori error its selector
+  /// sees use the equality-constrained estimate theta - G e2 p21 / G_22 (G = P, or the IV gain
+  /// (Z' Phi)^-1), which with lambda = 1 and a large P0 is exactly the batch refit without the
+  /// column.  (Projecting theta inside the recursion instead, RlsOptions' box, leaves P describing
+  /// the unconstrained fit: the clamped candidates never recovered, e.g. nk 8-13 of 0..280 on the
+  /// fixed-gate pool 2 record ended with areas of 0-748 m^2, so the bank could not choose the
+  /// batch's nk = 12.)
+  bool wave_front_non_negative = false;
   BankSelectorOptions selector;
   /// Re-centring period of the regressor (samples): 0 = automatic, i.e. never for lambda = 1 and
   /// ceil(1 / (1 - lambda)) (one memory length) otherwise; < 0 = never.
@@ -72,9 +82,11 @@ struct OnlineIntegratorDelayOptions {
   /// snapshots report the three-step estimate (p21 = 0, as the batch's closed-loop fit) at the nk
   /// chosen by the IV bank, which runs alongside (as for kOn).  Step (1) needs a delay criterion
   /// the loop does not bias; measured on the fixed-gate ASCE canal 2 pool 2 record (true 682 s):
-  /// the IV bank's choice is 720 s (the batch scan's too), the least-squares bank's 780 s (there
-  /// the zero-DC-gain F_hat never comes out stable and step 3 has no flow to fit), a selector on
-  /// the three-step candidates' own level errors 540 s (area 23641 m^2, -31 %).
+  /// the IV bank's choice is 720 s (the batch scan's too); the least-squares bank's was 780 s
+  /// while p21 >= 0 was an RLS box (see wave_front_non_negative; there the zero-DC-gain F_hat
+  /// never comes out stable and step 3 has no flow to fit) and is 720 s now, but it sees the
+  /// loop's bias; a selector on the three-step candidates' own level errors 540 s (area 23641
+  /// m^2, -31 %).
   /// Step (3) takes forgetting, P0 and the sample guards from `rls` (not its box), step (2) its
   /// forgetting; the rest from three_step.
   ClosedLoopMode closed_loop = ClosedLoopMode::kOff;
@@ -84,9 +96,9 @@ struct OnlineIntegratorDelayOptions {
   /// fitted output is y(k) + p22 q_out(k) instead of y(k).  In open loop q_out is (nearly)
   /// constant and p22 q_out goes into c.  In closed loop with a gate q_out ~ q0 + g y, the term
   /// becomes p22 g y and cannot be told apart from b: with p22 = 0 the estimate is that of
-  /// A (1 + p22 g) (measured: 44889 m^2 = 34113 x 1.32 on ASCE canal 2 pool 2, g = 14.6 m^2/s),
-  /// and no estimator of this regression can do better from the data alone.  Snapshots' c is
-  /// then the offset of y + p22 q_out.  0 = plain ID.
+  /// A (1 + p22 g) (measured: 44215 m^2, 34113 x 1.32 = 44.9k, on ASCE canal 2 pool 2, g = 14.6
+  /// m^2/s), and no estimator of this regression can do better from the data alone.  Snapshots' c
+  /// is then the offset of y + p22 q_out.  0 = plain ID.
   double outflow_direct_gain_s_per_m2 = 0.0;
   IntegratorDelayHealthOptions health;  ///< thresholds of IntegratorDelaySnapshot::flags
 
@@ -201,6 +213,11 @@ class OnlineIntegratorDelayBank final {
   void UpdateIvCandidates(std::vector<IvRls<N>>& estimators, double t, double level_m);
   template <int N>
   static Eigen::Matrix<double, N, N> CentreShift(double dq, double dt);
+  /// theta with p21 >= 0 (wave_front_non_negative): theta itself, or the estimate constrained
+  /// to p21 = 0 through the gain g (P or the IV gain).
+  template <int N>
+  Eigen::Matrix<double, N, 1> Constrained(const Eigen::Matrix<double, N, 1>& theta,
+                                          const Eigen::Matrix<double, N, N>& g) const;
   void Recentre();
   void Decide();
   void FillThreeStepSnapshot(const OnlineThreeStep& t, IntegratorDelaySnapshot& s) const;

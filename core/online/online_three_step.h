@@ -16,9 +16,10 @@ struct ThreeStepOptions {
   /// Step (2) by instrumental variables (IvRls) with the instrument
   /// z = [-t_hat(k-1)..-t_hat(k-m), input terms], t_hat the flow simulated through the current
   /// F_hat (the recursive form of the batch's IV refinement against the outflow meter's noise).
-  /// Off by default: on the fixed-gate ASCE canal 2 pool 2 record at nk = 12 the IV estimate was
-  /// unstable on 638 of 780 samples (instruments from a poor early F_hat are weak), least squares
-  /// on 9; step 3 gave 33407 m^2 (IV) and 34223 m^2 (LS) against 34113 m^2.
+  /// Off by default: on the fixed-gate ASCE canal 2 pool 2 record at nk = 12 (the realization
+  /// before the simulator's PRBS became core/signal/prbs.h's) the IV estimate was unstable on 638
+  /// of 780 samples (instruments from a poor early F_hat are weak), least squares on 9; step 3
+  /// gave 33407 m^2 (IV) and 34223 m^2 (LS) against 34113 m^2.
   bool sensitivity_iv = false;
   RlsOptions regression;  ///< step (3)'s estimator (n = 7); UD, lambda 1 by default
   /// Step (3) starts after this many samples (F_hat must have settled; an early F_hat from a

@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <limits>
 #include <map>
 #include <memory>
 #include <stdexcept>
@@ -139,10 +138,9 @@ nlohmann::json OnlineId(const IdentifyOptions& options, const drivers::CsvTable&
   id.closed_loop = ParseClosedLoop(options.closed_loop);
   id.outflow_direct_gain_s_per_m2 = options.p22;
   // p21 >= 0 as in the batch fit: a negative wave-front gain lets Q_(nk-1) - b q_in(k-nk+1) mimic
-  // Q_nk, so the delay would be ambiguous by one sample.
-  constexpr double kInf = std::numeric_limits<double>::infinity();
-  id.rls.lower = Eigen::Vector4d(-kInf, 0.0, -kInf, -kInf);
-  id.rls.upper = Eigen::Vector4d::Constant(kInf);
+  // Q_nk, so the delay would be ambiguous by one sample.  Not by the RLS box: a clamped theta
+  // with an unconstrained P never recovers (core::OnlineIntegratorDelayOptions).
+  id.wave_front_non_negative = true;
   if (id.max_delay_samples + 20 >= n) {
     throw InputError(table.source() + ": " + std::to_string(n) +
                      " samples are too few for delays up to " +

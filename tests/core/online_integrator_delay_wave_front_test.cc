@@ -63,6 +63,47 @@ TEST(OnlineIdWaveFront, ForgettingOneEqualsBatchOpenLoopFit) {
   }
 }
 
+// p21 >= 0 (wave_front_non_negative, as `identify --online` runs the bank) equals the batch at
+// every delay, the constrained ones included: where the unconstrained p21 is negative the batch
+// refits without the column, and so must the candidate.  The RLS box (clamping theta inside the
+// recursion) did not: on this record it left nk 8-13 of 0..280 with areas of 0-748 m^2, and the
+// bank chose 14 against the batch's 12.
+TEST(OnlineIdWaveFront, NonNegativeWaveFrontEqualsTheBatchAtEveryDelay) {
+  const PoolRecord r = ReadPoolRecord("asce2-pool2-prbs-fixed-gate.csv");
+  const int max_nk = 30;
+  IntegratorDelayFitOptions fit_options;
+  fit_options.max_nk = max_nk;
+  fit_options.closed_loop = ClosedLoopMode::kOff;
+  const IntegratorDelayFit batch = FitIntegratorDelay(r.q_in, r.q_out, r.level, r.ts, fit_options);
+  OnlineIntegratorDelayOptions o;
+  o.sample_time_s = r.ts;
+  o.max_delay_samples = max_nk;
+  o.wave_front_term = true;
+  o.wave_front_non_negative = true;
+  o.rls.initial_covariance = 1e10;
+  OnlineIntegratorDelayBank bank(o);
+  for (Eigen::Index k = 0; k < r.level.size(); ++k) bank.Update(r.q_in(k), r.q_out(k), r.level(k));
+  EXPECT_EQ(bank.selected_delay_samples(), batch.model.nk);
+  const Eigen::VectorXd y = r.level.tail(r.level.size() - (max_nk + 1));
+  int constrained = 0;
+  for (int nk = 0; nk <= max_nk; ++nk) {
+    const Eigen::MatrixXd a = OpenLoopRegressors(r.q_in, r.q_out, nk, max_nk + 1);
+    Eigen::VectorXd theta = a.householderQr().solve(y);
+    if (theta(1) < 0.0) {
+      ++constrained;
+      Eigen::MatrixXd reduced(a.rows(), 3);
+      reduced << a.col(0), a.col(2), a.col(3);
+      const Eigen::VectorXd t3 = reduced.householderQr().solve(y);
+      theta << t3(0), 0.0, t3(1), t3(2);
+    }
+    const IntegratorDelaySnapshot c = bank.CandidateSnapshot(nk);
+    EXPECT_LT(Rel(c.b, theta(0)), 1e-6) << nk << " " << c.b << " " << theta(0);
+    EXPECT_GE(c.wave_front_gain_s_per_m2, 0.0) << nk;
+    EXPECT_NEAR(c.wave_front_gain_s_per_m2, theta(1), 1e-6 * std::abs(theta(1)) + 1e-12) << nk;
+  }
+  EXPECT_GT(constrained, 0);  // the record does exercise the constraint
+}
+
 // Re-centring with the wave-front term is still an exact re-parameterisation.
 TEST(OnlineIdWaveFront, RecentringDoesNotChangeTheFit) {
   const PoolRecord r = ReadPoolRecord("asce2-pool2-prbs.csv");

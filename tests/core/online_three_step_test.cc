@@ -76,17 +76,19 @@ OnlineThreeStep RunAtDelay(const PoolRecord& r, int nk, const ThreeStepOptions& 
 
 // The issue's held-out check for the three-step method alone, and how it depends on the delay:
 // area within 20 % of 34113 m^2 (IDZ of ASCE canal 2 pool 2, Litrico and Fromion 2004) at the
-// batch's delay (nk = 12, 720 s; true 682 s).  Observed: 34223 m^2 at nk = 12 (+0.3 %), 30894 m^2
-// at nk = 11
-// (-9 %); at nk = 13 the zero-DC-gain ARX never comes out stable (F_hat stays 0, so step 3 has no
-// flow to fit and b stays 0).  The 20 % bound is the issue's; nk = 11 is asserted within it too,
-// nk = 13 is asserted to fail, which is what this record shows.
+// batch's delay (nk = 12, 720 s; true 682 s).  Observed on this record: 30635 m^2 at nk = 12
+// (-10.2 %), 28316 m^2 at nk = 11 (-17.0 %); at nk = 13 the zero-DC-gain ARX never comes out
+// stable (F_hat stays 0, so step 3 has no flow to fit and b stays 0).  The error at nk = 12 is
+// the realization's, not a bias: over 12 realizations of the scenario (PRBS start state and
+// sensor seed 1..12) it was -10.2 .. +11.2 % (mean +1.7 %, std 6.8 %; the record before the PRBS
+// moved to core/signal/prbs gave +0.3 %), at nk = 11 -17.0 .. +2.1 % (mean -6.6 %).  So only the
+// issue's 20 % is asserted, at nk = 12 and 11; nk = 13 is asserted to fail, which is what this
+// record shows.
 TEST(OnlineThreeStep, FixedGateRecordAreaByDelay) {
   const PoolRecord r = ReadPoolRecord("asce2-pool2-prbs-fixed-gate.csv");
   const double truth = 34113.0;
   const OnlineThreeStep at12 = RunAtDelay(r, 12);
   EXPECT_LT(Rel(r.ts / at12.b(), truth), 0.2) << r.ts / at12.b();
-  EXPECT_LT(Rel(r.ts / at12.b(), truth), 0.02) << r.ts / at12.b();  // observed +0.3 %
   const OnlineThreeStep at11 = RunAtDelay(r, 11);
   EXPECT_LT(Rel(r.ts / at11.b(), truth), 0.2) << r.ts / at11.b();
   const OnlineThreeStep at13 = RunAtDelay(r, 13);
@@ -96,8 +98,9 @@ TEST(OnlineThreeStep, FixedGateRecordAreaByDelay) {
 
 // The bank as `canalid identify --online --closed-loop three-step` runs it (nk 0..60, wave-front
 // term in the IV bank that picks the delay, lambda 1), without p22: the issue's tolerance, area
-// within 20 % of 34113 m^2 and delay within 0.5..1.2 x 682 s.  Observed: 720 s, 34223 m^2; the
-// IV bank alone gives 44889 m^2 on the same record (+31.6 %, the p22 g bias).
+// within 20 % of 34113 m^2 and delay within 0.5..1.2 x 682 s.  Observed: 720 s, 30635 m^2
+// (-10.2 %, see above); the IV bank alone gives 39687 m^2 here (+16.3 %; 44215 m^2, +29.6 %, as
+// `identify --online` runs it on the cleaned level up to 3600 s: the p22 g bias).
 TEST(OnlineThreeStep, BankOnFixedGateRecordMeetsTheIssueTolerance) {
   const PoolRecord r = ReadPoolRecord("asce2-pool2-prbs-fixed-gate.csv");
   OnlineIntegratorDelayOptions o;
@@ -118,9 +121,10 @@ TEST(OnlineThreeStep, BankOnFixedGateRecordMeetsTheIssueTolerance) {
 }
 
 // The batch three-step is as sensitive to the delay on this record (FitIntegratorDelay with min_nk
-// = max_nk = nk, so k0 = nk + 1, a window 48..51 samples longer than the bank's): observed 31101
-// m^2 at nk = 11 (-9 %), 33773 m^2 at 12 (-1 %), 54048 m^2 at 13 (+58 %, the sensitivity model
-// falls back to order 1).  Asserted: the first two inside the issue's 20 %, the third outside it.
+// = max_nk = nk, so k0 = nk + 1, a window 48..51 samples longer than the bank's): observed 29819
+// m^2 at nk = 11 (-12.6 %), 32077 m^2 at 12 (-6.0 %), 52143 m^2 at 13 (+52.9 %, the sensitivity
+// model falls back to order 1); over the 12 realizations above, at 12: -6.6 .. +8.2 %.  Asserted:
+// the first two inside the issue's 20 %, the third outside it.
 TEST(OnlineThreeStep, BatchThreeStepAreaByDelay) {
   const PoolRecord r = ReadPoolRecord("asce2-pool2-prbs-fixed-gate.csv");
   auto area = [&](int nk) {

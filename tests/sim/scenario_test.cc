@@ -127,6 +127,36 @@ TEST(Scenario, CommittedDataFilesAreReproduced) {
   }
 }
 
+// The inflow of the committed PRBS record is the order-7 m-sequence of core/signal/prbs.h, checked
+// by the properties that define one rather than by its values: one value per 360 s clock (6 rows),
+// over a period of 2^7 - 1 = 127 clocks 64 at +0.8 and 63 at -0.8, a circular autocorrelation of
+// -1 at every nonzero lag, and the 13 clocks after the period repeat the first 13.
+TEST(Scenario, CommittedPrbsInflowIsAnMSequenceOfOrder7) {
+  std::ifstream in(kSource + "/tests/data/sim/asce2-pool2-prbs.csv");
+  std::stringstream file;
+  file << in.rdbuf();
+  const std::vector<double> q = ParseCsv(file.str()).Column("q_in");
+  ASSERT_EQ(q.size(), 841u);
+  // Row r (t = 60 r) holds the input of clock floor(r / 6); row 0 is the steady state before it.
+  std::vector<int> s;
+  for (std::size_t c = 0; 6 * c + 1 < q.size(); ++c) {
+    const double v = q[6 * c + 1] - 10.0;
+    ASSERT_NEAR(std::abs(v), 0.8, 1e-12) << c;
+    s.push_back(v > 0.0 ? 1 : -1);
+  }
+  ASSERT_EQ(s.size(), 140u);
+  constexpr int kPeriod = 127;
+  int sum = 0;
+  for (int c = 0; c < kPeriod; ++c) sum += s[c];
+  EXPECT_EQ(sum, 1);
+  for (int lag = 1; lag < kPeriod; ++lag) {
+    int r = 0;
+    for (int c = 0; c < kPeriod; ++c) r += s[c] * s[(c + lag) % kPeriod];
+    EXPECT_EQ(r, -1) << "lag " << lag;
+  }
+  for (int c = kPeriod; c < 140; ++c) EXPECT_EQ(s[c], s[c - kPeriod]) << c;
+}
+
 TEST(Scenario, PrbsAndFaultsAreWhereTheFilesSayTheyAre) {
   const Table clean = ParseCsv(RunToString("asce-canal2.toml", "asce2-pool2-prbs.toml"));
   const Table noisy = ParseCsv(RunToString("asce-canal2.toml", "asce2-pool2-prbs-noisy.toml"));
