@@ -7,6 +7,7 @@
 #include <cstdio>
 
 #include "sim/saint_venant.h"
+#include "tests/support/canal2_pool2.h"
 
 namespace canalid::sim {
 namespace {
@@ -33,17 +34,7 @@ double Rk4UpstreamDepth(const Pool& p, double q, double y_down, double distance_
   return y;
 }
 
-Pool Canal2Pool2() {
-  Pool p;
-  p.name = "2";
-  p.length_m = 3000;
-  p.bottom_width_m = 7;
-  p.side_slope = 1.5;
-  p.bed_slope = 1e-4;
-  p.manning_n = 0.02;
-  p.target_depth_m = 2.1;
-  return p;
-}
+using canalid::testing::Canal2Pool2;
 
 TEST(SteadyProfile, MatchesRk4BackwaterOnCanal2Pool2) {
   const Pool p = Canal2Pool2();
