@@ -21,6 +21,35 @@ double Lcg(std::uint64_t& state) {  // deterministic uniform in [-1, 1)
   return static_cast<double>(state >> 11) * 0x1.0p-52 - 1.0;
 }
 
+struct SisoRecord {
+  std::vector<double> u;
+  std::vector<double> y;
+};
+
+// kPool samples of x(k) = pole x(k-1) + gain u(k) (+ noise Lcg when noise > 0) under a random
+// binary u.
+SisoRecord FirstOrderRecord(std::uint64_t seed, double pole, double gain, double noise) {
+  SisoRecord r{std::vector<double>(kPool), std::vector<double>(kPool)};
+  double x = 0.0;
+  for (int k = 0; k < kPool; ++k) {
+    r.u[k] = Lcg(seed) > 0 ? 1.0 : -1.0;
+    x = pole * x + gain * r.u[k];
+    if (noise > 0.0) x += noise * Lcg(seed);
+    r.y[k] = x;
+  }
+  return r;
+}
+
+// One bank.Update(u, y) per iteration, cycling through the record.
+template <class Bank>
+void RunSisoBank(benchmark::State& state, Bank& bank, const SisoRecord& record) {
+  int k = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(bank.Update(record.u[k], record.y[k]));
+    k = (k + 1) & (kPool - 1);
+  }
+}
+
 const char* Name(RlsMethod m) {
   switch (m) {
     case RlsMethod::kUdDirectional:
@@ -151,20 +180,7 @@ void BM_FractionalBank8(benchmark::State& state) {
   options.delay_samples = 2;
   options.rls.forgetting = 0.999;
   OnlineFractionalBank bank(options);
-  std::uint64_t seed = 5;
-  std::vector<double> u(kPool);
-  std::vector<double> y(kPool);
-  double x = 0.0;
-  for (int k = 0; k < kPool; ++k) {
-    u[k] = Lcg(seed) > 0 ? 1.0 : -1.0;
-    x = 0.95 * x + 0.05 * u[k];
-    y[k] = x;
-  }
-  int k = 0;
-  for (auto _ : state) {
-    benchmark::DoNotOptimize(bank.Update(u[k], y[k]));
-    k = (k + 1) & (kPool - 1);
-  }
+  RunSisoBank(state, bank, FirstOrderRecord(5, 0.95, 0.05, 0.0));
 }
 BENCHMARK(BM_FractionalBank8);
 
@@ -175,20 +191,7 @@ void BM_ArxBank16(benchmark::State& state) {
   options.max_delay_samples = 16;
   options.rls.forgetting = 0.99;
   OnlineArxBank bank(options);
-  std::uint64_t seed = 7;
-  std::vector<double> u(kPool);
-  std::vector<double> y(kPool);
-  double x = 0.0;
-  for (int k = 0; k < kPool; ++k) {
-    u[k] = Lcg(seed) > 0 ? 1.0 : -1.0;
-    x = 0.9 * x + 0.1 * u[k] + 0.01 * Lcg(seed);
-    y[k] = x;
-  }
-  int k = 0;
-  for (auto _ : state) {
-    benchmark::DoNotOptimize(bank.Update(u[k], y[k]));
-    k = (k + 1) & (kPool - 1);
-  }
+  RunSisoBank(state, bank, FirstOrderRecord(7, 0.9, 0.1, 0.01));
 }
 BENCHMARK(BM_ArxBank16);
 

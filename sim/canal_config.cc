@@ -146,12 +146,9 @@ Canal ReadCanal(ConfigReader& reader) {
     reader.Problem(root.source(), "missing [[pool]] entries");
   } else {
     for (std::size_t i = 0; i < pools->size(); ++i) {
-      const toml::table* t = (*pools)[i].as_table();
       const std::string where = "pool[" + std::to_string(i) + "]";
-      if (t == nullptr) {
-        reader.Problem((*pools)[i].source(), where + " must be a table");
-        continue;
-      }
+      const toml::table* t = reader.TableAt(*pools, i, where);
+      if (t == nullptr) continue;
       reader.CheckKeys(*t, where,
                        {"name", "length_m", "bottom_width_m", "side_slope", "bed_slope",
                         "manning_n", "bank_depth_m", "target_depth_m", "structure", "offtake"});
@@ -182,23 +179,15 @@ Canal ReadCanal(ConfigReader& reader) {
     }
     for (std::size_t i = 0; controls != nullptr && i < controls->size(); ++i) {
       const std::string where = "level_control[" + std::to_string(i) + "]";
-      const toml::table* t = (*controls)[i].as_table();
-      if (t == nullptr) {
-        reader.Problem((*controls)[i].source(), where + " must be a table");
-        continue;
-      }
+      const toml::table* t = reader.TableAt(*controls, i, where);
+      if (t == nullptr) continue;
       LevelControl c;
       c.name = std::to_string(i + 1);
       ReadLevelControl(reader, *t, where, &c);
       canal.level_controls.push_back(c);
     }
   }
-  reader.Finish();
-  try {
-    ValidateCanal(canal);
-  } catch (const std::invalid_argument& e) {
-    throw ConfigError({path + ": " + e.what()});
-  }
+  reader.FinishValidated([&] { ValidateCanal(canal); });
   return canal;
 }
 

@@ -137,6 +137,13 @@ void ConfigReader::CheckKeys(const toml::table& table, std::string_view where,
   }
 }
 
+const toml::table* ConfigReader::TableAt(const toml::array& array, std::size_t index,
+                                         const std::string& where) {
+  const toml::table* t = array[index].as_table();
+  if (t == nullptr) Problem(array[index].source(), where + " must be a table");
+  return t;
+}
+
 void ConfigReader::Finish() const {
   if (!toml_.HasProblems()) return;
   std::vector<std::string> messages;

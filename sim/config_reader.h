@@ -52,9 +52,23 @@ class ConfigReader final {
   void CheckKeys(const toml::table& table, std::string_view where,
                  std::initializer_list<std::string_view> allowed);
   void Problem(const toml::source_region& region, const std::string& message);
+  /// Element `index` of an array of tables ([[name]]), or null after the problem
+  /// "<where> must be a table".
+  const toml::table* TableAt(const toml::array& array, std::size_t index, const std::string& where);
   bool HasProblems() const { return toml_.HasProblems(); }
   /// @throws ConfigError if any problem was recorded.
   void Finish() const;
+  /// Finish(), then `validate()`, whose std::invalid_argument becomes the ConfigError
+  /// "<path>: <what>" (a file that reads cleanly but describes an impossible canal).
+  template <class Validate>
+  void FinishValidated(Validate&& validate) const {
+    Finish();
+    try {
+      validate();
+    } catch (const std::invalid_argument& e) {
+      throw ConfigError({path() + ": " + e.what()});
+    }
+  }
 
  private:
   explicit ConfigReader(core::TomlReader toml) : toml_(std::move(toml)) {}

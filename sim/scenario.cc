@@ -101,7 +101,6 @@ SensorConfig ReadSensor(ConfigReader& reader, const toml::table& t, const std::s
 namespace {
 
 Scenario ReadScenario(ConfigReader& reader, const Canal& full) {
-  const std::string& path = reader.path();
   const toml::table& root = reader.root();
   reader.CheckKeys(
       root, "",
@@ -184,11 +183,8 @@ Scenario ReadScenario(ConfigReader& reader, const Canal& full) {
     if (events == nullptr) reader.Problem(node->source(), "'event' must be an array of tables");
     for (std::size_t k = 0; events != nullptr && k < events->size(); ++k) {
       const std::string where = "event[" + std::to_string(k) + "]";
-      const toml::table* t = (*events)[k].as_table();
-      if (t == nullptr) {
-        reader.Problem((*events)[k].source(), where + " must be a table");
-        continue;
-      }
+      const toml::table* t = reader.TableAt(*events, k, where);
+      if (t == nullptr) continue;
       reader.CheckKeys(
           *t, where,
           {"time_s", "target", "kind", "value", "amplitude", "clock_s", "order", "seed", "end_s"});
@@ -291,12 +287,7 @@ Scenario ReadScenario(ConfigReader& reader, const Canal& full) {
       reader.Problem(node->source(), "'sensor' must be a table");
     }
   }
-  reader.Finish();
-  try {
-    ValidateCanal(sc.canal);
-  } catch (const std::invalid_argument& e) {
-    throw ConfigError({path + ": " + e.what()});
-  }
+  reader.FinishValidated([&] { ValidateCanal(sc.canal); });
   return sc;
 }
 

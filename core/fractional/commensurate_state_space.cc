@@ -9,6 +9,7 @@
 
 #include "core/fractional/grunwald_letnikov.h"
 #include "core/numerics/levenberg_marquardt.h"
+#include "core/numerics/record_checks.h"
 
 namespace canalid::core {
 namespace {
@@ -187,14 +188,7 @@ void CheckFitArguments(const char* where, Eigen::Index input_size, Eigen::Index 
     throw std::invalid_argument(w + ": sample_time_s = " + std::to_string(sample_time_s) +
                                 " must be > 0");
   }
-  if (output_size != input_size) {
-    throw std::invalid_argument(w + ": input has " + std::to_string(input_size) +
-                                " samples but output has " + std::to_string(output_size));
-  }
-  if (input_size < 20 * q + delay_samples) {
-    throw std::invalid_argument(w + ": " + std::to_string(input_size) + " samples, need at least " +
-                                std::to_string(20 * q + delay_samples));
-  }
+  CheckRecordLengths(where, input_size, output_size, 20 * q + delay_samples);
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include "core/fractional/oustaloup.h"
 #include "core/numerics/least_squares.h"
 #include "core/numerics/levenberg_marquardt.h"
+#include "core/numerics/record_checks.h"
 
 namespace canalid::core {
 namespace {
@@ -81,14 +82,7 @@ FractionalFoptdFitResult FitFractionalFoptd(const Eigen::Ref<const Eigen::Vector
                                             const FractionalFoptdFitOptions& options) {
   CheckOptions(options);
   const Eigen::Index n = input.size();
-  if (output.size() != n) {
-    throw std::invalid_argument("FitFractionalFoptd: input has " + std::to_string(n) +
-                                " samples but output has " + std::to_string(output.size()));
-  }
-  if (n < 20) {
-    throw std::invalid_argument("FitFractionalFoptd: " + std::to_string(n) +
-                                " samples, need at least 20");
-  }
+  CheckRecordLengths("FitFractionalFoptd", n, output.size(), 20);
   if (!(sample_time_s > 0.0) || !std::isfinite(sample_time_s)) {
     throw std::invalid_argument(
         "FitFractionalFoptd: sample_time_s = " + std::to_string(sample_time_s) + " must be > 0");

@@ -7,6 +7,7 @@
 
 #include "core/numerics/least_squares.h"
 #include "core/numerics/levenberg_marquardt.h"
+#include "core/numerics/record_checks.h"
 #include "core/signal/fractional_delay.h"
 #include "core/signal/fractional_zoh.h"
 
@@ -71,14 +72,7 @@ IntegratorWaveFit FitIntegratorWave(const Eigen::Ref<const Eigen::VectorXd>& inp
                                     const Eigen::Ref<const Eigen::VectorXd>& output,
                                     double sample_time_s, const IntegratorWaveFitOptions& options) {
   const Eigen::Index n = input.size();
-  if (output.size() != n) {
-    throw std::invalid_argument("FitIntegratorWave: input has " + std::to_string(n) +
-                                " samples but output has " + std::to_string(output.size()));
-  }
-  if (n < 20) {
-    throw std::invalid_argument("FitIntegratorWave: " + std::to_string(n) +
-                                " samples, need at least 20");
-  }
+  CheckRecordLengths("FitIntegratorWave", n, output.size(), 20);
   if (!(sample_time_s > 0.0)) {
     throw std::invalid_argument(
         "FitIntegratorWave: sample_time_s = " + std::to_string(sample_time_s) + " must be > 0");

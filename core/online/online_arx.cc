@@ -15,10 +15,14 @@ namespace {
 
 }  // namespace
 
+void CheckOnlineArxOrders(std::string_view owner, int na, int nb) {
+  if (na < 0) ThrowOptionOutOfRange(owner, "na", na, ">= 0");
+  if (nb < 1) ThrowOptionOutOfRange(owner, "nb", nb, ">= 1");
+  if (na + nb > kMaxOnlineArxParams) ThrowOptionOutOfRange(owner, "nb", nb, "na + nb <= 16");
+}
+
 void OnlineArxOptions::Validate() const {
-  if (na < 0) Fail("na", na, ">= 0");
-  if (nb < 1) Fail("nb", nb, ">= 1");
-  if (na + nb > kMaxOnlineArxParams) Fail("nb", nb, "na + nb <= 16");
+  CheckOnlineArxOrders("OnlineArxOptions", na, nb);
   if (min_delay_samples < 0) Fail("min_delay_samples", min_delay_samples, ">= 0");
   if (max_delay_samples < min_delay_samples || max_delay_samples > 100000) {
     Fail("max_delay_samples", max_delay_samples, "min_delay_samples..100000");

@@ -1,5 +1,6 @@
 #pragma once
 #include <cstdint>
+#include <string_view>
 #include <vector>
 
 #include "core/numerics/ring_buffer.h"
@@ -12,6 +13,11 @@ namespace canalid::core {
 inline constexpr int kMaxOnlineArxParams = 16;
 /// A vector of at most kMaxOnlineArxParams values stored inline (no heap).
 using ArxParamVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxOnlineArxParams, 1>;
+
+/// The ARX orders of an online estimator's options: na >= 0, nb >= 1, na + nb <=
+/// kMaxOnlineArxParams.  @throws std::invalid_argument "<owner>.<name> = ..."
+/// (ThrowOptionOutOfRange).
+void CheckOnlineArxOrders(std::string_view owner, int na, int nb);
 
 struct OnlineArxOptions {
   int na = 2;                 ///< >= 0

@@ -16,9 +16,7 @@ namespace {
 }  // namespace
 
 void OnlineLpvArxOptions::Validate() const {
-  if (na < 0) Fail("na", na, ">= 0");
-  if (nb < 1) Fail("nb", nb, ">= 1");
-  if (na + nb > kMaxOnlineArxParams) Fail("nb", nb, "na + nb <= 16");
+  CheckOnlineArxOrders("OnlineLpvArxOptions", na, nb);
   if (delay_samples < 0) Fail("delay_samples", delay_samples, ">= 0");
   if (!(input_abs_max > 0.0)) Fail("input_abs_max", input_abs_max, "> 0");
   if (!(output_abs_max > 0.0)) Fail("output_abs_max", output_abs_max, "> 0");

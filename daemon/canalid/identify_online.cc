@@ -205,30 +205,20 @@ nlohmann::json OnlineId(const IdentifyOptions& options, const drivers::CsvTable&
                        std::to_string(bank_health.outflow_level_correlation) + " over " +
                        std::to_string(id.closed_loop_window_samples) + " samples";
   }
-  return {{"model", "id"},
-          {"delay_s", s.delay_s},
-          {"nk", s.delay_samples},
-          {"b", s.b},
-          {"area_m2", s.area_m2},
-          {"sample_time_s", ts},
-          {"p21_s_per_m2", s.wave_front_gain_s_per_m2},
-          {"offset_m", s.c_m},
-          {"drift_m_per_s", s.d_m / ts},
-          {"p22_s_per_m2", id.outflow_direct_gain_s_per_m2},
-          {"closed_loop", bank_health.closed_loop},
-          {"closed_loop_reason", reason},
-          {"fit_from_sample", id.max_delay_samples + 1},
-          {"b_std", s.b_std},
-          {"area_std_m2", s.area_std_m2},
-          {"prediction_error_m", s.prediction_error_m},
-          {"innovation_std_m", s.innovation_std_m},
-          {"estimator", id.closed_loop == core::ClosedLoopMode::kThreeStep ? "online-three-step"
-                        : bank_health.closed_loop                          ? "online-iv"
-                                                  : "online-" + options.method},
-          {"forgetting", options.forgetting},
-          {"health", health},
-          {"preprocessing", {{"level_outliers_replaced", outliers.count}}},
-          {"warnings", nlohmann::json::array()}};
+  // The online ID model's keys, then what this command adds; "estimator" names the method used.
+  nlohmann::json model = drivers::OnlineIdJson(s, ts);
+  model["p22_s_per_m2"] = id.outflow_direct_gain_s_per_m2;
+  model["closed_loop"] = bank_health.closed_loop;
+  model["closed_loop_reason"] = reason;
+  model["fit_from_sample"] = id.max_delay_samples + 1;
+  model["estimator"] = id.closed_loop == core::ClosedLoopMode::kThreeStep ? "online-three-step"
+                       : bank_health.closed_loop                          ? "online-iv"
+                                                 : "online-" + options.method;
+  model["forgetting"] = options.forgetting;
+  model["health"] = health;
+  model["preprocessing"] = {{"level_outliers_replaced", outliers.count}};
+  model["warnings"] = nlohmann::json::array();
+  return model;
 }
 
 nlohmann::json OnlineArx(const IdentifyOptions& options, const drivers::CsvTable& table) {

@@ -120,7 +120,6 @@ void ValidatePlcConfig(const PlcConfig& c) {
 namespace {
 
 PlcConfig ReadPlcConfig(ConfigReader& reader, const Canal& canal) {
-  const std::string& path = reader.path();
   const toml::table& root = reader.root();
   PlcConfig c = DefaultPlcConfig(canal);
   c.pools.clear();
@@ -171,12 +170,9 @@ PlcConfig ReadPlcConfig(ConfigReader& reader, const Canal& canal) {
     reader.Problem(root.source(), "missing [[pool]] entries");
   } else {
     for (std::size_t i = 0; i < pools->size(); ++i) {
-      const toml::table* t = (*pools)[i].as_table();
       const std::string w = "pool[" + std::to_string(i) + "]";
-      if (t == nullptr) {
-        reader.Problem((*pools)[i].source(), w + " must be a table");
-        continue;
-      }
+      const toml::table* t = reader.TableAt(*pools, i, w);
+      if (t == nullptr) continue;
       reader.CheckKeys(
           *t, w,
           {"name", "setpoint_min", "setpoint_max", "rate_per_s", "offtake_min", "offtake_max"});
@@ -208,12 +204,7 @@ PlcConfig ReadPlcConfig(ConfigReader& reader, const Canal& canal) {
       c.pools.push_back(p);
     }
   }
-  reader.Finish();
-  try {
-    ValidatePlcConfig(c);
-  } catch (const std::invalid_argument& e) {
-    throw ConfigError({path + ": " + e.what()});
-  }
+  reader.FinishValidated([&] { ValidatePlcConfig(c); });
   return c;
 }
 

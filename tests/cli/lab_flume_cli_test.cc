@@ -14,15 +14,20 @@
 namespace canalid::testing {
 namespace {
 
+// canalsim run -q on config/sim/CANAL.toml and config/sim/scenarios/SCENARIO.toml, into csv.
+ProgramRun RunScenario(const std::string& canal, const std::string& scenario,
+                       const std::filesystem::path& csv, const std::filesystem::path& dir) {
+  const std::string src = CANALID_SOURCE_DIR;
+  return RunProgram(std::string(CANALID_BINARY_DIR) + "/sim/canalsim run -q" + " --canal " + src +
+                        "/config/sim/" + canal + ".toml" + " --scenario " + src +
+                        "/config/sim/scenarios/" + scenario + ".toml" + " --out " + csv.string(),
+                    dir);
+}
+
 TEST(LabFlumeCli, GateStepFitsAFoptdOfTheOrderOfSeed2) {
   const auto dir = TestDirectory("lab-flume-foptd");
-  const std::string src = CANALID_SOURCE_DIR;
   const auto csv = dir / "gate-step.csv";
-  const ProgramRun sim =
-      RunProgram(std::string(CANALID_BINARY_DIR) + "/sim/canalsim run -q" + " --canal " + src +
-                     "/config/sim/lab-flume.toml" + " --scenario " + src +
-                     "/config/sim/scenarios/lab-flume-gate-step.toml" + " --out " + csv.string(),
-                 dir);
+  const ProgramRun sim = RunScenario("lab-flume", "lab-flume-gate-step", csv, dir);
   ASSERT_EQ(sim.exit_code, 0) << sim.err;
   const drivers::CsvTable table = drivers::CsvTable::Read(csv.string());
   ASSERT_EQ(table.rows(), 2501);  // 375 s every 0.15 s, the paper's sample time
@@ -63,13 +68,8 @@ TEST(PumpPilotCli, B1PrbsGivesAnIntegratorWithTheWaveTravelDelay) {
   // Its area must be of the order of the pool's 1.8 m2 surface: the reflected waves between the
   // pumps bias it (measured 2.3 m2), so only a factor 1.5 is asked.
   const auto dir = TestDirectory("pump-pilot-id");
-  const std::string src = CANALID_SOURCE_DIR;
   const auto csv = dir / "b1-prbs.csv";
-  const ProgramRun sim =
-      RunProgram(std::string(CANALID_BINARY_DIR) + "/sim/canalsim run -q" + " --canal " + src +
-                     "/config/sim/pump-pilot.toml" + " --scenario " + src +
-                     "/config/sim/scenarios/pump-pilot-b1-prbs.toml" + " --out " + csv.string(),
-                 dir);
+  const ProgramRun sim = RunScenario("pump-pilot", "pump-pilot-b1-prbs", csv, dir);
   ASSERT_EQ(sim.exit_code, 0) << sim.err;
   const ProgramRun fit = RunProgram(
       CanalidProgram() + " identify --model id --max-delay-s 30 --input " + csv.string(), dir);

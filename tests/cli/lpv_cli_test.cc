@@ -9,45 +9,15 @@
 #include <string>
 #include <vector>
 
+#include "tests/support/lpv_record.h"
 #include "tests/support/run_program.h"
 #include "tests/support/simulate_round_trip.h"
 
 namespace canalid::testing {
 namespace {
 
-// The true laws (highest degree first): a1(theta), b1(theta) quadratic, nk = 3 samples.
-constexpr double kA1[3] = {0.05, -0.2, -0.7};
-constexpr double kB1[3] = {-0.02, 0.1, 0.05};
-constexpr int kNk = 3;
-constexpr int kPerBand = 600;
-const std::vector<double> kThetas = {1.1, 1.3, 1.5, 1.7, 1.9};  // one operating point per band
+// The true laws: tests/support/lpv_record.h (kLpvA1, kLpvB1, nk = 3 samples, kLpvThetas).
 const char* kBands = "1.0,1.2,1.4,1.6,1.8,2.0";
-
-double Quadratic(const double (&p)[3], double theta) {
-  return (p[0] * theta + p[1]) * theta + p[2];
-}
-
-// y[k] = -a1(theta[k]) y[k-1] + b1(theta[k]) u[k-nk] (+ noise), theta a staircase through the
-// bands, u a random +-1 sequence held 5 samples, at rest (u = 0) for the first 10 samples.
-std::string LpvCsv(double noise_std, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> noise(0.0, 1.0);
-  const int n = kPerBand * static_cast<int>(kThetas.size());
-  std::vector<double> u(n, 0.0), y(n, 0.0);
-  std::ostringstream csv;
-  csv.precision(17);
-  csv << "time_s,gate,level,upstream\n";
-  for (int k = 0; k < n; ++k) {
-    const double theta = kThetas[static_cast<std::size_t>(k / kPerBand)];
-    if (k >= 10) u[k] = k % 5 == 0 ? ((rng() & 1U) ? 1.0 : -1.0) : u[k - 1];
-    if (k >= 1) {
-      y[k] =
-          -Quadratic(kA1, theta) * y[k - 1] + Quadratic(kB1, theta) * (k >= kNk ? u[k - kNk] : 0.0);
-    }
-    csv << k * 10.0 << "," << u[k] << "," << y[k] + noise_std * noise(rng) << "," << theta << "\n";
-  }
-  return csv.str();
-}
 
 class LpvCli : public ::testing::Test {
  protected:
@@ -66,8 +36,8 @@ class LpvCli : public ::testing::Test {
 TEST_F(LpvCli, RecoversKnownQuadraticParameterLaws) {
   const auto model_file = dir_ / "lpv.json";
   const ProgramRun run =
-      Identify(LpvCsv(0.0, 1), "--local arx --schedule upstream --bands " + std::string(kBands) +
-                                   " --out " + model_file.string());
+      Identify(LpvCsv(1, 1.0, 0.0), "--local arx --schedule upstream --bands " +
+                                        std::string(kBands) + " --out " + model_file.string());
   ASSERT_EQ(run.exit_code, 0) << run.err;
   const auto json = nlohmann::json::parse(run.out);
   EXPECT_EQ(json["model"], "lpv");
@@ -78,11 +48,11 @@ TEST_F(LpvCli, RecoversKnownQuadraticParameterLaws) {
   // Noise-free: every local ARX fit is exact and five exact points fix each quadratic, so
   // only rounding separates the coefficients from the truth.
   for (int j = 0; j < 3; ++j) {
-    EXPECT_NEAR(json["coefficients"]["a1"][j].get<double>(), kA1[j], 1e-8) << j;
-    EXPECT_NEAR(json["coefficients"]["b1"][j].get<double>(), kB1[j], 1e-8) << j;
+    EXPECT_NEAR(json["coefficients"]["a1"][j].get<double>(), kLpvA1[j], 1e-8) << j;
+    EXPECT_NEAR(json["coefficients"]["b1"][j].get<double>(), kLpvB1[j], 1e-8) << j;
   }
   EXPECT_NEAR(json["coefficients"]["nk"][0].get<double>(), 0.0, 1e-8);
-  EXPECT_NEAR(json["coefficients"]["nk"][2].get<double>(), kNk, 1e-8);
+  EXPECT_NEAR(json["coefficients"]["nk"][2].get<double>(), kLpvNkSamples, 1e-8);
   // MAE per operating point (the LPV paper's Tables 8-9), local and LPV.  The interpolation is
   // exact at the band centres, so both are equal; the first band starts at rest, so its MAE is ~0
   // (later runs start in the previous band's state, which the per-band simulation from rest does
@@ -90,17 +60,17 @@ TEST_F(LpvCli, RecoversKnownQuadraticParameterLaws) {
   ASSERT_EQ(json["metrics_per_band"].size(), 5u);
   for (std::size_t i = 0; i < 5; ++i) {
     const auto& band = json["metrics_per_band"][i];
-    EXPECT_NEAR(band["theta_mean"].get<double>(), kThetas[i], 1e-12);
-    EXPECT_EQ(band["samples"], kPerBand);
+    EXPECT_NEAR(band["theta_mean"].get<double>(), kLpvThetas[i], 1e-12);
+    EXPECT_EQ(band["samples"], kLpvPerBand);
     EXPECT_NEAR(band["lpv_mae"].get<double>(), band["local_mae"].get<double>(), 1e-9);
-    EXPECT_NEAR(band["local_params"]["a1"].get<double>(), Quadratic(kA1, kThetas[i]), 1e-9);
+    EXPECT_NEAR(band["local_params"]["a1"].get<double>(), Quadratic(kLpvA1, kLpvThetas[i]), 1e-9);
   }
   EXPECT_LT(json["metrics_per_band"][0]["local_mae"].get<double>(), 1e-9);
 
   // The same edges from a file (one per line, or comma/space separated) give the same model.
   WriteFile(dir_ / "bands.txt", "1.0\n1.2, 1.4\n1.6 1.8\n2.0\n");
   const ProgramRun from_file =
-      Identify(LpvCsv(0.0, 1),
+      Identify(LpvCsv(1, 1.0, 0.0),
                "--local arx --schedule upstream --bands-file " + (dir_ / "bands.txt").string());
   ASSERT_EQ(from_file.exit_code, 0) << from_file.err;
   const auto json2 = nlohmann::json::parse(from_file.out);
@@ -116,18 +86,18 @@ TEST_F(LpvCli, NoisyDataWithinStatedToleranceAndSimulateRoundTrip) {
   // 0.005); the laws are checked where they are used, at the band centres.
   const auto model_file = dir_ / "lpv.json";
   const ProgramRun run =
-      Identify(LpvCsv(0.01, 2), "--local arx --schedule upstream --bands " + std::string(kBands) +
-                                    " --out " + model_file.string());
+      Identify(LpvCsv(2, 1.0, 0.01), "--local arx --schedule upstream --bands " +
+                                         std::string(kBands) + " --out " + model_file.string());
   ASSERT_EQ(run.exit_code, 0) << run.err;
   const auto json = nlohmann::json::parse(run.out);
-  for (double theta : kThetas) {
+  for (double theta : kLpvThetas) {
     auto at = [&](const char* name) {
       const auto& c = json["coefficients"][name];
       return (c[0].get<double>() * theta + c[1].get<double>()) * theta + c[2].get<double>();
     };
-    EXPECT_NEAR(at("a1"), Quadratic(kA1, theta), 0.005) << theta;
-    EXPECT_NEAR(at("b1"), Quadratic(kB1, theta), 0.005) << theta;
-    EXPECT_NEAR(at("nk"), kNk, 0.2) << theta;
+    EXPECT_NEAR(at("a1"), Quadratic(kLpvA1, theta), 0.005) << theta;
+    EXPECT_NEAR(at("b1"), Quadratic(kLpvB1, theta), 0.005) << theta;
+    EXPECT_NEAR(at("nk"), kLpvNkSamples, 0.2) << theta;
   }
   ExpectSimulateReproducesModel(model_file, dir_ / "in.csv", "level", dir_);
 }
@@ -160,7 +130,7 @@ TEST_F(LpvCli, BadInputGetsOneClearMessageAndExitCode2) {
       {schedule + "--bands 1.0,1.4,2.0", "2 bands, degree 2 needs at least 3"},
   };
   for (const Case& c : cases) {
-    const ProgramRun run = Identify(LpvCsv(0.0, 3), c.args);
+    const ProgramRun run = Identify(LpvCsv(3, 1.0, 0.0), c.args);
     EXPECT_EQ(run.exit_code, 2) << c.args << "\n" << run.err;
     EXPECT_NE(run.err.find(c.message), std::string::npos)
         << "expected '" << c.message << "' in: " << run.err;

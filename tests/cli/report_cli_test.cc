@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "core/fractional/mittag_leffler.h"
+#include "tests/support/lpv_record.h"
 #include "tests/support/run_program.h"
 
 namespace canalid::testing {
@@ -133,34 +134,6 @@ std::string GateStepCsv() {
                     : 0.0;
     csv << k * kTs << "," << (k < 40 ? 15 : 40) << ","
         << 60.0 + kGain * 25.0 * response + noise(rng) << "\n";
-  }
-  return csv.str();
-}
-
-// tests/cli/lpv_cli_test.cc's plant: y[k] = -a1(theta) y[k-1] + b1(theta) u[k-3], a1 and b1
-// quadratic in theta, theta a staircase through five bands, u a random +-1 held 5 samples.
-constexpr double kA1[3] = {0.05, -0.2, -0.7};
-constexpr double kB1[3] = {-0.02, 0.1, 0.05};
-const std::vector<double> kThetas = {1.1, 1.3, 1.5, 1.7, 1.9};
-double Quadratic(const double (&p)[3], double theta) {
-  return (p[0] * theta + p[1]) * theta + p[2];
-}
-std::string LpvCsv() {
-  constexpr int kPerBand = 600;
-  std::mt19937 rng(3);
-  std::normal_distribution<double> noise(0.0, 1e-3);
-  const int n = kPerBand * static_cast<int>(kThetas.size());
-  std::vector<double> u(n, 0.0), y(n, 0.0);
-  std::ostringstream csv;
-  csv.precision(17);
-  csv << "time_s,gate,level,upstream\n";
-  for (int k = 0; k < n; ++k) {
-    const double theta = kThetas[static_cast<std::size_t>(k / kPerBand)];
-    if (k >= 10) u[k] = k % 5 == 0 ? ((rng() & 1U) ? 1.0 : -1.0) : u[k - 1];
-    if (k >= 1) {
-      y[k] = -Quadratic(kA1, theta) * y[k - 1] + Quadratic(kB1, theta) * (k >= 3 ? u[k - 3] : 0.0);
-    }
-    csv << k * 10.0 << "," << u[k] << "," << y[k] + noise(rng) << "," << theta << "\n";
   }
   return csv.str();
 }
@@ -306,7 +279,7 @@ TEST_F(ReportCli, FractionalGateStepRecord) {
 }
 
 TEST_F(ReportCli, LpvParametersAgainstTheSchedule) {
-  WriteFile(dir_ / "lpv.csv", LpvCsv());
+  WriteFile(dir_ / "lpv.csv", LpvCsv(3, 1e-3));
   const std::string input = (dir_ / "lpv.csv").string();
   const std::string args =
       "--local arx --schedule upstream --bands 1.0,1.2,1.4,1.6,1.8,2.0 --u gate --y level";
@@ -324,12 +297,12 @@ TEST_F(ReportCli, LpvParametersAgainstTheSchedule) {
   }
   // Step responses at every operating point settle at the true plant's static gain
   // b1/(1 + a1) at that theta (identification error: within 3 %).
-  for (std::size_t i = 0; i < kThetas.size(); ++i) {
+  for (std::size_t i = 0; i < kLpvThetas.size(); ++i) {
     const auto step =
         ReadData(dir_ / "report" / "gnuplot" / ("step_lpv_" + std::to_string(i) + ".dat"));
     ASSERT_FALSE(step.empty());
-    const double gain = Quadratic(kB1, kThetas[i]) / (1.0 + Quadratic(kA1, kThetas[i]));
-    EXPECT_NEAR(step.back()[1] / gain, 1.0, 0.03) << "theta " << kThetas[i];
+    const double gain = Quadratic(kLpvB1, kLpvThetas[i]) / (1.0 + Quadratic(kLpvA1, kLpvThetas[i]));
+    EXPECT_NEAR(step.back()[1] / gain, 1.0, 0.03) << "theta " << kLpvThetas[i];
   }
 }
 

@@ -11,6 +11,7 @@
 
 #include "core/fractional/mittag_leffler.h"
 #include "tests/support/frac_step_reference.h"
+#include "tests/support/minimal_lpv_json.h"
 #include "tests/support/run_program.h"
 #include "tests/support/simulate_round_trip.h"
 
@@ -345,13 +346,7 @@ TEST_F(SimulateCli, MinimalLpvTakesZeroOffsetsAndTheRecordsSampleTime) {
   csv << "time_s,u,theta\n";
   for (int k = 0; k < 60; ++k) csv << 2 * k << "," << (k < 5 ? 0 : 1) << ",0.5\n";
   WriteFile(dir_ / "lpv.csv", csv.str());
-  nlohmann::json minimal = {{"model", "lpv"},
-                            {"kind", "first_order_arx"},
-                            {"local_model", "arx"},
-                            {"schedule", "theta"},
-                            {"degree", 0},
-                            {"parameters", {"a1", "b1", "nk"}},
-                            {"coefficients", {{"a1", {-0.7}}, {"b1", {0.1}}, {"nk", {3.0}}}}};
+  const nlohmann::json minimal = MinimalLpvJson();
   nlohmann::json explicit_ = minimal;
   explicit_["input_offset"] = 0.0;
   explicit_["output_offset"] = 0.0;

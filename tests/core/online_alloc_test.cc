@@ -164,6 +164,28 @@ TEST(OnlineAllocation, ThreeStepIdBankUpdateAndSnapshotNeverAllocate) {
   EXPECT_TRUE(bank.Snapshot().valid);
 }
 
+// Allocations during `samples` updates and snapshots of a SISO bank on y = 0.9 y + 0.1 u + 0.01 e
+// under a random binary u (TestRandom(seed)), with a NaN u at sample bad_input_sample (-1: none)
+// and a NaN y at sample 100.  `probe` reads a snapshot value, which must stay finite.
+template <class Bank, class Probe>
+long SisoBankAllocations(Bank& bank, std::uint64_t seed, int samples, int bad_input_sample,
+                         Probe probe) {
+  testdata::TestRandom rnd(seed);
+  const long before = g_allocations;
+  double sum = 0.0;
+  double y = 0.0;
+  for (int k = 0; k < samples; ++k) {
+    const double u = rnd.Uniform() < 0.5 ? -1.0 : 1.0;
+    y = 0.9 * y + 0.1 * u + 0.01 * rnd.Normal();
+    bank.Update(k == bad_input_sample ? std::numeric_limits<double>::quiet_NaN() : u,
+                k == 100 ? std::numeric_limits<double>::quiet_NaN() : y);
+    sum += probe(bank.Snapshot());
+  }
+  const long allocations = g_allocations - before;
+  EXPECT_TRUE(std::isfinite(sum));
+  return allocations;
+}
+
 TEST(OnlineAllocation, ArxBankUpdateAndSnapshotNeverAllocate) {
   OnlineArxOptions o;
   o.na = 3;
@@ -172,19 +194,8 @@ TEST(OnlineAllocation, ArxBankUpdateAndSnapshotNeverAllocate) {
   o.max_delay_samples = 10;
   o.rls.forgetting = 0.99;
   OnlineArxBank bank(o);
-  testdata::TestRandom rnd(3);
-  const long before = g_allocations;
-  double sum = 0.0;
-  double y = 0.0;
-  for (int k = 0; k < 500; ++k) {
-    const double u = rnd.Uniform() < 0.5 ? -1.0 : 1.0;
-    y = 0.9 * y + 0.1 * u + 0.01 * rnd.Normal();
-    bank.Update(u, k == 100 ? std::numeric_limits<double>::quiet_NaN() : y);
-    sum += bank.Snapshot().a_std(0);
-  }
-  const long allocations = g_allocations - before;
-  EXPECT_EQ(allocations, 0);
-  EXPECT_TRUE(std::isfinite(sum));
+  EXPECT_EQ(SisoBankAllocations(bank, 3, 500, -1, [](const ArxSnapshot& s) { return s.a_std(0); }),
+            0);
 }
 
 TEST(OnlineAllocation, FractionalBankUpdateAndSnapshotNeverAllocate) {
@@ -193,20 +204,9 @@ TEST(OnlineAllocation, FractionalBankUpdateAndSnapshotNeverAllocate) {
   o.memory_samples = 100;
   o.delay_samples = 1;
   OnlineFractionalBank bank(o);
-  testdata::TestRandom rnd(4);
-  const long before = g_allocations;
-  double sum = 0.0;
-  double y = 0.0;
-  for (int k = 0; k < 400; ++k) {
-    const double u = rnd.Uniform() < 0.5 ? -1.0 : 1.0;
-    y = 0.9 * y + 0.1 * u + 0.01 * rnd.Normal();
-    bank.Update(k == 50 ? std::numeric_limits<double>::quiet_NaN() : u,
-                k == 100 ? std::numeric_limits<double>::quiet_NaN() : y);
-    sum += bank.Snapshot().theta1;
-  }
-  const long allocations = g_allocations - before;
-  EXPECT_EQ(allocations, 0);
-  EXPECT_TRUE(std::isfinite(sum));
+  EXPECT_EQ(
+      SisoBankAllocations(bank, 4, 400, 50, [](const FractionalSnapshot& s) { return s.theta1; }),
+      0);
 }
 
 }  // namespace

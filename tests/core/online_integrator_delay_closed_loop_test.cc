@@ -13,6 +13,7 @@
 #include "core/online/online_integrator_delay.h"
 #include "core/online/rls_iv.h"
 #include "tests/core/online_test_data.h"
+#include "tests/support/recentring_pair.h"
 
 namespace canalid::core {
 namespace {
@@ -175,18 +176,10 @@ TEST(OnlineIdClosedLoop, OutflowDirectGainChangesTheOutputOnly) {
 // estimates as they are without it (1e-9 relative: the transforms are exact up to rounding).
 TEST(OnlineIdClosedLoop, RecentringDoesNotChangeTheFit) {
   const LoopData d = MakeLoop(3000);
-  OnlineIntegratorDelayOptions a = LoopOptions(0.995);
-  a.recentre_samples = 50;
-  OnlineIntegratorDelayOptions b = a;
-  b.recentre_samples = -1;
-  OnlineIntegratorDelayBank ba(a);
-  OnlineIntegratorDelayBank bb(b);
-  for (std::size_t k = 0; k < d.level.size(); ++k) {
-    ba.Update(d.q_in[k], d.q_out[k], d.level[k]);
-    bb.Update(d.q_in[k], d.q_out[k], d.level[k]);
-  }
-  const IntegratorDelaySnapshot sa = ba.CandidateSnapshot(7);
-  const IntegratorDelaySnapshot sb = bb.CandidateSnapshot(7);
+  const OnlineIntegratorDelayOptions a = LoopOptions(0.995);
+  const canalid::testing::RecentringPair r = canalid::testing::RunWithAndWithoutRecentring(a, d, 7);
+  const IntegratorDelaySnapshot& sa = r.recentred;
+  const IntegratorDelaySnapshot& sb = r.plain;
   EXPECT_LT(Rel(sa.b, sb.b), 1e-9);
   EXPECT_LT(Rel(sa.c_m, sb.c_m), 1e-6);
   EXPECT_LT(Rel(sa.b_std, sb.b_std), 1e-6);

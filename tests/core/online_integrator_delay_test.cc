@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "tests/core/online_test_data.h"
+#include "tests/support/recentring_pair.h"
 
 namespace canalid::core {
 namespace {
@@ -86,18 +87,10 @@ TEST(OnlineIntegratorDelayBank, RecentringDoesNotChangeTheFit) {
   PoolSpec spec;
   spec.samples = 4000;
   const PoolData d = MakePool(spec);
-  OnlineIntegratorDelayOptions a = BankOptions(7, 7, 0.995);
-  a.recentre_samples = 50;
-  OnlineIntegratorDelayOptions b = a;
-  b.recentre_samples = -1;
-  OnlineIntegratorDelayBank ba(a);
-  OnlineIntegratorDelayBank bb(b);
-  for (std::size_t k = 0; k < d.level.size(); ++k) {
-    ba.Update(d.q_in[k], d.q_out[k], d.level[k]);
-    bb.Update(d.q_in[k], d.q_out[k], d.level[k]);
-  }
-  const IntegratorDelaySnapshot sa = ba.CandidateSnapshot(7);
-  const IntegratorDelaySnapshot sb = bb.CandidateSnapshot(7);
+  const OnlineIntegratorDelayOptions a = BankOptions(7, 7, 0.995);
+  const canalid::testing::RecentringPair r = canalid::testing::RunWithAndWithoutRecentring(a, d, 7);
+  const IntegratorDelaySnapshot& sa = r.recentred;
+  const IntegratorDelaySnapshot& sb = r.plain;
   EXPECT_LT(Rel(sa.b, sb.b), 1e-9);
   EXPECT_LT(Rel(sa.c_m, sb.c_m), 1e-6);
   EXPECT_LT(Rel(sa.area_m2, 6000.0), 0.02);

@@ -99,6 +99,14 @@ TEST(Rls, DynamicSizeMatchesFixedSizeBitForBit) {
   for (int i = 0; i < 3; ++i) EXPECT_EQ(fixed.theta()(i), dynamic.theta()(i));
 }
 
+// theta, trace P and the innovation variance equal to the bit.
+void ExpectBitIdenticalState(const Rls<2>& a, const Rls<2>& b) {
+  EXPECT_EQ(a.theta()(0), b.theta()(0));
+  EXPECT_EQ(a.theta()(1), b.theta()(1));
+  EXPECT_EQ(a.health().trace_p, b.health().trace_p);
+  EXPECT_EQ(a.innovation_variance(), b.innovation_variance());
+}
+
 TEST(Rls, SameSamplesGiveBitIdenticalState) {
   Eigen::VectorXd truth(2);
   truth << 1.0, -2.0;
@@ -114,10 +122,7 @@ TEST(Rls, SameSamplesGiveBitIdenticalState) {
     a.Update(phi, data.y(k));
     b.Update(phi, data.y(k));
   }
-  EXPECT_EQ(a.theta()(0), b.theta()(0));
-  EXPECT_EQ(a.theta()(1), b.theta()(1));
-  EXPECT_EQ(a.health().trace_p, b.health().trace_p);
-  EXPECT_EQ(a.innovation_variance(), b.innovation_variance());
+  ExpectBitIdenticalState(a, b);
 }
 
 TEST(Rls, InvalidSamplesAreRejectedWithoutTouchingTheState) {
@@ -147,10 +152,7 @@ TEST(Rls, InvalidSamplesAreRejectedWithoutTouchingTheState) {
     }
   }
   EXPECT_EQ(dirty.health().rejected_invalid, 50);
-  EXPECT_EQ(dirty.theta()(0), clean.theta()(0));
-  EXPECT_EQ(dirty.theta()(1), clean.theta()(1));
-  EXPECT_EQ(dirty.health().trace_p, clean.health().trace_p);
-  EXPECT_EQ(dirty.innovation_variance(), clean.innovation_variance());
+  ExpectBitIdenticalState(dirty, clean);
 }
 
 TEST(Rls, OutliersAreRejectedOrClipped) {

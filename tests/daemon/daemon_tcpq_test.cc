@@ -67,6 +67,12 @@ fs::path WriteKey(const fs::path& dir) {
   return key;
 }
 
+// canalidd on `config`, its output logged to dir/canalidd.log.
+ChildProcess StartCanalidd(const fs::path& dir, const fs::path& config) {
+  return ChildProcess(
+      {std::string(CANALID_BINARY_DIR) + "/daemon/canalidd/canalidd", "--config", config.string()},
+      {}, dir / "canalidd.log");
+}
 // Peak resident set of process `pid` (VmHWM, KiB); -1 when unreadable.
 long PeakRssKib(pid_t pid) {
   std::ifstream status("/proc/" + std::to_string(pid) + "/status");
@@ -90,9 +96,7 @@ TEST(DaemonTcpq, LosingTheHubIsLoggedAndReconnectedNotAnAbort) {
   const fs::path config = WriteConfig(dir, hub.url(), key);
 
   auto first = std::async(std::launch::async, [&hub] { return hub.Accept(); });
-  ChildProcess daemon(
-      {std::string(CANALID_BINARY_DIR) + "/daemon/canalidd/canalidd", "--config", config.string()},
-      {}, dir / "canalidd.log");
+  ChildProcess daemon = StartCanalidd(dir, config);
   const int hub_side = first.get();
   ASSERT_GE(hub_side, 0) << daemon.output();
   EXPECT_EQ(TcpqTestHub::ReadSubscribe(hub_side), "CANALID_ASCE2_COMMAND") << daemon.output();
@@ -128,9 +132,7 @@ TEST(DaemonTcpq, AFloodOfOversizeCommandsNeitherStallsTheLoopNorAllocates) {
   TcpqTestHub hub;
   const fs::path config = WriteConfig(dir, hub.url(), key);
   auto accepted = std::async(std::launch::async, [&hub] { return hub.Accept(); });
-  ChildProcess daemon(
-      {std::string(CANALID_BINARY_DIR) + "/daemon/canalidd/canalidd", "--config", config.string()},
-      {}, dir / "canalidd.log");
+  ChildProcess daemon = StartCanalidd(dir, config);
   const int hub_side = accepted.get();
   ASSERT_GE(hub_side, 0) << daemon.output();
   const std::string channel = "CANALID_ASCE2_COMMAND";
@@ -221,9 +223,7 @@ TEST(DaemonTcpq, SighupWithABadKeyFileKeepsTheRunningDaemon) {
   TcpqTestHub hub;
   const fs::path config = WriteConfig(dir, hub.url(), key);
   auto accepted = std::async(std::launch::async, [&hub] { return hub.Accept(); });
-  ChildProcess daemon(
-      {std::string(CANALID_BINARY_DIR) + "/daemon/canalidd/canalidd", "--config", config.string()},
-      {}, dir / "canalidd.log");
+  ChildProcess daemon = StartCanalidd(dir, config);
   const int hub_side = accepted.get();
   ASSERT_GE(hub_side, 0) << daemon.output();
   ASSERT_FALSE(daemon.WaitForLine("running:", kHubWaitMs).empty()) << daemon.output();

@@ -83,6 +83,14 @@ void WriteBytes(const fs::path& path, const std::vector<std::uint8_t>& bytes) {
             static_cast<std::streamsize>(bytes.size()));
 }
 
+// Reads to the end of the log; returns how many events came.
+std::size_t ReadAll(LogReader& reader) {
+  LogEvent e;
+  std::size_t read = 0;
+  while (reader.Next(&e)) ++read;
+  return read;
+}
+
 TEST(LcmLogReader, ReadsWhatLcmWroteWithOffsets) {
   const fs::path path = TestPath("whole.lcmlog");
   std::vector<Written> events = SomeEvents();
@@ -134,9 +142,7 @@ TEST(LcmLogReader, TruncatedAnywhereInTheLastEventKeepsTheOthers) {
     WriteBytes(path,
                std::vector<std::uint8_t>(bytes.begin(), bytes.begin() + static_cast<long>(cut)));
     LogReader reader(path.string());
-    LogEvent e;
-    std::size_t read = 0;
-    while (reader.Next(&e)) ++read;
+    const std::size_t read = ReadAll(reader);
     ASSERT_EQ(read, events.size() - 1) << "cut at " << cut;
     EXPECT_EQ(reader.end(), LogEnd::kTruncated) << "cut at " << cut;
     EXPECT_EQ(reader.problem().rfind("byte " + std::to_string(last) + ": ", 0), 0U)
@@ -153,9 +159,7 @@ TEST(LcmLogReader, BadSyncWordIsCorruptionAtItsOffset) {
   bytes[events[3].offset + 1] ^= 0xFF;
   WriteBytes(path, bytes);
   LogReader reader(path.string());
-  LogEvent e;
-  std::size_t read = 0;
-  while (reader.Next(&e)) ++read;
+  const std::size_t read = ReadAll(reader);
   EXPECT_EQ(read, 3U);
   EXPECT_EQ(reader.end(), LogEnd::kCorrupt);
   EXPECT_EQ(reader.problem().rfind("byte " + std::to_string(events[3].offset) + ": ", 0), 0U)
@@ -171,9 +175,7 @@ TEST(LcmLogReader, ImpossibleChannelLengthIsCorruption) {
   bytes[events[2].offset + 20] = 0x7F;  // channel length's most significant byte
   WriteBytes(path, bytes);
   LogReader reader(path.string());
-  LogEvent e;
-  std::size_t read = 0;
-  while (reader.Next(&e)) ++read;
+  const std::size_t read = ReadAll(reader);
   EXPECT_EQ(read, 2U);
   EXPECT_EQ(reader.end(), LogEnd::kCorrupt);
   EXPECT_NE(reader.problem().find("channel length"), std::string::npos) << reader.problem();

@@ -11,6 +11,7 @@
 
 #include "core/fractional/fractional_foptd_fit.h"
 #include "drivers/json/model_json.h"
+#include "tests/support/minimal_lpv_json.h"
 
 namespace canalid::drivers {
 namespace {
@@ -178,13 +179,7 @@ nlohmann::json Minimal(const std::string& kind) {
     return json{{"model", "frac-ss"}, {"q", 1},          {"A", {{0.0, 1.0}, {-0.5, -1.5}}},
                 {"B", {0.0, 0.5}},    {"C", {1.0, 0.2}}, {"delay_samples", 3}};
   }
-  return json{{"model", "lpv"},
-              {"kind", "first_order_arx"},
-              {"local_model", "arx"},
-              {"schedule", "theta"},
-              {"degree", 0},
-              {"parameters", {"a1", "b1", "nk"}},
-              {"coefficients", {{"a1", {-0.7}}, {"b1", {0.1}}, {"nk", {3.0}}}}};
+  return canalid::testing::MinimalLpvJson();
 }
 
 // Reads `json` with the reader of its kind (the result is dropped: only errors matter here).

@@ -7,6 +7,7 @@
 #include <cstdio>
 
 #include "sim/saint_venant.h"
+#include "tests/support/canal2_pool2.h"
 
 namespace canalid::sim {
 namespace {
@@ -33,17 +34,7 @@ double Rk4UpstreamDepth(const Pool& p, double q, double y_down, double distance_
   return y;
 }
 
-Pool Canal2Pool2() {
-  Pool p;
-  p.name = "2";
-  p.length_m = 3000;
-  p.bottom_width_m = 7;
-  p.side_slope = 1.5;
-  p.bed_slope = 1e-4;
-  p.manning_n = 0.02;
-  p.target_depth_m = 2.1;
-  return p;
-}
+using canalid::testing::Canal2Pool2;
 
 TEST(SteadyProfile, MatchesRk4BackwaterOnCanal2Pool2) {
   const Pool p = Canal2Pool2();
@@ -58,7 +49,8 @@ TEST(SteadyProfile, MatchesRk4BackwaterOnCanal2Pool2) {
   EXPECT_LT(y.front(), 2.0);  // M2-like drawdown towards a normal depth below 2.1 m
 }
 
-TEST(SteadyProfile, MatchesRk4OnSteepCanal1Pool2) {
+// ASCE test canal 1 pool 2, the steep one (target depth left at its default).
+Pool SteepCanal1Pool2() {
   Pool p;
   p.name = "c1p2";
   p.length_m = 1200;
@@ -66,6 +58,11 @@ TEST(SteadyProfile, MatchesRk4OnSteepCanal1Pool2) {
   p.side_slope = 1.5;
   p.bed_slope = 0.002;
   p.manning_n = 0.014;
+  return p;
+}
+
+TEST(SteadyProfile, MatchesRk4OnSteepCanal1Pool2) {
+  const Pool p = SteepCanal1Pool2();
   const std::vector<double> y = SteadyProfile(p, 1.8, 120, 0.9);
   // Steep pool: M1 backwater that reaches normal depth upstream; 10 m steps, 1 mm tolerance.
   for (int j = 0; j <= 120; j += 20) {
@@ -83,13 +80,7 @@ struct SettleCase {
 };
 
 TEST(SteadyProfile, SaintVenantSettlesOnTheStandardStepProfile) {
-  Pool steep;
-  steep.name = "c1p2";
-  steep.length_m = 1200;
-  steep.bottom_width_m = 1.0;
-  steep.side_slope = 1.5;
-  steep.bed_slope = 0.002;
-  steep.manning_n = 0.014;
+  Pool steep = SteepCanal1Pool2();
   steep.target_depth_m = 0.9;
   // Settling time constants A / (dQ/dh of the weir): about 2000 s on canal 2 pool 2, under
   // 200 s on canal 1 pool 2; the runs last 20 and 100 of them.

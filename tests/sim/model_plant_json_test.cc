@@ -18,13 +18,18 @@
 
 #include "core/fractional/fractional_foptd.h"
 #include "drivers/csv/csv_table.h"
+#include "tests/support/lpv_record.h"
 #include "tests/support/run_program.h"
 
 namespace canalid::sim {
 namespace {
 
 using canalid::testing::CanalidProgram;
+using canalid::testing::kLpvA1;
+using canalid::testing::kLpvB1;
+using canalid::testing::LpvCsv;
 using canalid::testing::ProgramRun;
+using canalid::testing::Quadratic;
 using canalid::testing::ReadFile;
 using canalid::testing::RunProgram;
 using canalid::testing::TestDirectory;
@@ -342,14 +347,8 @@ TEST_F(ModelPlantJson, FracSsPlantEqualsCanalidSimulateFullAndShortMemory) {
 
 // ---- lpv -----------------------------------------------------------------------------------
 
-// Quadratic laws in theta, highest degree first, as lpv_cli_test's.
-constexpr double kLpvA1[3] = {0.05, -0.2, -0.7};
-constexpr double kLpvB1[3] = {-0.02, 0.1, 0.05};
+// Quadratic laws in theta: kLpvA1, kLpvB1 of tests/support/lpv_record.h, and a delay law.
 constexpr double kLpvNk[3] = {0.5, 0.0, 1.9};  // 0.5 theta^2 + 1.9: 2.5 .. 3.9 on [1, 2]
-
-double Quadratic(const double (&p)[3], double theta) {
-  return (p[0] * theta + p[1]) * theta + p[2];
-}
 
 nlohmann::json LpvJson(double input_offset, double output_offset) {
   auto list = [](const double(&p)[3]) { return std::vector<double>{p[0], p[1], p[2]}; };
@@ -431,32 +430,9 @@ TEST(LpvArxPlant, RefusesDelaysBeyondItsRingAndOtherLocals) {
                std::invalid_argument);
 }
 
-// lpv_cli_test's record: theta a staircase through five bands, u a random +-1 held 5 samples,
-// y from the laws kLpvA1, kLpvB1 and nk = 3, with seeded noise.
-std::string LpvCsv() {
-  std::mt19937 rng(2);
-  std::normal_distribution<double> noise(0.0, 0.01);
-  const std::vector<double> thetas = {1.1, 1.3, 1.5, 1.7, 1.9};
-  const int per_band = 600;
-  const int n = per_band * static_cast<int>(thetas.size());
-  std::vector<double> u(n, 0.0), y(n, 0.0);
-  std::ostringstream csv;
-  csv.precision(17);
-  csv << "time_s,gate,level,upstream\n";
-  for (int k = 0; k < n; ++k) {
-    const double theta = thetas[static_cast<std::size_t>(k / per_band)];
-    if (k >= 10) u[k] = k % 5 == 0 ? ((rng() & 1U) ? 1.0 : -1.0) : u[k - 1];
-    if (k >= 1) {
-      y[k] = -Quadratic(kLpvA1, theta) * y[k - 1] +
-             Quadratic(kLpvB1, theta) * (k >= 3 ? u[k - 3] : 0.0);
-    }
-    csv << k * 10.0 << "," << u[k] << "," << y[k] + 0.01 * noise(rng) << "," << theta << "\n";
-  }
-  return csv.str();
-}
-
 TEST_F(ModelPlantJson, LpvPlantEqualsCanalidSimulate) {
-  WriteFile(dir_ / "lpv.csv", LpvCsv());
+  // The support record with seed 2 and noise 0.01 N(0, 0.01).
+  WriteFile(dir_ / "lpv.csv", LpvCsv(2, 0.01, 0.01));
   const auto model =
       Identify((dir_ / "lpv.csv").string(),
                "--model lpv --local arx --u gate --y level --schedule upstream --bands "

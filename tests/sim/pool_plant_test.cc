@@ -6,6 +6,8 @@
 #include <memory>
 #include <stdexcept>
 
+#include "tests/support/canal2_pool2.h"
+
 namespace canalid::sim {
 namespace {
 
@@ -68,14 +70,7 @@ TEST(FoptdPlant, StepResponseIsTheClosedForm) {
 // step its late level slope gives the pool's surface area (canal 2 pool 2: 41133 m2 measured by
 // scenario_test, SWMM 41616 m2).
 TEST(SaintVenantPool, SameInterfaceAsTheFastPlants) {
-  Pool pool;
-  pool.name = "2";
-  pool.length_m = 3000;
-  pool.bottom_width_m = 7;
-  pool.side_slope = 1.5;
-  pool.bed_slope = 1e-4;
-  pool.manning_n = 0.02;
-  pool.target_depth_m = 2.1;
+  const Pool pool = canalid::testing::Canal2Pool2();
   std::unique_ptr<PoolPlant> plant = std::make_unique<SaintVenantPool>(pool, 10.0, 100.0, 0.6);
   plant->SetFlows(10.0, 10.0);
   for (int k = 0; k < 60; ++k) plant->Step(10.0);
