@@ -2,6 +2,7 @@
 // Run: build/bench/rls_bench --benchmark_min_time=0.2
 #include <benchmark/benchmark.h>
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -14,7 +15,7 @@
 namespace canalid::core {
 namespace {
 
-constexpr int kPool = 1024;  // pre-generated samples, cycled
+constexpr std::size_t kPool = 1024;  // pre-generated samples, cycled
 
 double Lcg(std::uint64_t& state) {  // deterministic uniform in [-1, 1)
   state = state * 6364136223846793005ULL + 1442695040888963407ULL;
@@ -84,11 +85,11 @@ void BM_RlsUpdate(benchmark::State& state) {
   std::vector<Eigen::Matrix<double, N, 1>> phis(kPool);
   std::vector<double> ys(kPool);
   std::uint64_t seed = 1;
-  for (int k = 0; k < kPool; ++k) {
+  for (std::size_t k = 0; k < kPool; ++k) {
     for (int i = 0; i < N; ++i) phis[k](i) = Lcg(seed);
     ys[k] = phis[k].sum() + 0.01 * Lcg(seed);
   }
-  int k = 0;
+  std::size_t k = 0;
   for (auto _ : state) {
     benchmark::DoNotOptimize(rls.Update(phis[k], ys[k]));
     k = (k + 1) & (kPool - 1);
@@ -115,13 +116,13 @@ void BM_IvRlsUpdate(benchmark::State& state) {
   std::vector<Eigen::Matrix<double, N, 1>> zs(kPool);
   std::vector<double> ys(kPool);
   std::uint64_t seed = 1;
-  for (int k = 0; k < kPool; ++k) {
+  for (std::size_t k = 0; k < kPool; ++k) {
     for (int i = 0; i < N; ++i) zs[k](i) = Lcg(seed);
     phis[k] = zs[k];
     phis[k](0) += 0.3 * Lcg(seed);
     ys[k] = phis[k].sum() + 0.01 * Lcg(seed);
   }
-  int k = 0;
+  std::size_t k = 0;
   for (auto _ : state) {
     benchmark::DoNotOptimize(rls.Update(phis[k], zs[k], ys[k]));
     k = (k + 1) & (kPool - 1);
@@ -154,13 +155,13 @@ void BM_IdBank64(benchmark::State& state) {
   std::vector<double> q_out(kPool);
   std::vector<double> level(kPool);
   double y = 2.0;
-  for (int k = 0; k < kPool; ++k) {
+  for (std::size_t k = 0; k < kPool; ++k) {
     q_in[k] = 2.0 + 0.2 * (Lcg(seed) > 0 ? 1 : -1);
     q_out[k] = 2.0 + 0.1 * Lcg(seed);
     y += 0.01 * (q_in[k] - q_out[k]);
     level[k] = y;
   }
-  int k = 0;
+  std::size_t k = 0;
   for (auto _ : state) {
     benchmark::DoNotOptimize(bank.Update(q_in[k], q_out[k], level[k]));
     k = (k + 1) & (kPool - 1);

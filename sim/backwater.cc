@@ -30,10 +30,10 @@ std::vector<double> SteadyProfile(const Pool& pool, double flow_m3s, int num_cel
        << " m is not subcritical at " << flow_m3s << " m3/s";
     throw std::runtime_error(os.str());
   }
-  std::vector<double> depth(num_cells + 1);
-  depth[num_cells] = downstream_depth_m;
+  std::vector<double> depth(static_cast<std::size_t>(num_cells + 1));
+  depth[static_cast<std::size_t>(num_cells)] = downstream_depth_m;
   for (int j = num_cells - 1; j >= 0; --j) {
-    const double hr = depth[j + 1];
+    const double hr = depth[static_cast<std::size_t>(j + 1)];
     const double ar = section.Area(hr);
     double gr = 0.0, gr_h = 0.0, gr_q = 0.0;
     section.Friction(hr, q, &gr, &gr_h, &gr_q);
@@ -75,7 +75,7 @@ std::vector<double> SteadyProfile(const Pool& pool, double flow_m3s, int num_cel
          << ", x = " << j * dx << " m)";
       throw std::runtime_error(os.str());
     }
-    depth[j] = h;
+    depth[static_cast<std::size_t>(j)] = h;
   }
   return depth;
 }

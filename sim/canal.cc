@@ -68,7 +68,8 @@ void ValidateCanal(const Canal& canal) {
       }
     } else {
       const int a = FindPoolIndex(canal, c.actuator_pool);
-      if (a < 0 || canal.pools[a].structure.type != Structure::Type::kPump) {
+      if (a < 0 ||
+          canal.pools[static_cast<std::size_t>(a)].structure.type != Structure::Type::kPump) {
         throw std::invalid_argument(where + ": actuator pool '" + c.actuator_pool +
                                     "' must be a pool of the canal whose structure is a pump");
       }

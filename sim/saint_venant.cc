@@ -26,17 +26,18 @@ constexpr double kDiffStep = 1e-7;
 SaintVenantCanal::SaintVenantCanal(const Canal& canal) : canal_(canal) {
   ValidateCanal(canal_);
   const int pools = num_pools();
-  offset_.assign(pools + 1, 0);
+  offset_.assign(static_cast<std::size_t>(pools + 1), 0);
   for (int p = 0; p < pools; ++p) {
-    const Pool& pool = canal_.pools[p];
+    const Pool& pool = canal_.pools[static_cast<std::size_t>(p)];
     sections_.emplace_back(pool.bottom_width_m, pool.side_slope, pool.manning_n);
     const int cells = static_cast<int>(std::ceil(pool.length_m / canal_.max_dx_m - 1e-9));
     dx_.push_back(pool.length_m / std::max(cells, 1));
-    offset_[p + 1] = offset_[p] + std::max(cells, 1) + 1;
+    offset_[static_cast<std::size_t>(p + 1)] =
+        offset_[static_cast<std::size_t>(p)] + std::max(cells, 1) + 1;
     structure_setting_.push_back(pool.structure.setting);
     offtake_setting_.push_back(pool.offtake.setting);
   }
-  const int n = 2 * offset_[pools];
+  const int n = 2 * offset_[static_cast<std::size_t>(pools)];
   x_.setZero(n);
   residual_.setZero(n);
   delta_.setZero(n);
@@ -51,8 +52,9 @@ SaintVenantCanal::SaintVenantCanal(const Canal& canal) : canal_(canal) {
     BoundControl bound{LevelPid(config), level_pool, c.level_downstream, actuator, 0};
     controls_.push_back(bound);
     const int k = static_cast<int>(controls_.size()) - 1;
-    const double flow = actuator < 0 ? upstream_value_ : structure_setting_[actuator];
-    controls_[k].pid.Reset(flow, ControlledLevel(k));
+    const double flow =
+        actuator < 0 ? upstream_value_ : structure_setting_[static_cast<std::size_t>(actuator)];
+    controls_[static_cast<std::size_t>(k)].pid.Reset(flow, ControlledLevel(k));
   }
   old_x_ = x_;
   initial_volume_m3_ = Volume();
@@ -68,18 +70,19 @@ SaintVenantCanal::BoundaryFlows SaintVenantCanal::CurrentBoundaryFlows() const {
 }
 
 double SaintVenantCanal::TailLevel(int pool) const {
-  const double tail = canal_.pools[pool].structure.tailwater_m;
+  const double tail = canal_.pools[static_cast<std::size_t>(pool)].structure.tailwater_m;
   return tail < 0.0 ? kFreeOutfall : tail;
 }
 
 void SaintVenantCanal::BuildSteadyState() {
   const int pools = num_pools();
   double flow = canal_.upstream.flow_m3s;
-  std::vector<double> pool_flow(pools);
+  std::vector<double> pool_flow(static_cast<std::size_t>(pools));
   for (int p = 0; p < pools; ++p) {
-    pool_flow[p] = flow;
-    const Pool& pool = canal_.pools[p];
-    flow -= sim::OfftakeFlow(pool.offtake, offtake_setting_[p], pool.target_depth_m);
+    pool_flow[static_cast<std::size_t>(p)] = flow;
+    const Pool& pool = canal_.pools[static_cast<std::size_t>(p)];
+    flow -= sim::OfftakeFlow(pool.offtake, offtake_setting_[static_cast<std::size_t>(p)],
+                             pool.target_depth_m);
     if (flow < 0.0) {
       std::ostringstream os;
       os << "pool " << pool.name << ": offtakes take more than the inflow "
@@ -90,27 +93,31 @@ void SaintVenantCanal::BuildSteadyState() {
   for (int p = 0; p < pools; ++p) {
     std::vector<double> depth;
     try {
-      depth = SteadyProfile(canal_.pools[p], pool_flow[p], num_nodes(p) - 1,
-                            canal_.pools[p].target_depth_m);
+      depth = SteadyProfile(canal_.pools[static_cast<std::size_t>(p)],
+                            pool_flow[static_cast<std::size_t>(p)], num_nodes(p) - 1,
+                            canal_.pools[static_cast<std::size_t>(p)].target_depth_m);
     } catch (const std::runtime_error& e) {
       // No steady state for these flows and targets: a problem of the configuration.
       throw std::invalid_argument(e.what());
     }
     for (int i = 0; i < num_nodes(p); ++i) {
-      x_[2 * (offset_[p] + i)] = depth[i];
-      x_[2 * (offset_[p] + i) + 1] = pool_flow[p];
+      x_[2 * (offset_[static_cast<std::size_t>(p)] + i)] = depth[static_cast<std::size_t>(i)];
+      x_[2 * (offset_[static_cast<std::size_t>(p)] + i) + 1] =
+          pool_flow[static_cast<std::size_t>(p)];
     }
   }
   for (int p = 0; p < pools; ++p) {
-    const Pool& pool = canal_.pools[p];
-    const double through = p + 1 < pools
-                               ? pool_flow[p + 1]
-                               : pool_flow[p] - sim::OfftakeFlow(pool.offtake, offtake_setting_[p],
-                                                                 pool.target_depth_m);
+    const Pool& pool = canal_.pools[static_cast<std::size_t>(p)];
+    const double through =
+        p + 1 < pools
+            ? pool_flow[static_cast<std::size_t>(p + 1)]
+            : pool_flow[static_cast<std::size_t>(p)] -
+                  sim::OfftakeFlow(pool.offtake, offtake_setting_[static_cast<std::size_t>(p)],
+                                   pool.target_depth_m);
     const double down = p + 1 < pools ? UpstreamDepth(p + 1) - pool.structure.drop_m : TailLevel(p);
     if (pool.structure.setting_from_steady_state) {
       try {
-        structure_setting_[p] =
+        structure_setting_[static_cast<std::size_t>(p)] =
             SteadyStructureSetting(pool.structure, through, DownstreamDepth(p), down);
       } catch (const std::invalid_argument& e) {
         throw std::invalid_argument("pool " + pool.name + " structure: " + e.what());
@@ -122,13 +129,13 @@ void SaintVenantCanal::BuildSteadyState() {
 }
 
 double SaintVenantCanal::ControlledLevel(int k) const {
-  const BoundControl& c = controls_.at(k);
+  const BoundControl& c = controls_.at(static_cast<std::size_t>(k));
   return c.level_downstream ? DownstreamDepth(c.level_pool) : UpstreamDepth(c.level_pool);
 }
 
 void SaintVenantCanal::RunLevelControls() {
   for (int k = 0; k < num_level_controls(); ++k) {
-    BoundControl& c = controls_[k];
+    BoundControl& c = controls_[static_cast<std::size_t>(k)];
     // Sample instants are compared with a tolerance so that k Ts is not missed by rounding.
     const double eps = 1e-9 * (1.0 + time_s_);
     const double ts = c.pid.config().sample_time_s;
@@ -140,7 +147,7 @@ void SaintVenantCanal::RunLevelControls() {
     if (c.actuator_pool < 0) {
       upstream_value_ = c.pid.output_m3s();
     } else {
-      structure_setting_[c.actuator_pool] = c.pid.output_m3s();
+      structure_setting_[static_cast<std::size_t>(c.actuator_pool)] = c.pid.output_m3s();
     }
   }
 }
@@ -151,19 +158,19 @@ double SaintVenantCanal::StructureFlow(int pool) const {
 }
 
 double SaintVenantCanal::OfftakeFlow(int pool) const {
-  return sim::OfftakeFlow(canal_.pools[pool].offtake, offtake_setting_[pool],
-                          DownstreamDepth(pool));
+  return sim::OfftakeFlow(canal_.pools[static_cast<std::size_t>(pool)].offtake,
+                          offtake_setting_[static_cast<std::size_t>(pool)], DownstreamDepth(pool));
 }
 
 double SaintVenantCanal::PoolVolume(int pool) const {
-  const TrapezoidSection& s = sections_[pool];
+  const TrapezoidSection& s = sections_[static_cast<std::size_t>(pool)];
   double sum = 0.0;
   const int n = num_nodes(pool);
   for (int i = 0; i < n; ++i) {
     const double a = s.Area(depth_m(pool, i));
     sum += (i == 0 || i == n - 1) ? 0.5 * a : a;
   }
-  return sum * dx_[pool];
+  return sum * dx_[static_cast<std::size_t>(pool)];
 }
 
 double SaintVenantCanal::Volume() const {
@@ -177,7 +184,7 @@ void SaintVenantCanal::Add(int row, int col, double value) {
     triplets_.emplace_back(row, col, value);
     return;
   }
-  jacobian_.valuePtr()[slots_[add_count_++]] = value;
+  jacobian_.valuePtr()[slots_[static_cast<std::size_t>(add_count_++)]] = value;
 }
 
 void SaintVenantCanal::Assemble(const Eigen::VectorXd& old_x, double dt_s) {
@@ -196,10 +203,11 @@ void SaintVenantCanal::Assemble(const Eigen::VectorXd& old_x, double dt_s) {
   ++row;
   const int pools = num_pools();
   for (int p = 0; p < pools; ++p) {
-    const TrapezoidSection& s = sections_[p];
-    const double dx = dx_[p];
-    const double slope = canal_.pools[p].bed_slope;
-    for (int j = offset_[p]; j + 1 < offset_[p + 1]; ++j) {
+    const TrapezoidSection& s = sections_[static_cast<std::size_t>(p)];
+    const double dx = dx_[static_cast<std::size_t>(p)];
+    const double slope = canal_.pools[static_cast<std::size_t>(p)].bed_slope;
+    for (int j = offset_[static_cast<std::size_t>(p)];
+         j + 1 < offset_[static_cast<std::size_t>(p + 1)]; ++j) {
       const int hl = 2 * j, ql = hl + 1, hr = hl + 2, qr = hl + 3;
       const double hl1 = x_[hl], ql1 = x_[ql], hr1 = x_[hr], qr1 = x_[qr];
       const double hl0 = old_x[hl], ql0 = old_x[ql], hr0 = old_x[hr], qr0 = old_x[qr];
@@ -239,16 +247,20 @@ void SaintVenantCanal::Assemble(const Eigen::VectorXd& old_x, double dt_s) {
       ++row;
     }
     // Downstream end of the pool: offtake and structure.
-    const Pool& pool = canal_.pools[p];
-    const int a = offset_[p + 1] - 1;
+    const Pool& pool = canal_.pools[static_cast<std::size_t>(p)];
+    const int a = offset_[static_cast<std::size_t>(p + 1)] - 1;
     const int ha = 2 * a, qa = ha + 1;
     const double h = x_[ha];
-    const double off = sim::OfftakeFlow(pool.offtake, offtake_setting_[p], h);
-    const double off_h = (sim::OfftakeFlow(pool.offtake, offtake_setting_[p], h + kDiffStep) -
-                          sim::OfftakeFlow(pool.offtake, offtake_setting_[p], h - kDiffStep)) /
-                         (2.0 * kDiffStep);
+    const double off =
+        sim::OfftakeFlow(pool.offtake, offtake_setting_[static_cast<std::size_t>(p)], h);
+    const double off_h =
+        (sim::OfftakeFlow(pool.offtake, offtake_setting_[static_cast<std::size_t>(p)],
+                          h + kDiffStep) -
+         sim::OfftakeFlow(pool.offtake, offtake_setting_[static_cast<std::size_t>(p)],
+                          h - kDiffStep)) /
+        (2.0 * kDiffStep);
     const Structure& st = pool.structure;
-    const double setting = structure_setting_[p];
+    const double setting = structure_setting_[static_cast<std::size_t>(p)];
     if (p + 1 < pools) {
       const int hb = ha + 2, qb = ha + 3;
       const double down = x_[hb] - st.drop_m;

@@ -52,18 +52,33 @@ class SaintVenantCanal final {
   /// Inflow (m^3/s) or reservoir depth (m), according to canal().upstream.type.
   void SetUpstream(double value) { upstream_value_ = value; }
   double upstream() const { return upstream_value_; }
-  void SetStructureSetting(int pool, double setting) { structure_setting_.at(pool) = setting; }
-  double structure_setting(int pool) const { return structure_setting_.at(pool); }
-  void SetOfftakeSetting(int pool, double setting) { offtake_setting_.at(pool) = setting; }
-  double offtake_setting(int pool) const { return offtake_setting_.at(pool); }
+  void SetStructureSetting(int pool, double setting) {
+    structure_setting_.at(static_cast<std::size_t>(pool)) = setting;
+  }
+  double structure_setting(int pool) const {
+    return structure_setting_.at(static_cast<std::size_t>(pool));
+  }
+  void SetOfftakeSetting(int pool, double setting) {
+    offtake_setting_.at(static_cast<std::size_t>(pool)) = setting;
+  }
+  double offtake_setting(int pool) const {
+    return offtake_setting_.at(static_cast<std::size_t>(pool));
+  }
 
   const Canal& canal() const { return canal_; }
   double time_s() const { return time_s_; }
   int num_pools() const { return static_cast<int>(canal_.pools.size()); }
-  int num_nodes(int pool) const { return offset_.at(pool + 1) - offset_.at(pool); }
-  double dx_m(int pool) const { return dx_.at(pool); }
-  double depth_m(int pool, int node) const { return x_[2 * (offset_[pool] + node)]; }
-  double flow_m3s(int pool, int node) const { return x_[2 * (offset_[pool] + node) + 1]; }
+  int num_nodes(int pool) const {
+    return offset_.at(static_cast<std::size_t>(pool + 1)) -
+           offset_.at(static_cast<std::size_t>(pool));
+  }
+  double dx_m(int pool) const { return dx_.at(static_cast<std::size_t>(pool)); }
+  double depth_m(int pool, int node) const {
+    return x_[2 * (offset_[static_cast<std::size_t>(pool)] + node)];
+  }
+  double flow_m3s(int pool, int node) const {
+    return x_[2 * (offset_[static_cast<std::size_t>(pool)] + node) + 1];
+  }
   double PoolInflow(int pool) const { return flow_m3s(pool, 0); }
   /// Flow leaving the pool at its downstream end (structure flow plus offtake).
   double PoolOutflow(int pool) const { return flow_m3s(pool, num_nodes(pool) - 1); }
@@ -76,10 +91,14 @@ class SaintVenantCanal final {
   double Volume() const;
   const MassBalance& mass_balance() const { return mass_; }
   int num_level_controls() const { return static_cast<int>(controls_.size()); }
-  const LevelPid& level_control(int k) const { return controls_.at(k).pid; }
+  const LevelPid& level_control(int k) const {
+    return controls_.at(static_cast<std::size_t>(k)).pid;
+  }
   /// Depth (m) the control `k` holds, now.
   double ControlledLevel(int k) const;
-  void SetLevelSetpoint(int k, double setpoint_m) { controls_.at(k).pid.SetSetpoint(setpoint_m); }
+  void SetLevelSetpoint(int k, double setpoint_m) {
+    controls_.at(static_cast<std::size_t>(k)).pid.SetSetpoint(setpoint_m);
+  }
   int last_iterations() const { return last_iterations_; }
 
  private:

@@ -110,7 +110,7 @@ class SampledPoolPlant final : public PoolPlant {
   void SetFlows(double inflow_m3s, double outflow_m3s) override;
   /// @throws std::invalid_argument unless dt_s is a positive whole multiple (1e-9) of Ts.
   void Step(double dt_s) override;
-  double time_s() const override { return samples_ * plant_->sample_time_s(); }
+  double time_s() const override { return static_cast<double>(samples_) * plant_->sample_time_s(); }
   double level_m() const override { return plant_->Output(inputs_); }
 
  private:

@@ -133,7 +133,7 @@ Scenario ReadScenario(ConfigReader& reader, const Canal& full) {
   sc.canal.pools.assign(full.pools.begin() + i0, full.pools.begin() + i1 + 1);
   double inflow = full.upstream.flow_m3s;
   for (int i = 0; i < i0; ++i) {
-    const Pool& p = full.pools[i];
+    const Pool& p = full.pools[static_cast<std::size_t>(i)];
     inflow -= OfftakeFlow(p.offtake, p.offtake.setting, p.target_depth_m);
   }
   if (i0 > 0) sc.canal.upstream.type = UpstreamBoundary::Type::kFlow;
@@ -161,7 +161,7 @@ Scenario ReadScenario(ConfigReader& reader, const Canal& full) {
                                              PoolNames(sc.canal) + ")");
           continue;
         }
-        Pool& p = sc.canal.pools[i];
+        Pool& p = sc.canal.pools[static_cast<std::size_t>(i)];
         reader.CheckKeys(*t, where, {"target_depth_m", "structure", "offtake"});
         p.target_depth_m =
             reader.Number(*t, "target_depth_m", where, p.target_depth_m, 1e-3, 100.0);
@@ -204,7 +204,8 @@ Scenario ReadScenario(ConfigReader& reader, const Canal& full) {
         const bool owned = c.actuator_pool.empty()
                                ? e.input.kind == InputRef::Kind::kUpstream
                                : e.input.kind == InputRef::Kind::kStructure &&
-                                     sc.canal.pools[e.input.pool].name == c.actuator_pool;
+                                     sc.canal.pools[static_cast<std::size_t>(e.input.pool)].name ==
+                                         c.actuator_pool;
         if (owned) {
           reader.Problem(t->source(), "'" + where + ".target' = \"" + target +
                                           "\" is the pump of level control " + c.name +

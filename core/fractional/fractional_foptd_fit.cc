@@ -88,7 +88,7 @@ FractionalFoptdFitResult FitFractionalFoptd(const Eigen::Ref<const Eigen::Vector
         "FitFractionalFoptd: sample_time_s = " + std::to_string(sample_time_s) + " must be > 0");
   }
   const double ts = sample_time_s;
-  const double record_s = n * ts;
+  const double record_s = static_cast<double>(n) * ts;
 
   // Deviations from the initial rest point.
   FractionalFoptdFitResult result;
@@ -143,7 +143,7 @@ FractionalFoptdFitResult FitFractionalFoptd(const Eigen::Ref<const Eigen::Vector
     for (Eigen::Index j = k; j < k + 5 && beyond; ++j) beyond = std::abs(smoothed(j)) > threshold;
     if (beyond) {
       // y[k] is the first output past the threshold; the response started before it.
-      delay = std::max(0.0, (k - 1 - first_change) * ts);
+      delay = std::max(0.0, static_cast<double>(k - 1 - first_change) * ts);
       break;
     }
   }

@@ -202,7 +202,7 @@ Eigen::VectorXd SimulateFractionalFoptd(const FractionalFoptdParams& params,
     OustaloupOptions band = options.oustaloup;
     if (!(band.low_frequency_rad_s > 0.0)) {
       const double spd = band.sections_per_decade;
-      band = DefaultOustaloupOptions(params, sample_time_s, n * sample_time_s);
+      band = DefaultOustaloupOptions(params, sample_time_s, static_cast<double>(n) * sample_time_s);
       if (spd > 0.0) band.sections_per_decade = spd;
     }
     OustaloupFoptdSimulator sim(params, sample_time_s, band);

@@ -86,7 +86,7 @@ IntegratorWaveFit FitIntegratorWave(const Eigen::Ref<const Eigen::VectorXd>& inp
   result.input_offset = input(0);
   const double y_first = output(0);
   const Eigen::VectorXd dy = output.array() - y_first;
-  const double record_s = n * ts;
+  const double record_s = static_cast<double>(n) * ts;
   const double max_delay =
       options.max_delay_s > 0.0 ? options.max_delay_s : std::min(0.25 * record_s, 100.0 * ts);
 

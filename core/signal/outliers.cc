@@ -48,7 +48,7 @@ OutlierResult RemoveOutliers(const Eigen::Ref<const Eigen::VectorXd>& x,
   OutlierResult result;
   std::vector<bool> flagged(static_cast<std::size_t>(n), false);
   std::vector<double> window;
-  window.reserve(static_cast<std::size_t>(2 * options.half_window + 1));
+  window.reserve(2 * static_cast<std::size_t>(options.half_window) + 1);
   for (Eigen::Index i = 0; i < n; ++i) {
     const Eigen::Index lo = std::max<Eigen::Index>(0, i - options.half_window);
     const Eigen::Index hi = std::min<Eigen::Index>(n - 1, i + options.half_window);

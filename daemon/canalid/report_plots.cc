@@ -209,7 +209,8 @@ void ModelPlots(PlotWriter& w, const ModelAnalysis& m, std::size_t index, const 
   const Eigen::Index lags = m.autocorrelation.size();
   std::ostringstream acf;
   acf << "set xlabel " << Quote("lag (samples of " + Number(sample_time_s) + " s)")
-      << "\nset ylabel 'autocorrelation'\nset xrange [-0.5:" << Number(lags - 0.5) << "]\n"
+      << "\nset ylabel 'autocorrelation'\nset xrange [-0.5:"
+      << Number(static_cast<double>(lags) - 0.5) << "]\n"
       << "set yrange [-1.05:1.05]\nplot "
       << w.Data("acf_" + m.kind, {"lag", "r"},
                 {Eigen::VectorXd::LinSpaced(lags, 0.0, static_cast<double>(lags - 1)),

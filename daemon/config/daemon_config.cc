@@ -218,9 +218,10 @@ void ValidateChannels(const DaemonConfig& c, Collector& out) {
         return;
       }
       std::array<uint16_t, 2> registers{};
-      if (scaling_ok &&
-          EncodeChannel(scaling, value, std::span(registers.data(), RegisterCount(ch.type))) !=
-              ScalingError::kNone) {
+      if (scaling_ok && EncodeChannel(scaling, value,
+                                      std::span(registers.data(), static_cast<std::size_t>(
+                                                                      RegisterCount(ch.type)))) !=
+                            ScalingError::kNone) {
         out.Add(at + key, Num(value) + " does not fit register type " + Quoted(EnumName(ch.type)) +
                               " with this scale and offset");
       }

@@ -187,8 +187,11 @@ CsvTable CsvTable::FromColumns(const std::string& source, const std::vector<std:
   for (Eigen::Index r = 1; r < rows; ++r) {
     const std::string problem =
         TimeProblem(t(0), t(r - 1), t(r), static_cast<std::size_t>(r + 1), table.sample_time_s_);
-    if (!problem.empty())
-      throw CsvError(source + ": row " + std::to_string(r + 1) + ": " + problem);
+    if (!problem.empty()) {
+      std::string message = source + ": row " + std::to_string(r + 1) + ": ";
+      message += problem;
+      throw CsvError(message);
+    }
   }
   return table;
 }

@@ -96,7 +96,8 @@ int LcmBus::UsableFileno() noexcept {
     // socket in use each time (one setsockopt per call).
     timeval timeout{};
     timeout.tv_sec = static_cast<time_t>(kTcpqReceiveTimeoutS);
-    timeout.tv_usec = static_cast<suseconds_t>((kTcpqReceiveTimeoutS - timeout.tv_sec) * 1e6);
+    timeout.tv_usec = static_cast<suseconds_t>(
+        (kTcpqReceiveTimeoutS - static_cast<double>(timeout.tv_sec)) * 1e6);
     ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof timeout);
   }
   return fd;

@@ -77,12 +77,13 @@ PlcStatus FakePlcPort::WriteRegisters(int address, std::span<const uint16_t> val
 
 void FakePlcPort::SetRegister(RegisterKind kind, int address, uint16_t value) {
   std::lock_guard lock(mutex_);
-  (kind == RegisterKind::kHolding ? holding_ : input_).at(address) = value;
+  (kind == RegisterKind::kHolding ? holding_ : input_).at(static_cast<std::size_t>(address)) =
+      value;
 }
 
 uint16_t FakePlcPort::GetRegister(RegisterKind kind, int address) const {
   std::lock_guard lock(mutex_);
-  return (kind == RegisterKind::kHolding ? holding_ : input_).at(address);
+  return (kind == RegisterKind::kHolding ? holding_ : input_).at(static_cast<std::size_t>(address));
 }
 
 void FakePlcPort::FailNextRequest(const PlcStatus& status) {

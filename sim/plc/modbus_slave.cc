@@ -180,7 +180,8 @@ bool ModbusSlave::Answer(Client* client) {
       return;
     }
     for (int i = 0; i < n; ++i) {
-      holding[address + i] = static_cast<std::uint16_t>(Word(pdu + values + 2 * i));
+      holding[static_cast<std::size_t>(address + i)] =
+          static_cast<std::uint16_t>(Word(pdu + values + 2 * i));
     }
     first = address;
     count = n;
@@ -199,8 +200,8 @@ bool ModbusSlave::Answer(Client* client) {
     if (address < size) {
       const int and_mask = Word(pdu + 3);
       const int or_mask = Word(pdu + 5);
-      holding[address] = static_cast<std::uint16_t>((holding[address] & and_mask) |
-                                                    (or_mask & ~and_mask & 0xFFFF));
+      holding[static_cast<std::size_t>(address)] = static_cast<std::uint16_t>(
+          (holding[static_cast<std::size_t>(address)] & and_mask) | (or_mask & ~and_mask & 0xFFFF));
       first = address;
       count = 1;
       wrote = true;

@@ -16,7 +16,7 @@ constexpr double kMaxAddress = 65535.0;
 
 // Range of setpoints that no sensible command leaves, for a pool of `canal`.
 void DefaultLimits(const Canal& canal, int index, PoolPlcConfig* p) {
-  const Pool& pool = canal.pools.at(index);
+  const Pool& pool = canal.pools.at(static_cast<std::size_t>(index));
   const double big_flow_m3s = 5.0 * std::max(canal.upstream.flow_m3s, 1.0);
   p->name = pool.name;
   p->pool = index;

@@ -46,17 +46,18 @@ double PlcLogic::Clamp(double value, double lo, double hi) {
 }
 
 double PlcLogic::SetStructureSetpoint(int record, double value) {
-  const PoolPlcConfig& p = config_.pools.at(record);
-  if (heartbeat_lost_) return structure_setpoint_[record];
-  structure_setpoint_[record] = Clamp(value, p.setpoint_min, p.setpoint_max);
-  return structure_setpoint_[record];
+  const PoolPlcConfig& p = config_.pools.at(static_cast<std::size_t>(record));
+  if (heartbeat_lost_) return structure_setpoint_[static_cast<std::size_t>(record)];
+  structure_setpoint_[static_cast<std::size_t>(record)] =
+      Clamp(value, p.setpoint_min, p.setpoint_max);
+  return structure_setpoint_[static_cast<std::size_t>(record)];
 }
 
 double PlcLogic::SetOfftakeSetpoint(int record, double value) {
-  const PoolPlcConfig& p = config_.pools.at(record);
-  if (heartbeat_lost_) return offtake_setpoint_[record];
-  offtake_setpoint_[record] = Clamp(value, p.offtake_min, p.offtake_max);
-  return offtake_setpoint_[record];
+  const PoolPlcConfig& p = config_.pools.at(static_cast<std::size_t>(record));
+  if (heartbeat_lost_) return offtake_setpoint_[static_cast<std::size_t>(record)];
+  offtake_setpoint_[static_cast<std::size_t>(record)] = Clamp(value, p.offtake_min, p.offtake_max);
+  return offtake_setpoint_[static_cast<std::size_t>(record)];
 }
 
 double PlcLogic::SetUpstreamSetpoint(double value_m3s) {
@@ -89,8 +90,10 @@ void PlcLogic::Advance(double now_s) {
     RestoreNominal();
   }
   for (int i = 0; i < num_records(); ++i) {
-    structure_setting_[i] =
-        Toward(structure_setting_[i], structure_setpoint_[i], config_.pools[i].rate_per_s, dt_s);
+    structure_setting_[static_cast<std::size_t>(i)] =
+        Toward(structure_setting_[static_cast<std::size_t>(i)],
+               structure_setpoint_[static_cast<std::size_t>(i)],
+               config_.pools[static_cast<std::size_t>(i)].rate_per_s, dt_s);
   }
   upstream_flow_ =
       Toward(upstream_flow_, upstream_setpoint_, config_.upstream_rate_m3s_per_s, dt_s);
@@ -98,7 +101,9 @@ void PlcLogic::Advance(double now_s) {
 
 bool PlcLogic::moving() const {
   for (int i = 0; i < num_records(); ++i) {
-    if (structure_setting_[i] != structure_setpoint_[i]) return true;
+    if (structure_setting_[static_cast<std::size_t>(i)] !=
+        structure_setpoint_[static_cast<std::size_t>(i)])
+      return true;
   }
   return false;
 }

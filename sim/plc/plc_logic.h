@@ -33,12 +33,20 @@ class PlcLogic final {
   void Advance(double now_s);
 
   int num_records() const { return static_cast<int>(structure_setpoint_.size()); }
-  double structure_setpoint(int record) const { return structure_setpoint_.at(record); }
-  double structure_setting(int record) const { return structure_setting_.at(record); }
-  double offtake_setpoint(int record) const { return offtake_setpoint_.at(record); }
+  double structure_setpoint(int record) const {
+    return structure_setpoint_.at(static_cast<std::size_t>(record));
+  }
+  double structure_setting(int record) const {
+    return structure_setting_.at(static_cast<std::size_t>(record));
+  }
+  double offtake_setpoint(int record) const {
+    return offtake_setpoint_.at(static_cast<std::size_t>(record));
+  }
   double upstream_setpoint_m3s() const { return upstream_setpoint_; }
   double upstream_flow_m3s() const { return upstream_flow_; }
-  double nominal_structure(int record) const { return nominal_structure_.at(record); }
+  double nominal_structure(int record) const {
+    return nominal_structure_.at(static_cast<std::size_t>(record));
+  }
   bool heartbeat_lost() const { return heartbeat_lost_; }
   std::uint16_t heartbeat() const { return heartbeat_; }
   /// True if the last Set*Setpoint call had to clamp its value.

@@ -38,8 +38,8 @@ PlcSimulation::PlcSimulation(const Canal& canal, const PlcConfig& config, bool l
       logic_(config_, NominalStructures(plant_, config_), NominalOfftakes(plant_, config_),
              plant_.upstream(), plant_.time_s()),
       lockstep_(lockstep),
-      input_(InputRegisterCount(config_), 0),
-      holding_(HoldingRegisterCount(config_), 0),
+      input_(static_cast<std::size_t>(InputRegisterCount(config_)), 0),
+      holding_(static_cast<std::size_t>(HoldingRegisterCount(config_)), 0),
       stuck_upstream_m_(config_.pools.size(), 0.0),
       stuck_downstream_m_(config_.pools.size(), 0.0) {
   for (const PoolPlcConfig& p : config_.pools) {
@@ -60,7 +60,7 @@ void PlcSimulation::Step() {
   // moves its actuators to where they are at t_next first.
   logic_.Advance(t_next_s);
   for (int r = 0; r < logic_.num_records(); ++r) {
-    const int pool = config_.pools[r].pool;
+    const int pool = config_.pools[static_cast<std::size_t>(r)].pool;
     plant_.SetStructureSetting(pool, logic_.structure_setting(r));
     plant_.SetOfftakeSetting(pool, logic_.offtake_setpoint(r));
   }
@@ -100,7 +100,9 @@ void PlcSimulation::OnHoldingWrite(int first, int count) {
     }
   }
   for (int r = 0; r < logic_.num_records(); ++r) {
-    const Pool& pool = plant_.canal().pools[config_.pools[r].pool];
+    const Pool& pool =
+        plant_.canal()
+            .pools[static_cast<std::size_t>(config_.pools[static_cast<std::size_t>(r)].pool)];
     const double su = StructureUnit(config_, pool.structure.type);
     const double ou = OfftakeUnit(config_, pool.offtake.type);
     const int ss = HoldingScaledAddress(config_, r, kStructureSetpoint);
@@ -108,7 +110,8 @@ void PlcSimulation::OnHoldingWrite(int first, int count) {
     const int sf = HoldingFloatAddress(config_, r, kStructureSetpoint);
     const int of = HoldingFloatAddress(config_, r, kOfftakeSetpoint);
     if (Touches(first, count, ss, 1)) {
-      logic_.SetStructureSetpoint(r, core::DecodeScaled16(holding_[ss], su));
+      logic_.SetStructureSetpoint(r,
+                                  core::DecodeScaled16(holding_[static_cast<std::size_t>(ss)], su));
       any_setpoint = true;
     }
     if (Touches(first, count, sf, 2)) {
@@ -116,7 +119,8 @@ void PlcSimulation::OnHoldingWrite(int first, int count) {
       any_setpoint = true;
     }
     if (Touches(first, count, os, 1)) {
-      logic_.SetOfftakeSetpoint(r, core::DecodeScaled16(holding_[os], ou));
+      logic_.SetOfftakeSetpoint(r,
+                                core::DecodeScaled16(holding_[static_cast<std::size_t>(os)], ou));
       any_setpoint = true;
     }
     if (Touches(first, count, of, 2)) {
@@ -132,8 +136,10 @@ void PlcSimulation::OnHoldingWrite(int first, int count) {
       const bool is = (mask >> r) & 1u;
       if (is && !was) {
         // The sensor freezes at the reading it gives now.
-        stuck_upstream_m_[r] = plant_.UpstreamDepth(config_.pools[r].pool);
-        stuck_downstream_m_[r] = plant_.DownstreamDepth(config_.pools[r].pool);
+        stuck_upstream_m_[static_cast<std::size_t>(r)] =
+            plant_.UpstreamDepth(config_.pools[static_cast<std::size_t>(r)].pool);
+        stuck_downstream_m_[static_cast<std::size_t>(r)] =
+            plant_.DownstreamDepth(config_.pools[static_cast<std::size_t>(r)].pool);
       }
     }
     stuck_mask_ = mask;
@@ -147,13 +153,15 @@ void PlcSimulation::OnHoldingWrite(int first, int count) {
 }
 
 void PlcSimulation::PutInput(int record, int field, double value, double unit) {
-  input_[InputScaledAddress(config_, record, field)] = core::EncodeScaled16(value, unit);
+  input_[static_cast<std::size_t>(InputScaledAddress(config_, record, field))] =
+      core::EncodeScaled16(value, unit);
   core::EncodeFloat32(static_cast<float>(value), config_.word_order,
                       Pair(input_, InputFloatAddress(config_, record, field)));
 }
 
 void PlcSimulation::PutHolding(int record, int field, double value, double unit) {
-  holding_[HoldingScaledAddress(config_, record, field)] = core::EncodeScaled16(value, unit);
+  holding_[static_cast<std::size_t>(HoldingScaledAddress(config_, record, field))] =
+      core::EncodeScaled16(value, unit);
   core::EncodeFloat32(static_cast<float>(value), config_.word_order,
                       Pair(holding_, HoldingFloatAddress(config_, record, field)));
 }
@@ -167,7 +175,9 @@ void PlcSimulation::PublishHoldings() {
   core::EncodeFloat32(static_cast<float>(upstream), config_.word_order,
                       Pair(holding_, kHrUpstreamFloat));
   for (int r = 0; r < logic_.num_records(); ++r) {
-    const Pool& pool = plant_.canal().pools[config_.pools[r].pool];
+    const Pool& pool =
+        plant_.canal()
+            .pools[static_cast<std::size_t>(config_.pools[static_cast<std::size_t>(r)].pool)];
     PutHolding(r, kStructureSetpoint, logic_.structure_setpoint(r),
                StructureUnit(config_, pool.structure.type));
     PutHolding(r, kOfftakeSetpoint, logic_.offtake_setpoint(r),
@@ -177,7 +187,8 @@ void PlcSimulation::PublishHoldings() {
 
 double PlcSimulation::Level(int record, double true_depth_m, bool downstream) const {
   if ((stuck_mask_ >> record) & 1u) {
-    return downstream ? stuck_downstream_m_[record] : stuck_upstream_m_[record];
+    return downstream ? stuck_downstream_m_[static_cast<std::size_t>(record)]
+                      : stuck_upstream_m_[static_cast<std::size_t>(record)];
   }
   if ((holding_[kHrFaultSpikeMask] >> record) & 1u) {
     const int period = holding_[kHrFaultSpikePeriod] == 0 ? 2 : holding_[kHrFaultSpikePeriod];
@@ -213,8 +224,9 @@ void PlcSimulation::PublishInputs() {
   input_[kIrHeartbeat] = logic_.heartbeat();
   input_[kIrOverruns] = static_cast<std::uint16_t>(overruns_ > 65535 ? 65535 : overruns_);
   for (int r = 0; r < logic_.num_records(); ++r) {
-    const int pool = config_.pools[r].pool;
-    const Structure::Type type = plant_.canal().pools[pool].structure.type;
+    const int pool = config_.pools[static_cast<std::size_t>(r)].pool;
+    const Structure::Type type =
+        plant_.canal().pools[static_cast<std::size_t>(pool)].structure.type;
     const double su = StructureUnit(config_, type);
     const double fu = config_.flow_unit_m3s;
     const double lu = config_.level_unit_m;

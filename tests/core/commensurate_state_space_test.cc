@@ -61,7 +61,9 @@ Eigen::VectorXd NaiveSimulation(const CommensurateModel& m, const Eigen::VectorX
     if (alpha == 1.0) {
       w(j) = j == 0 ? 1.0 : (j == 1 ? -1.0 : 0.0);
     } else {
-      w(j) = std::exp(std::lgamma(j - alpha) - std::lgamma(j + 1.0)) / std::tgamma(-alpha);
+      w(j) = std::exp(std::lgamma(static_cast<double>(j) - alpha) -
+                      std::lgamma(static_cast<double>(j) + 1.0)) /
+             std::tgamma(-alpha);
     }
   }
   std::vector<Eigen::VectorXd> x(static_cast<size_t>(steps + 1), Eigen::VectorXd::Zero(n));

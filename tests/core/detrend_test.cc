@@ -23,7 +23,8 @@ TEST(Detrend, MatchesAnIndependentQrLineFit) {
   const Eigen::Index n = 86400;
   Eigen::VectorXd x(n);
   for (Eigen::Index k = 0; k < n; ++k) {
-    x(k) = 1.7 - 2e-6 * static_cast<double>(k) + 0.05 * std::sin(0.001 * k) + noise(rng);
+    x(k) = 1.7 - 2e-6 * static_cast<double>(k) + 0.05 * std::sin(0.001 * static_cast<double>(k)) +
+           noise(rng);
   }
   Eigen::MatrixXd design(n, 2);
   design.col(0).setOnes();

@@ -82,7 +82,8 @@ TEST(Experiment, RunsSettleExciteIdentifyDoneWithThePrbsOfTheDesign) {
   // Exactly the designed signal, one value per recorded sample.
   const Eigen::VectorXd expected = GeneratePrbs(run.plan.prbs, 45);
   ASSERT_EQ(written.size(), 45U);
-  for (int k = 0; k < 45; ++k) EXPECT_DOUBLE_EQ(written[k], expected(k)) << k;
+  for (int k = 0; k < 45; ++k)
+    EXPECT_DOUBLE_EQ(written[static_cast<std::size_t>(k)], expected(k)) << k;
   run.Apply(Event(ExperimentEventKind::kIdentificationSucceeded));
   EXPECT_EQ(run.state.phase, ExperimentPhase::kDone);
 }

@@ -30,7 +30,8 @@ Eigen::VectorXd StepSuperposition(const IntegratorWaveModel& m, const Eigen::Vec
   for (Eigen::Index j = 0; j < u.size(); ++j) {
     const double jump = u(j) - (j > 0 ? u(j - 1) : 0.0);
     if (jump == 0.0) continue;
-    for (Eigen::Index k = j + 1; k < u.size(); ++k) y(k) += jump * StepResponse(m, (k - j) * ts);
+    for (Eigen::Index k = j + 1; k < u.size(); ++k)
+      y(k) += jump * StepResponse(m, static_cast<double>(k - j) * ts);
   }
   return y;
 }

@@ -132,7 +132,7 @@ TEST(LpvModelTest, FractionalLocalModelsAndMaePerOperatingPoint) {
   ASSERT_EQ(arx.points.size(), 5u);
   for (size_t i = 0; i < 5; ++i) {
     EXPECT_LT(frac.points[i].lpv_mae, arx.points[i].lpv_mae) << "operating point " << i;
-    EXPECT_LT(frac.points[i].local_mae, 0.01 * 10.0 * Poly(gain, 1.0 + i));
+    EXPECT_LT(frac.points[i].local_mae, 0.01 * 10.0 * Poly(gain, 1.0 + static_cast<double>(i)));
   }
 }
 

@@ -30,7 +30,7 @@ TEST(ProcessModels, FoptdStepMatchesClosedFormWithSubSampleDelay) {
   for (const auto& m : {model, shifted}) {
     const Eigen::VectorXd y = Simulate(m, u, ts);
     for (Eigen::Index k = 0; k < u.size(); k += 7) {
-      EXPECT_NEAR(y(k), FoptdStep(m.gain, m.time_constant_s, m.delay_s, k * ts), 1e-12)
+      EXPECT_NEAR(y(k), FoptdStep(m.gain, m.time_constant_s, m.delay_s, static_cast<double>(k) * ts), 1e-12)
           << "k=" << k;
     }
   }
@@ -43,7 +43,7 @@ TEST(ProcessModels, SoptdStepMatchesClosedFormIncludingEqualTimeConstants) {
     const Eigen::VectorXd y = Simulate(m, u, ts);
     for (Eigen::Index k = 0; k < u.size(); k += 3) {
       EXPECT_NEAR(
-          y(k), SoptdStep(m.gain, m.time_constants_s[0], m.time_constants_s[1], m.delay_s, k * ts),
+          y(k), SoptdStep(m.gain, m.time_constants_s[0], m.time_constants_s[1], m.delay_s, static_cast<double>(k) * ts),
           1e-12)
           << "k=" << k;
     }

@@ -151,7 +151,8 @@ std::string JsonNumbersDiffer(const nlohmann::json& expected, const nlohmann::js
       const std::string key =
           expected.is_object() ? it.key() : std::to_string(it - expected.begin());
       const nlohmann::json& other =
-          expected.is_object() ? actual.at(it.key()) : actual.at(it - expected.begin());
+          expected.is_object() ? actual.at(it.key())
+                               : actual.at(static_cast<std::size_t>(it - expected.begin()));
       const std::string d = JsonNumbersDiffer(*it, other, relative, at + "/" + key);
       if (!d.empty()) return d;
     }
@@ -303,7 +304,9 @@ LcmRecord ReadLcmLog(const fs::path& path) {
       canalid::health_t m;
       if (m.decode(e->data, 0, e->datalen) != e->datalen) continue;
       auto& counters = record.last_health[m.component];
-      for (int i = 0; i < m.num_counters; ++i) counters[m.counter_names[i]] = m.counter_values[i];
+      for (int i = 0; i < m.num_counters; ++i)
+        counters[m.counter_names[static_cast<std::size_t>(i)]] =
+            m.counter_values[static_cast<std::size_t>(i)];
     }
   }
   return record;
@@ -382,8 +385,9 @@ std::vector<double> ChannelValues(const std::vector<canalid::sample_t>& samples,
   std::vector<double> values;
   for (const canalid::sample_t& m : samples) {
     for (int c = 0; c < m.num_channels; ++c) {
-      if (m.channel_names[c] == name && m.quality[c] == canalid::sample_t::QUALITY_VALID)
-        values.push_back(m.values[c]);
+      if (m.channel_names[static_cast<std::size_t>(c)] == name &&
+          m.quality[static_cast<std::size_t>(c)] == canalid::sample_t::QUALITY_VALID)
+        values.push_back(m.values[static_cast<std::size_t>(c)]);
     }
   }
   return values;
@@ -593,8 +597,8 @@ TEST(DaemonCanalsim, ExceptionRepliesAndSpikesAreCountedNotFatal) {
     const canalid::sample_t& m = record.samples[i];
     if (m.status == canalid::sample_t::STATUS_OK) ++ok_after;
     for (int c = 0; c < m.num_channels; ++c) {
-      if (m.channel_names[c] == "pool2_level" &&
-          m.quality[c] == canalid::sample_t::QUALITY_OUT_OF_RANGE) {
+      if (m.channel_names[static_cast<std::size_t>(c)] == "pool2_level" &&
+          m.quality[static_cast<std::size_t>(c)] == canalid::sample_t::QUALITY_OUT_OF_RANGE) {
         ++out_of_range;
       }
     }
@@ -768,8 +772,9 @@ double MeanValue(const std::vector<canalid::sample_t>& samples, const std::strin
   int n = 0;
   for (const canalid::sample_t& m : samples) {
     for (int c = 0; c < m.num_channels; ++c) {
-      if (m.channel_names[c] == name && m.quality[c] == canalid::sample_t::QUALITY_VALID) {
-        sum += m.values[c];
+      if (m.channel_names[static_cast<std::size_t>(c)] == name &&
+          m.quality[static_cast<std::size_t>(c)] == canalid::sample_t::QUALITY_VALID) {
+        sum += m.values[static_cast<std::size_t>(c)];
         ++n;
       }
     }

@@ -57,7 +57,7 @@ TEST_F(KeyFileTest, SixtyFourHexDigitsWithOrWithoutANewline) {
 }
 
 TEST_F(KeyFileTest, RefusesGroupOrOtherAccess) {
-  for (mode_t mode : {0640, 0620, 0604, 0602, 0644, 0666}) {
+  for (mode_t mode : {0640u, 0620u, 0604u, 0602u, 0644u, 0666u}) {
     const auto path = Write(kHex, mode);
     const std::string why = Refusal(path);
     EXPECT_NE(why.find(path.string()), std::string::npos) << why;

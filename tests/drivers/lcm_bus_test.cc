@@ -91,7 +91,8 @@ TEST_P(BusContract, TypedRoundTripOfEveryMessageType) {
   }
   EXPECT_EQ(bus_->Handle(0.0), 0) << "the unmatched channel reaches no handler";
   ASSERT_EQ(samples.size(), 50u);
-  for (int64_t i = 0; i < 50; ++i) testing::ExpectEqual(testing::MakeSample(i), samples[i]);
+  for (int64_t i = 0; i < 50; ++i)
+    testing::ExpectEqual(testing::MakeSample(i), samples[static_cast<std::size_t>(i)]);
   testing::ExpectEqual(testing::MakeModel(), model);
   testing::ExpectEqual(testing::MakeExperiment(), experiment);
   testing::ExpectEqual(testing::MakeHealth(), health);

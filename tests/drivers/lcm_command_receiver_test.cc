@@ -139,7 +139,8 @@ std::vector<uint8_t> Encode(const canalid::command_t& message) {
 
 void PutI32(std::vector<uint8_t>& bytes, std::size_t at, int32_t value) {
   const auto bits = static_cast<uint32_t>(value);
-  for (int i = 0; i < 4; ++i) bytes[at + static_cast<std::size_t>(i)] = bits >> (24 - 8 * i);
+  for (int i = 0; i < 4; ++i)
+    bytes[at + static_cast<std::size_t>(i)] = static_cast<uint8_t>(bits >> (24 - 8 * i));
 }
 
 // A 60-byte message as in the issue: a command_t with short strings, no MAC bytes and

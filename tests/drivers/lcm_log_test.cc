@@ -95,7 +95,8 @@ TEST(LcmLog, FileUrlReplaysTheLogThroughTheBus) {
     if (bus.Handle(2.0) <= 0) break;
   }
   ASSERT_EQ(samples.size(), 3u);
-  for (int64_t i = 0; i < 3; ++i) testing::ExpectEqual(testing::MakeSample(i), samples[i]);
+  for (int64_t i = 0; i < 3; ++i)
+    testing::ExpectEqual(testing::MakeSample(i), samples[static_cast<std::size_t>(i)]);
   EXPECT_EQ(seen["CANALID_COMMAND"], 1);
   EXPECT_EQ(bus.handler_failures(), 0);
 }

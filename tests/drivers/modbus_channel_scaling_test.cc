@@ -89,7 +89,7 @@ TEST(ChannelScaling, RoundTripsEveryTypeAndWordOrder) {
       for (int i = 0; i < 200; ++i) raws.push_back(std::round(uniform(rng)));
       for (double raw : raws) {
         const double value = raw * 0.001 + 100.0;
-        std::vector<uint16_t> regs(RegisterCount(type));
+        std::vector<uint16_t> regs(static_cast<std::size_t>(RegisterCount(type)));
         ASSERT_EQ(EncodeChannel(s, value, regs), ScalingError::kNone) << raw;
         EXPECT_EQ(RawFromRegisters(type, order, regs),
                   type == RegisterType::kF32 ? static_cast<float>(raw) : raw);

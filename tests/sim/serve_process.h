@@ -93,14 +93,14 @@ class Master {
   }
   /// Input registers [address, address + n); fails the test (and returns zeros) on an error.
   std::vector<std::uint16_t> Inputs(int address, int n) {
-    std::vector<std::uint16_t> r(n, 0);
+    std::vector<std::uint16_t> r(static_cast<std::size_t>(n), 0);
     const int rc = modbus_read_input_registers(ctx_, address, n, r.data());
     EXPECT_EQ(rc, n) << "read input " << address << ": " << modbus_strerror(errno);
     return r;
   }
   std::uint16_t Input(int address) { return Inputs(address, 1)[0]; }
   std::vector<std::uint16_t> Holdings(int address, int n) {
-    std::vector<std::uint16_t> r(n, 0);
+    std::vector<std::uint16_t> r(static_cast<std::size_t>(n), 0);
     const int rc = modbus_read_registers(ctx_, address, n, r.data());
     EXPECT_EQ(rc, n) << "read holding " << address << ": " << modbus_strerror(errno);
     return r;
@@ -119,7 +119,7 @@ class Master {
   void Step(int n) { Write(1, static_cast<std::uint16_t>(n)); }
   /// A read that may fail: returns errno (0 on success).
   int TryReadInputs(int address, int n) {
-    std::vector<std::uint16_t> r(n, 0);
+    std::vector<std::uint16_t> r(static_cast<std::size_t>(n), 0);
     return modbus_read_input_registers(ctx_, address, n, r.data()) == n ? 0 : errno;
   }
   modbus_t* ctx() { return ctx_; }
