@@ -37,7 +37,7 @@ void FractionalFoptdPlant::Advance(const Eigen::Ref<const Eigen::VectorXd>& inpu
   simulator_.Advance(inputs(0) - initial_input_);
 }
 
-IdLevelPlant::IdLevelPlant(const core::IntegratorDelayModel& model, double p21_s_per_m2,
+IntegratorDelayLevelPlant::IntegratorDelayLevelPlant(const core::IntegratorDelayModel& model, double p21_s_per_m2,
                            double offset_m, double drift_m_per_sample, int fit_from_sample,
                            double initial_inflow_m3s)
     : model_(model),
@@ -47,26 +47,26 @@ IdLevelPlant::IdLevelPlant(const core::IntegratorDelayModel& model, double p21_s
       k0_(fit_from_sample),
       previous_outflow_m3s_(initial_inflow_m3s) {
   if (model.nk < 0) {
-    throw std::invalid_argument("IdLevelPlant: nk = " + std::to_string(model.nk) +
+    throw std::invalid_argument("IntegratorDelayLevelPlant: nk = " + std::to_string(model.nk) +
                                 ", must be >= 0");
   }
   if (!(model.sample_time_s > 0.0) || !std::isfinite(model.b)) {
     throw std::invalid_argument(
-        "IdLevelPlant: sample_time_s = " + std::to_string(model.sample_time_s) +
+        "IntegratorDelayLevelPlant: sample_time_s = " + std::to_string(model.sample_time_s) +
         " (must be > 0), b = " + std::to_string(model.b) + " (must be finite)");
   }
   if (fit_from_sample < 0) {
     throw std::invalid_argument(
-        "IdLevelPlant: fit_from_sample = " + std::to_string(fit_from_sample) + ", must be >= 0");
+        "IntegratorDelayLevelPlant: fit_from_sample = " + std::to_string(fit_from_sample) + ", must be >= 0");
   }
   inflow_history_ = Eigen::VectorXd::Constant(model.nk, initial_inflow_m3s);
 }
 
-double IdLevelPlant::DelayedInflow(double inflow_now) const {
+double IntegratorDelayLevelPlant::DelayedInflow(double inflow_now) const {
   return model_.nk == 0 ? inflow_now : inflow_history_(head_);
 }
 
-double IdLevelPlant::Output(const Eigen::Ref<const Eigen::VectorXd>& inputs) const {
+double IntegratorDelayLevelPlant::Output(const Eigen::Ref<const Eigen::VectorXd>& inputs) const {
   RequireInputs(inputs, 2);
   const double delayed = DelayedInflow(inputs(0));
   const double integrated =
@@ -75,7 +75,7 @@ double IdLevelPlant::Output(const Eigen::Ref<const Eigen::VectorXd>& inputs) con
          drift_m_per_sample_ * static_cast<double>(sample_ - k0_);
 }
 
-void IdLevelPlant::Advance(const Eigen::Ref<const Eigen::VectorXd>& inputs) {
+void IntegratorDelayLevelPlant::Advance(const Eigen::Ref<const Eigen::VectorXd>& inputs) {
   RequireInputs(inputs, 2);
   const double delayed = DelayedInflow(inputs(0));
   if (sample_ >= k0_) integrated_m3s_ += delayed - previous_outflow_m3s_;

@@ -54,10 +54,10 @@ class FractionalFoptdPlant final : public SampledPlant {
 ///   y(k) = b Q(k) + p21 q_in(k - nk) + c + d (k - k0),
 /// with inputs (q_in, q_out) in m^3/s and y in m.  The plant's sample 0 is the model's sample 0;
 /// inflows before it are `initial_inflow_m3s` (at rest).  Outputs before k0 have Q = 0.
-class IdLevelPlant final : public SampledPlant {
+class IntegratorDelayLevelPlant final : public SampledPlant {
  public:
   /// @throws std::invalid_argument unless nk >= 0, Ts > 0, b finite, k0 >= 0.
-  IdLevelPlant(const core::IntegratorDelayModel& model, double p21_s_per_m2, double offset_m,
+  IntegratorDelayLevelPlant(const core::IntegratorDelayModel& model, double p21_s_per_m2, double offset_m,
                double drift_m_per_sample, int fit_from_sample, double initial_inflow_m3s);
   double sample_time_s() const override { return model_.sample_time_s; }
   int input_count() const override { return 2; }

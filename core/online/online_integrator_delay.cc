@@ -39,39 +39,39 @@ int IntegratorDelaySnapshotFlags(const IntegratorDelaySnapshot& s,
   }
   if (!(s.condition_number <= options.health.condition_max)) flags |= kFlagIllConditioned;
   if (s.health.frozen) flags |= kFlagFrozen;
-  if (CheckIntegratorDelayBounds(s.area_m2, s.delay_samples, options) != IdBoundsViolation::kNone) {
+  if (CheckIntegratorDelayBounds(s.area_m2, s.delay_samples, options) != IntegratorDelayBoundsViolation::kNone) {
     flags |= kFlagOutOfBounds;
   }
   return flags;
 }
 
-IdBoundsViolation CheckIntegratorDelayBounds(double area_m2, int delay_samples,
+IntegratorDelayBoundsViolation CheckIntegratorDelayBounds(double area_m2, int delay_samples,
                                              const OnlineIntegratorDelayOptions& o) {
-  if (!(area_m2 > 0.0 && std::isfinite(area_m2))) return IdBoundsViolation::kArea;
+  if (!(area_m2 > 0.0 && std::isfinite(area_m2))) return IntegratorDelayBoundsViolation::kArea;
   if (delay_samples < o.min_delay_samples || delay_samples > o.max_delay_samples) {
-    return IdBoundsViolation::kOutsideBank;
+    return IntegratorDelayBoundsViolation::kOutsideBank;
   }
   if (delay_samples == o.max_delay_samples ||
       (delay_samples == o.min_delay_samples && o.min_delay_samples > 0)) {
-    return IdBoundsViolation::kAtBankEdge;
+    return IntegratorDelayBoundsViolation::kAtBankEdge;
   }
-  return IdBoundsViolation::kNone;
+  return IntegratorDelayBoundsViolation::kNone;
 }
 
 std::string IntegratorDelayBoundsProblem(double area_m2, int delay_samples,
                                          const OnlineIntegratorDelayOptions& o) {
   std::ostringstream m;
   switch (CheckIntegratorDelayBounds(area_m2, delay_samples, o)) {
-    case IdBoundsViolation::kNone:
+    case IntegratorDelayBoundsViolation::kNone:
       break;
-    case IdBoundsViolation::kArea:
+    case IntegratorDelayBoundsViolation::kArea:
       m << "area_m2 " << area_m2 << " is not > 0 and finite";
       break;
-    case IdBoundsViolation::kOutsideBank:
+    case IntegratorDelayBoundsViolation::kOutsideBank:
       m << "delay " << delay_samples << " samples is outside the bank [" << o.min_delay_samples
         << ", " << o.max_delay_samples << "]";
       break;
-    case IdBoundsViolation::kAtBankEdge:
+    case IntegratorDelayBoundsViolation::kAtBankEdge:
       m << "delay " << delay_samples << " samples is at the edge of the bank ["
         << o.min_delay_samples << ", " << o.max_delay_samples
         << "]: the true delay may lie outside it";

@@ -206,7 +206,7 @@ nlohmann::json OnlineId(const IdentifyOptions& options, const drivers::CsvTable&
                        std::to_string(id.closed_loop_window_samples) + " samples";
   }
   // The online ID model's keys, then what this command adds; "estimator" names the method used.
-  nlohmann::json model = drivers::OnlineIdJson(s, ts);
+  nlohmann::json model = drivers::OnlineIntegratorDelayJson(s, ts);
   model["p22_s_per_m2"] = id.outflow_direct_gain_s_per_m2;
   model["closed_loop"] = bank_health.closed_loop;
   model["closed_loop_reason"] = reason;

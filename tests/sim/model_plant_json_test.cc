@@ -477,7 +477,7 @@ TEST(FractionalFoptdPlant, HandWrittenMinimalModelFollowsTheMittagLefflerStep) {
   EXPECT_LT(worst, 0.001 * 0.372);
 }
 
-TEST(IdLevelPlant, HandWrittenModelWithoutSampleTimeRunsAtThePlants) {
+TEST(IntegratorDelayLevelPlant, HandWrittenModelWithoutSampleTimeRunsAtThePlants) {
   // b and nk only: p21, offset and drift 0, the plant's sample time.  Inflow 1 m3/s above the
   // outflow from sample 0: the level rises by b per sample once the 2-sample delay has passed.
   const nlohmann::json model = {{"model", "id"}, {"b", 0.002}, {"nk", 2}};

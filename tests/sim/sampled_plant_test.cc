@@ -80,11 +80,11 @@ TEST(FractionalFoptdPlant, StartsAtTheOffsetLevelOfItsFirstInput) {
   EXPECT_THROW(plant.Output(Eigen::VectorXd::Zero(2)), std::invalid_argument);
 }
 
-TEST(IdLevelPlant, FollowsTheLevelEquationSummedByHand) {
+TEST(IntegratorDelayLevelPlant, FollowsTheLevelEquationSummedByHand) {
   // nk = 3, k0 = 2, b = Ts / A with A = 30000 m2, p21 = 0.02 s/m2, c = 2.1 m, d = 1e-5 m per
   // sample; inflow steps by 0.8 at sample 4, outflow by 0.5 at sample 6.
   const core::IntegratorDelayModel model{60.0 / 30000.0, 3, 60.0};
-  IdLevelPlant plant(model, 0.02, 2.1, 1e-5, 2, kFlow0);
+  IntegratorDelayLevelPlant plant(model, 0.02, 2.1, 1e-5, 2, kFlow0);
   double q_integrated = 0.0;
   double q_out_previous = kFlow0;
   auto inflow = [](int k) { return k >= 4 ? kFlow0 + kStep : kFlow0; };
@@ -100,12 +100,12 @@ TEST(IdLevelPlant, FollowsTheLevelEquationSummedByHand) {
   }
 }
 
-TEST(IdLevelPlant, ZeroDelayHasDirectFeedthrough) {
+TEST(IntegratorDelayLevelPlant, ZeroDelayHasDirectFeedthrough) {
   const core::IntegratorDelayModel model{0.001, 0, 10.0};
-  IdLevelPlant plant(model, 0.5, 1.0, 0.0, 0, 5.0);
+  IntegratorDelayLevelPlant plant(model, 0.5, 1.0, 0.0, 0, 5.0);
   // Q(0) = q_in(0) - q_out(-1) = 6 - 5: y = 0.001 + 0.5 * 6 + 1.
   EXPECT_NEAR(plant.Output(Eigen::Vector2d(6.0, 5.0)), 0.001 + 3.0 + 1.0, 1e-12);
-  EXPECT_THROW(IdLevelPlant(core::IntegratorDelayModel{0.001, -1, 10.0}, 0.0, 0.0, 0.0, 0, 5.0),
+  EXPECT_THROW(IntegratorDelayLevelPlant(core::IntegratorDelayModel{0.001, -1, 10.0}, 0.0, 0.0, 0.0, 0, 5.0),
                std::invalid_argument);
 }
 
@@ -128,7 +128,7 @@ TEST(ArxPlant, FirstOrderStepIsTheGeometricSeries) {
 TEST(SampledPoolPlant, StepsWholeSamplesOnly) {
   const core::IntegratorDelayModel model{0.002, 2, 60.0};
   auto make = [&] {
-    return SampledPoolPlant(std::make_unique<IdLevelPlant>(model, 0.0, 2.0, 0.0, 0, kFlow0), kFlow0,
+    return SampledPoolPlant(std::make_unique<IntegratorDelayLevelPlant>(model, 0.0, 2.0, 0.0, 0, kFlow0), kFlow0,
                             kFlow0);
   };
   SampledPoolPlant once = make();
