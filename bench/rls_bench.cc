@@ -32,7 +32,7 @@ struct SisoRecord {
 SisoRecord FirstOrderRecord(std::uint64_t seed, double pole, double gain, double noise) {
   SisoRecord r{std::vector<double>(kPool), std::vector<double>(kPool)};
   double x = 0.0;
-  for (int k = 0; k < kPool; ++k) {
+  for (std::size_t k = 0; k < kPool; ++k) {
     r.u[k] = Lcg(seed) > 0 ? 1.0 : -1.0;
     x = pole * x + gain * r.u[k];
     if (noise > 0.0) x += noise * Lcg(seed);
@@ -44,7 +44,7 @@ SisoRecord FirstOrderRecord(std::uint64_t seed, double pole, double gain, double
 // One bank.Update(u, y) per iteration, cycling through the record.
 template <class Bank>
 void RunSisoBank(benchmark::State& state, Bank& bank, const SisoRecord& record) {
-  int k = 0;
+  std::size_t k = 0;
   for (auto _ : state) {
     benchmark::DoNotOptimize(bank.Update(record.u[k], record.y[k]));
     k = (k + 1) & (kPool - 1);

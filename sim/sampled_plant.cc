@@ -37,9 +37,10 @@ void FractionalFoptdPlant::Advance(const Eigen::Ref<const Eigen::VectorXd>& inpu
   simulator_.Advance(inputs(0) - initial_input_);
 }
 
-IntegratorDelayLevelPlant::IntegratorDelayLevelPlant(const core::IntegratorDelayModel& model, double p21_s_per_m2,
-                           double offset_m, double drift_m_per_sample, int fit_from_sample,
-                           double initial_inflow_m3s)
+IntegratorDelayLevelPlant::IntegratorDelayLevelPlant(const core::IntegratorDelayModel& model,
+                                                     double p21_s_per_m2, double offset_m,
+                                                     double drift_m_per_sample, int fit_from_sample,
+                                                     double initial_inflow_m3s)
     : model_(model),
       p21_(p21_s_per_m2),
       offset_m_(offset_m),
@@ -56,8 +57,8 @@ IntegratorDelayLevelPlant::IntegratorDelayLevelPlant(const core::IntegratorDelay
         " (must be > 0), b = " + std::to_string(model.b) + " (must be finite)");
   }
   if (fit_from_sample < 0) {
-    throw std::invalid_argument(
-        "IntegratorDelayLevelPlant: fit_from_sample = " + std::to_string(fit_from_sample) + ", must be >= 0");
+    throw std::invalid_argument("IntegratorDelayLevelPlant: fit_from_sample = " +
+                                std::to_string(fit_from_sample) + ", must be >= 0");
   }
   inflow_history_ = Eigen::VectorXd::Constant(model.nk, initial_inflow_m3s);
 }

@@ -57,8 +57,9 @@ class FractionalFoptdPlant final : public SampledPlant {
 class IntegratorDelayLevelPlant final : public SampledPlant {
  public:
   /// @throws std::invalid_argument unless nk >= 0, Ts > 0, b finite, k0 >= 0.
-  IntegratorDelayLevelPlant(const core::IntegratorDelayModel& model, double p21_s_per_m2, double offset_m,
-               double drift_m_per_sample, int fit_from_sample, double initial_inflow_m3s);
+  IntegratorDelayLevelPlant(const core::IntegratorDelayModel& model, double p21_s_per_m2,
+                            double offset_m, double drift_m_per_sample, int fit_from_sample,
+                            double initial_inflow_m3s);
   double sample_time_s() const override { return model_.sample_time_s; }
   int input_count() const override { return 2; }
   double Output(const Eigen::Ref<const Eigen::VectorXd>& inputs) const override;

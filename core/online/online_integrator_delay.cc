@@ -39,14 +39,15 @@ int IntegratorDelaySnapshotFlags(const IntegratorDelaySnapshot& s,
   }
   if (!(s.condition_number <= options.health.condition_max)) flags |= kFlagIllConditioned;
   if (s.health.frozen) flags |= kFlagFrozen;
-  if (CheckIntegratorDelayBounds(s.area_m2, s.delay_samples, options) != IntegratorDelayBoundsViolation::kNone) {
+  if (CheckIntegratorDelayBounds(s.area_m2, s.delay_samples, options) !=
+      IntegratorDelayBoundsViolation::kNone) {
     flags |= kFlagOutOfBounds;
   }
   return flags;
 }
 
 IntegratorDelayBoundsViolation CheckIntegratorDelayBounds(double area_m2, int delay_samples,
-                                             const OnlineIntegratorDelayOptions& o) {
+                                                          const OnlineIntegratorDelayOptions& o) {
   if (!(area_m2 > 0.0 && std::isfinite(area_m2))) return IntegratorDelayBoundsViolation::kArea;
   if (delay_samples < o.min_delay_samples || delay_samples > o.max_delay_samples) {
     return IntegratorDelayBoundsViolation::kOutsideBank;

@@ -147,9 +147,14 @@ int IntegratorDelaySnapshotFlags(const IntegratorDelaySnapshot& snapshot,
 /// finite or <= 0, nk outside [min, max], or nk at an edge as in kFlagOutOfBounds.  The same rule
 /// flags published models and keeps models from the state.  Pure, no allocation (it runs on every
 /// snapshot).
-enum class IntegratorDelayBoundsViolation : std::uint8_t { kNone, kArea, kOutsideBank, kAtBankEdge };
-IntegratorDelayBoundsViolation CheckIntegratorDelayBounds(double area_m2, int delay_samples,
-                                             const OnlineIntegratorDelayOptions& options);
+enum class IntegratorDelayBoundsViolation : std::uint8_t {
+  kNone,
+  kArea,
+  kOutsideBank,
+  kAtBankEdge
+};
+IntegratorDelayBoundsViolation CheckIntegratorDelayBounds(
+    double area_m2, int delay_samples, const OnlineIntegratorDelayOptions& options);
 /// CheckIntegratorDelayBounds as a sentence for a log line (empty when inside); allocates.
 std::string IntegratorDelayBoundsProblem(double area_m2, int delay_samples,
                                          const OnlineIntegratorDelayOptions& options);

@@ -220,7 +220,8 @@ ReplayModel ReplaySession::OnlineModel(const Reach& reach, double log_time_s) co
   ReplayModel model;
   model.reach = reach.config.name;
   model.log_time_s = log_time_s;
-  model.json = drivers::OnlineIntegratorDelayJson(s, reach.runner->options().pipeline.sample_time_s);
+  model.json =
+      drivers::OnlineIntegratorDelayJson(s, reach.runner->options().pipeline.sample_time_s);
   model.json["samples"] = bank.health().samples;
   model.json["reach"] = reach.config.name;
   return model;

@@ -200,7 +200,8 @@ nlohmann::json ToJson(const core::LpvIdentification& lpv, double sample_time_s) 
           {"metrics_per_band", bands}};
 }
 
-nlohmann::json OnlineIntegratorDelayJson(const core::IntegratorDelaySnapshot& s, double sample_time_s) {
+nlohmann::json OnlineIntegratorDelayJson(const core::IntegratorDelaySnapshot& s,
+                                         double sample_time_s) {
   return {{"model", "id"},
           {"estimator", "online"},
           {"delay_s", s.delay_s},

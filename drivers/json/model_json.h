@@ -43,6 +43,7 @@ nlohmann::json ToJson(const core::LpvIdentification& lpv, double sample_time_s);
 /// A snapshot of the online ID bank in the ID model's keys ("model": "id", delay_s, nk, b,
 /// area_m2, sample_time_s, p21_s_per_m2, offset_m, drift_m_per_s) with its standard deviations,
 /// errors and "estimator": "online".
-nlohmann::json OnlineIntegratorDelayJson(const core::IntegratorDelaySnapshot& snapshot, double sample_time_s);
+nlohmann::json OnlineIntegratorDelayJson(const core::IntegratorDelaySnapshot& snapshot,
+                                         double sample_time_s);
 
 }  // namespace canalid::drivers

@@ -90,8 +90,8 @@ std::unique_ptr<SampledPlant> PlantFromModelJson(
       r.model.sample_time_s = sample_time_s;
     }
     return std::make_unique<IntegratorDelayLevelPlant>(r.model, r.p21_s_per_m2, r.offset_m,
-                                          r.drift_m_per_s * r.model.sample_time_s,
-                                          r.fit_from_sample, initial_inputs(0));
+                                                       r.drift_m_per_s * r.model.sample_time_s,
+                                                       r.fit_from_sample, initial_inputs(0));
   }
   if (kind == "arx") {
     const core::ArxModel arx = drivers::ArxModelFromJson(json, source);

@@ -13,7 +13,8 @@ inline constexpr const char* kModelPlantKinds = "id, arx, foptd, soptd, frac-fop
 
 /// The plant of a `canalid identify` model JSON (read with drivers/json/model_json_read.h), with
 /// the conventions of `canalid simulate`, so the two give the same output on the same input:
-/// - "id": IntegratorDelayLevelPlant, inputs (q_in, q_out), the model's own sample time (the plant's when the
+/// - "id": IntegratorDelayLevelPlant, inputs (q_in, q_out), the model's own sample time (the
+/// plant's when the
 ///   model has none); `initial_inputs(0)`
 ///   is the inflow before sample 0.
 /// - "foptd": FractionalFoptdPlant with alpha = 1 (exact ZOH first order); "frac-foptd": with

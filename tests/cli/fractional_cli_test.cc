@@ -156,7 +156,7 @@ TEST_F(FractionalCli, CompareOverAFolderPrintsSeed2sTable) {
   EXPECT_NE(table.out.find("over 8 files"), std::string::npos) << table.out;
   EXPECT_EQ(rows[1], (std::vector<std::string>{"model", "mean", "max", "std"}));
   std::vector<double> means;
-  for (int r = 2; r < 5; ++r) {
+  for (std::size_t r = 2; r < 5; ++r) {
     ASSERT_EQ(rows[r].size(), 4u) << table.out;
     const double mean = std::stod(rows[r][1]), max = std::stod(rows[r][2]);
     const double sd = std::stod(rows[r][3]);
@@ -185,7 +185,7 @@ TEST_F(FractionalCli, CompareOverAFolderPrintsSeed2sTable) {
     std::vector<double> values;
     for (const auto& f : json["per_file"]) values.push_back(f["norm_error"][kind].get<double>());
     double mean = 0.0, ss = 0.0;
-    for (double v : values) mean += v / values.size();
+    for (double v : values) mean += v / static_cast<double>(values.size());
     for (double v : values) ss += (v - mean) * (v - mean);
     EXPECT_NEAR(json["norm_error"][kind]["mean"].get<double>(), mean, 1e-12 * mean) << kind;
     EXPECT_NEAR(json["norm_error"][kind]["std"].get<double>(), std::sqrt(ss / 7.0), 1e-12) << kind;

@@ -18,13 +18,13 @@ std::string IdCsv(int n) {
   std::ostringstream csv;
   csv.precision(17);
   csv << "time_s,q_in,q_out,level\n";
-  std::vector<double> q_in(n);
+  std::vector<double> q_in(static_cast<std::size_t>(n));
   double y = 2.1, value = 10.0;
-  for (int k = 0; k < n; ++k) {
+  for (std::size_t k = 0; k < q_in.size(); ++k) {
     if (k % 6 == 0) value = 10.0 + ((rng() & 1U) ? 0.8 : -0.8);
     q_in[k] = value;
     if (k > 0) y += 60.0 / 34113.0 * ((k >= 11 ? q_in[k - 11] : q_in[0]) - 10.0);
-    csv << 60.0 * k << "," << q_in[k] << ",10," << y << "\n";
+    csv << 60.0 * static_cast<double>(k) << "," << q_in[k] << ",10," << y << "\n";
   }
   return csv.str();
 }

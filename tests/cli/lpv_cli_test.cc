@@ -48,8 +48,12 @@ TEST_F(LpvCli, RecoversKnownQuadraticParameterLaws) {
   // Noise-free: every local ARX fit is exact and five exact points fix each quadratic, so
   // only rounding separates the coefficients from the truth.
   for (int j = 0; j < 3; ++j) {
-    EXPECT_NEAR(json["coefficients"]["a1"][j].get<double>(), kLpvA1[j], 1e-8) << j;
-    EXPECT_NEAR(json["coefficients"]["b1"][j].get<double>(), kLpvB1[j], 1e-8) << j;
+    EXPECT_NEAR(json["coefficients"]["a1"][static_cast<std::size_t>(j)].get<double>(), kLpvA1[j],
+                1e-8)
+        << j;
+    EXPECT_NEAR(json["coefficients"]["b1"][static_cast<std::size_t>(j)].get<double>(), kLpvB1[j],
+                1e-8)
+        << j;
   }
   EXPECT_NEAR(json["coefficients"]["nk"][0].get<double>(), 0.0, 1e-8);
   EXPECT_NEAR(json["coefficients"]["nk"][2].get<double>(), kLpvNkSamples, 1e-8);

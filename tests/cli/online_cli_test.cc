@@ -140,11 +140,11 @@ TEST(OnlineCli, ArxWithForgettingOneEqualsBatchArx) {
   const auto online = Identify("arx-online", args + " --online --forgetting 1");
   EXPECT_EQ(online["estimator"], "online-ud_directional");
   // P0 = 1e10 against an information matrix of O(1e2..1e5): the prior is far below 1e-6.
-  for (int j = 0; j < 2; ++j) {
+  for (std::size_t j = 0; j < 2; ++j) {
     EXPECT_LT(Rel(online["a"][j].get<double>(), batch["a"][j].get<double>()), 1e-6) << j;
   }
-  for (int i = 0; i < 2; ++i) {
-    for (int j = 0; j < 2; ++j) {
+  for (std::size_t i = 0; i < 2; ++i) {
+    for (std::size_t j = 0; j < 2; ++j) {
       EXPECT_LT(Rel(online["b_coeffs"][i][j].get<double>(), batch["b_coeffs"][i][j].get<double>()),
                 1e-6)
           << i << " " << j;
@@ -152,7 +152,7 @@ TEST(OnlineCli, ArxWithForgettingOneEqualsBatchArx) {
   }
   // With lambda = 1 the innovation variance is the batch SSR / (N - d), so the standard
   // deviations sqrt(sigma2 P_ii) are the batch ones too.
-  for (int j = 0; j < 6; ++j) {
+  for (std::size_t j = 0; j < 6; ++j) {
     EXPECT_LT(
         Rel(online["parameter_std"][j].get<double>(), batch["parameter_std"][j].get<double>()),
         1e-6)

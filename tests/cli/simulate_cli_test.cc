@@ -28,11 +28,11 @@ std::string IdCsv() {
   csv << "time_s,inflow,outflow,h\n";
   std::vector<double> q_in(840);
   double y = 2.1, value = 10.0;
-  for (int k = 0; k < 840; ++k) {
+  for (std::size_t k = 0; k < 840; ++k) {
     if (k % 6 == 0) value = 10.0 + ((rng() & 1U) ? 0.8 : -0.8);
     q_in[k] = value;
     if (k > 0) y += 60.0 / 34113.0 * ((k >= 11 ? q_in[k - 11] : q_in[0]) - 10.0);
-    csv << 60.0 * k << "," << q_in[k] << ",10," << y + noise(rng) << "\n";
+    csv << 60.0 * static_cast<double>(k) << "," << q_in[k] << ",10," << y + noise(rng) << "\n";
   }
   return csv.str();
 }
@@ -45,14 +45,14 @@ std::string ArxCsv() {
   csv.precision(17);
   csv << "time_s,u1,u2,y\n";
   std::vector<double> u1(600), u2(600), y(600, 0.0);
-  for (int t = 0; t < 600; ++t) {
+  for (std::size_t t = 0; t < 600; ++t) {
     u1[t] = (rng() & 1U) ? 1.0 : -1.0;
     u2[t] = (rng() & 1U) ? 0.5 : -0.5;
     if (t >= 2) {
       y[t] = 1.5 * y[t - 1] - 0.7 * y[t - 2] + u1[t - 1] + 0.5 * u1[t - 2] + 0.3 * u2[t - 2] +
              noise(rng);
     }
-    csv << t * 2.0 << "," << u1[t] << "," << u2[t] << "," << y[t] << "\n";
+    csv << static_cast<double>(t) * 2.0 << "," << u1[t] << "," << u2[t] << "," << y[t] << "\n";
   }
   return csv.str();
 }

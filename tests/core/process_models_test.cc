@@ -30,7 +30,8 @@ TEST(ProcessModels, FoptdStepMatchesClosedFormWithSubSampleDelay) {
   for (const auto& m : {model, shifted}) {
     const Eigen::VectorXd y = Simulate(m, u, ts);
     for (Eigen::Index k = 0; k < u.size(); k += 7) {
-      EXPECT_NEAR(y(k), FoptdStep(m.gain, m.time_constant_s, m.delay_s, static_cast<double>(k) * ts), 1e-12)
+      EXPECT_NEAR(
+          y(k), FoptdStep(m.gain, m.time_constant_s, m.delay_s, static_cast<double>(k) * ts), 1e-12)
           << "k=" << k;
     }
   }
@@ -42,9 +43,10 @@ TEST(ProcessModels, SoptdStepMatchesClosedFormIncludingEqualTimeConstants) {
   for (const SoptdModel m : {SoptdModel{2.0, {12.0, 3.0}, 7.3}, SoptdModel{2.0, {5.0, 5.0}, 1.0}}) {
     const Eigen::VectorXd y = Simulate(m, u, ts);
     for (Eigen::Index k = 0; k < u.size(); k += 3) {
-      EXPECT_NEAR(
-          y(k), SoptdStep(m.gain, m.time_constants_s[0], m.time_constants_s[1], m.delay_s, static_cast<double>(k) * ts),
-          1e-12)
+      EXPECT_NEAR(y(k),
+                  SoptdStep(m.gain, m.time_constants_s[0], m.time_constants_s[1], m.delay_s,
+                            static_cast<double>(k) * ts),
+                  1e-12)
           << "k=" << k;
     }
   }

@@ -70,7 +70,7 @@ TEST_P(RlsBatchTest, ForgettingOneEqualsBatchLeastSquares) {
   EXPECT_LT(RelativeError(rls.theta(), batch), 1e-6);
   // Standard errors: sigma2 = SSR / (N - n) and sqrt(sigma2 diag (Phi'Phi)^-1).
   const Eigen::VectorXd residual = data.y - data.phi * batch;
-  const double sigma2 = residual.squaredNorm() / (data.y.size() - 4);
+  const double sigma2 = residual.squaredNorm() / static_cast<double>(data.y.size() - 4);
   EXPECT_NEAR(rls.innovation_variance() / sigma2, 1.0, 1e-6);
   const Eigen::MatrixXd cov = (data.phi.transpose() * data.phi).inverse() * sigma2;
   Eigen::Vector4d sd;

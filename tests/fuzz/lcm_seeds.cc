@@ -79,7 +79,7 @@ int main(int argc, char** argv) {
     base.utime = canalid::fuzz::kNowUs;
     WriteFile(commands / "seed-accepted", Encode(Signed(base)));
     WriteFile(commands / "seed-bad-mac", Encode(canalid::testing::MakeCommand()));
-    for (int8_t kind : {2, 3, 4, 9}) {
+    for (int8_t kind : {int8_t{2}, int8_t{3}, int8_t{4}, int8_t{9}}) {
       canalid::command_t m = base;
       m.kind = kind;
       m.argument = kind == 2 ? "" : m.argument;

@@ -44,7 +44,9 @@ TEST(SteadyProfile, MatchesRk4BackwaterOnCanal2Pool2) {
   // The trapezoidal standard step with dx = 100 m has an O(dx^2) error; 1 mm is well above it
   // and far below the 123 mm of backwater drawdown the profile has here.
   for (int j = 0; j <= 30; j += 5) {
-    EXPECT_NEAR(y[j], Rk4UpstreamDepth(p, 10.0, 2.1, 3000.0 - 100.0 * j), 1e-3) << "node " << j;
+    EXPECT_NEAR(y[static_cast<std::size_t>(j)], Rk4UpstreamDepth(p, 10.0, 2.1, 3000.0 - 100.0 * j),
+                1e-3)
+        << "node " << j;
   }
   EXPECT_LT(y.front(), 2.0);  // M2-like drawdown towards a normal depth below 2.1 m
 }
@@ -66,7 +68,9 @@ TEST(SteadyProfile, MatchesRk4OnSteepCanal1Pool2) {
   const std::vector<double> y = SteadyProfile(p, 1.8, 120, 0.9);
   // Steep pool: M1 backwater that reaches normal depth upstream; 10 m steps, 1 mm tolerance.
   for (int j = 0; j <= 120; j += 20) {
-    EXPECT_NEAR(y[j], Rk4UpstreamDepth(p, 1.8, 0.9, 1200.0 - 10.0 * j), 1e-3) << "node " << j;
+    EXPECT_NEAR(y[static_cast<std::size_t>(j)], Rk4UpstreamDepth(p, 1.8, 0.9, 1200.0 - 10.0 * j),
+                1e-3)
+        << "node " << j;
   }
 }
 
@@ -107,7 +111,8 @@ TEST(SteadyProfile, SaintVenantSettlesOnTheStandardStepProfile) {
     const std::vector<double> profile = SteadyProfile(c.pool, c.new_flow_m3s, cells, y_down);
     double worst_step = 0.0, worst_rk4 = 0.0;
     for (int j = 0; j <= cells; ++j) {
-      worst_step = std::max(worst_step, std::abs(plant.depth_m(0, j) - profile[j]));
+      worst_step = std::max(worst_step,
+                            std::abs(plant.depth_m(0, j) - profile[static_cast<std::size_t>(j)]));
       const double rk4 =
           Rk4UpstreamDepth(c.pool, c.new_flow_m3s, y_down, c.pool.length_m - plant.dx_m(0) * j);
       worst_rk4 = std::max(worst_rk4, std::abs(plant.depth_m(0, j) - rk4));

@@ -151,12 +151,12 @@ std::string ArxCsv() {
   csv.precision(17);
   csv << "time_s,u1,u2,y\n";
   std::vector<double> u1(500), u2(500), y(500, 0.0);
-  for (int t = 0; t < 500; ++t) {
+  for (std::size_t t = 0; t < 500; ++t) {
     u1[t] = (rng() & 1U) ? 1.0 : -1.0;
     u2[t] = (rng() & 1U) ? 2.0 : 0.0;
     if (t >= 3) y[t] = 1.2 * y[t - 1] - 0.5 * y[t - 2] + 0.8 * u1[t - 1] + 0.4 * u2[t - 3];
     y[t] += noise(rng);
-    csv << t * 5.0 << "," << u1[t] << "," << u2[t] << "," << y[t] << "\n";
+    csv << static_cast<double>(t) * 5.0 << "," << u1[t] << "," << u2[t] << "," << y[t] << "\n";
   }
   return csv.str();
 }

@@ -21,7 +21,8 @@ const std::string kPlc = std::string(CANALID_SOURCE_DIR) + "/config/sim/plc/asce
 // Writes registers as a master would and lets the PLC act on them.
 void Write(PlcSimulation* sim, int address, std::initializer_list<std::uint16_t> values) {
   int i = 0;
-  for (std::uint16_t v : values) sim->holding_registers().at(address + i++) = v;
+  for (std::uint16_t v : values)
+    sim->holding_registers().at(static_cast<std::size_t>(address + i++)) = v;
   sim->OnHoldingWrite(address, static_cast<int>(values.size()));
 }
 
@@ -30,8 +31,8 @@ TEST(PlcSimulation, CdabFloatsInTheImage) {
   PlcConfig config = DefaultPlcConfig(canal);
   config.word_order = core::WordOrder::kLowWordFirst;
   PlcSimulation sim(canal, config, true);
-  const std::uint16_t* level =
-      &sim.input_registers()[InputFloatAddress(config, 1, kLevelDownstream)];
+  const std::uint16_t* level = &sim.input_registers()[static_cast<std::size_t>(
+      InputFloatAddress(config, 1, kLevelDownstream))];
   EXPECT_NEAR(modbus_get_float_cdab(level), 2.1, 1e-3);  // libmodbus decodes independently
   EXPECT_GT(std::abs(modbus_get_float_abcd(level) - 2.1), 0.1);
   // A float setpoint written low word first reaches the PLC and its 16-bit mirror.
@@ -39,7 +40,9 @@ TEST(PlcSimulation, CdabFloatsInTheImage) {
   // each word wrongly on little-endian hosts; its getters are right.)
   Write(&sim, HoldingFloatAddress(config, 1, kStructureSetpoint), {0x0000, 0x3FA0});
   EXPECT_DOUBLE_EQ(sim.logic().structure_setpoint(1), 1.25);
-  EXPECT_EQ(sim.holding_registers()[HoldingScaledAddress(config, 1, kStructureSetpoint)], 1250);
+  EXPECT_EQ(sim.holding_registers()[static_cast<std::size_t>(
+                HoldingScaledAddress(config, 1, kStructureSetpoint))],
+            1250);
 }
 
 TEST(PlcSimulation, OfftakeAndInflowSetpointsReachThePlant) {
@@ -53,8 +56,11 @@ TEST(PlcSimulation, OfftakeAndInflowSetpointsReachThePlant) {
   // A fixed offtake takes its setting at once; the inflow ramps at 0.01 m3/s per s.
   EXPECT_NEAR(sim.plant().OfftakeFlow(1), 2.0, 1e-9);
   EXPECT_NEAR(sim.plant().upstream(), 11.1, 1e-9);
-  EXPECT_EQ(sim.input_registers()[InputScaledAddress(config, 1, kOfftakeFlow)], 2000);
-  EXPECT_EQ(sim.input_registers()[InputScaledAddress(config, 0, kInflow)], 11100);
+  EXPECT_EQ(
+      sim.input_registers()[static_cast<std::size_t>(InputScaledAddress(config, 1, kOfftakeFlow))],
+      2000);
+  EXPECT_EQ(sim.input_registers()[static_cast<std::size_t>(InputScaledAddress(config, 0, kInflow))],
+            11100);
   EXPECT_EQ(sim.holding_registers()[kHrStep], 0);
 }
 
@@ -73,7 +79,7 @@ TEST(PlcSimulation, NegativeSpikesAndTheFaultWord) {
   const Canal canal = LoadCanal(kCanal);
   const PlcConfig config = DefaultPlcConfig(canal);
   PlcSimulation sim(canal, config, true);
-  const int level = InputScaledAddress(config, 1, kLevelUpstream);
+  const auto level = static_cast<std::size_t>(InputScaledAddress(config, 1, kLevelUpstream));
   const std::uint16_t before = sim.input_registers()[level];
   // Every 3rd step, -300 mm.
   Write(&sim, kHrFaultSpikeMask, {1u << 1, static_cast<std::uint16_t>(-300), 3});

@@ -21,7 +21,8 @@ TEST(SaintVenantCanal, FullCanal2StaysAtItsSteadyState) {
   SaintVenantCanal plant(canal);
   ASSERT_EQ(plant.num_pools(), 8);
   for (int p = 0; p < 8; ++p) {
-    EXPECT_NEAR(plant.DownstreamDepth(p), canal.pools[p].target_depth_m, 1e-12);
+    EXPECT_NEAR(plant.DownstreamDepth(p), canal.pools[static_cast<std::size_t>(p)].target_depth_m,
+                1e-12);
     if (p < 7) {
       EXPECT_GT(plant.structure_setting(p), 0.0) << "gate opening of pool " << p + 1;
     }
@@ -51,7 +52,8 @@ TEST(SaintVenantCanal, FullCanal1StaysAtItsSteadyState) {
   for (int p = 0; p < 8; ++p) before.push_back(plant.DownstreamDepth(p));
   for (int k = 0; k < 360; ++k) plant.Step(10.0);
   // Same bound as for canal 2: Newton tolerance accumulated over an hour.
-  for (int p = 0; p < 8; ++p) EXPECT_NEAR(plant.DownstreamDepth(p), before[p], 1e-7) << p;
+  for (int p = 0; p < 8; ++p)
+    EXPECT_NEAR(plant.DownstreamDepth(p), before[static_cast<std::size_t>(p)], 1e-7) << p;
   EXPECT_NEAR(plant.StructureFlow(7), 0.6, 1e-7);
 }
 
@@ -119,7 +121,7 @@ TEST(SaintVenantCanal, ReservoirWeirOrificeAndFreeGateSettle) {
 double TestVolume(const SaintVenantCanal& plant) {
   double v = 0.0;
   for (int p = 0; p < plant.num_pools(); ++p) {
-    const Pool& pool = plant.canal().pools[p];
+    const Pool& pool = plant.canal().pools[static_cast<std::size_t>(p)];
     const int n = plant.num_nodes(p);
     for (int i = 0; i < n; ++i) {
       const double y = plant.depth_m(p, i);
@@ -247,7 +249,7 @@ StepResponse PoolStep(const Pool& source, double flow_m3s, double dq, double dx_
   const long steps = std::lround(duration_s / dt_s);
   for (long k = 1; k <= steps; ++k) {
     plant.Step(dt_s);
-    r.t_s.push_back(k * dt_s);
+    r.t_s.push_back(static_cast<double>(k) * dt_s);
     r.rise_m.push_back(plant.DownstreamDepth(0) - y0);
   }
   return r;
@@ -263,7 +265,7 @@ TEST(SaintVenantCanal, WaveArrivalMatchesIdzDelayOnAsceCanals) {
   const Canal c2 = LoadCanal(kSource + "/config/sim/asce-canal2.toml");
   int checked = 0;
   for (const IdzRow& row : ReadIdz()) {
-    const Pool& pool = (row.canal == 1 ? c1 : c2).pools.at(row.pool - 1);
+    const Pool& pool = (row.canal == 1 ? c1 : c2).pools.at(static_cast<std::size_t>(row.pool - 1));
     // Resolve the front: about 60 cells per pool (at most 100 m) and a Courant number near 0.4.
     const double dx = std::min(100.0, pool.length_m / 60.0);
     const double dt = dx / 10.0;

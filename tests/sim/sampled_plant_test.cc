@@ -105,8 +105,9 @@ TEST(IntegratorDelayLevelPlant, ZeroDelayHasDirectFeedthrough) {
   IntegratorDelayLevelPlant plant(model, 0.5, 1.0, 0.0, 0, 5.0);
   // Q(0) = q_in(0) - q_out(-1) = 6 - 5: y = 0.001 + 0.5 * 6 + 1.
   EXPECT_NEAR(plant.Output(Eigen::Vector2d(6.0, 5.0)), 0.001 + 3.0 + 1.0, 1e-12);
-  EXPECT_THROW(IntegratorDelayLevelPlant(core::IntegratorDelayModel{0.001, -1, 10.0}, 0.0, 0.0, 0.0, 0, 5.0),
-               std::invalid_argument);
+  EXPECT_THROW(
+      IntegratorDelayLevelPlant(core::IntegratorDelayModel{0.001, -1, 10.0}, 0.0, 0.0, 0.0, 0, 5.0),
+      std::invalid_argument);
 }
 
 TEST(ArxPlant, FirstOrderStepIsTheGeometricSeries) {
@@ -128,8 +129,9 @@ TEST(ArxPlant, FirstOrderStepIsTheGeometricSeries) {
 TEST(SampledPoolPlant, StepsWholeSamplesOnly) {
   const core::IntegratorDelayModel model{0.002, 2, 60.0};
   auto make = [&] {
-    return SampledPoolPlant(std::make_unique<IntegratorDelayLevelPlant>(model, 0.0, 2.0, 0.0, 0, kFlow0), kFlow0,
-                            kFlow0);
+    return SampledPoolPlant(
+        std::make_unique<IntegratorDelayLevelPlant>(model, 0.0, 2.0, 0.0, 0, kFlow0), kFlow0,
+        kFlow0);
   };
   SampledPoolPlant once = make();
   SampledPoolPlant sample_by_sample = make();

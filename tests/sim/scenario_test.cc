@@ -145,16 +145,16 @@ TEST(Scenario, CommittedPrbsInflowIsAnMSequenceOfOrder7) {
     s.push_back(v > 0.0 ? 1 : -1);
   }
   ASSERT_EQ(s.size(), 140u);
-  constexpr int kPeriod = 127;
+  constexpr std::size_t kPeriod = 127;
   int sum = 0;
-  for (int c = 0; c < kPeriod; ++c) sum += s[c];
+  for (std::size_t c = 0; c < kPeriod; ++c) sum += s[c];
   EXPECT_EQ(sum, 1);
-  for (int lag = 1; lag < kPeriod; ++lag) {
+  for (std::size_t lag = 1; lag < kPeriod; ++lag) {
     int r = 0;
-    for (int c = 0; c < kPeriod; ++c) r += s[c] * s[(c + lag) % kPeriod];
+    for (std::size_t c = 0; c < kPeriod; ++c) r += s[c] * s[(c + lag) % kPeriod];
     EXPECT_EQ(r, -1) << "lag " << lag;
   }
-  for (int c = kPeriod; c < 140; ++c) EXPECT_EQ(s[c], s[c - kPeriod]) << c;
+  for (std::size_t c = kPeriod; c < 140; ++c) EXPECT_EQ(s[c], s[c - kPeriod]) << c;
 }
 
 TEST(Scenario, PrbsAndFaultsAreWhereTheFilesSayTheyAre) {

@@ -26,19 +26,22 @@ inline double Quadratic(const double (&p)[3], double theta) {
 inline std::string LpvCsv(unsigned seed, double noise_std, double noise_gain = 1.0) {
   std::mt19937 rng(seed);
   std::normal_distribution<double> noise(0.0, noise_std);
-  const int n = kLpvPerBand * static_cast<int>(kLpvThetas.size());
+  const auto per_band = static_cast<std::size_t>(kLpvPerBand);
+  const auto nk = static_cast<std::size_t>(kLpvNkSamples);
+  const std::size_t n = per_band * kLpvThetas.size();
   std::vector<double> u(n, 0.0), y(n, 0.0);
   std::ostringstream csv;
   csv.precision(17);
   csv << "time_s,gate,level,upstream\n";
-  for (int k = 0; k < n; ++k) {
-    const double theta = kLpvThetas[static_cast<std::size_t>(k / kLpvPerBand)];
+  for (std::size_t k = 0; k < n; ++k) {
+    const double theta = kLpvThetas[k / per_band];
     if (k >= 10) u[k] = k % 5 == 0 ? ((rng() & 1U) ? 1.0 : -1.0) : u[k - 1];
     if (k >= 1) {
       y[k] = -Quadratic(kLpvA1, theta) * y[k - 1] +
-             Quadratic(kLpvB1, theta) * (k >= kLpvNkSamples ? u[k - kLpvNkSamples] : 0.0);
+             Quadratic(kLpvB1, theta) * (k >= nk ? u[k - nk] : 0.0);
     }
-    csv << k * 10.0 << "," << u[k] << "," << y[k] + noise_gain * noise(rng) << "," << theta << "\n";
+    csv << static_cast<double>(k) * 10.0 << "," << u[k] << "," << y[k] + noise_gain * noise(rng)
+        << "," << theta << "\n";
   }
   return csv.str();
 }
