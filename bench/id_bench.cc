@@ -51,7 +51,7 @@ void BM_IdDelayScanDay(benchmark::State& state) {
 }
 BENCHMARK(BM_IdDelayScanDay)->Unit(benchmark::kMillisecond);
 
-void BM_IdPipelineDay(benchmark::State& state) {
+void BM_IdentifyIntegratorDelayDay(benchmark::State& state) {
   const PoolRecord r = MakeDay();
   IntegratorDelayIdentificationOptions options;
   options.fit.min_nk = 600;
@@ -62,7 +62,7 @@ void BM_IdPipelineDay(benchmark::State& state) {
     benchmark::DoNotOptimize(result.fit.model.b);
   }
 }
-BENCHMARK(BM_IdPipelineDay)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_IdentifyIntegratorDelayDay)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace canalid::core

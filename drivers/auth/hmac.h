@@ -10,7 +10,7 @@ using Sha256Digest = std::array<uint8_t, 32>;
 
 /// HMAC-SHA256 (RFC 2104 with SHA-256) and the constant-time tag compare, both from OpenSSL's
 /// libcrypto; this file only gives them the project's names and turns OpenSSL's failures into
-/// exceptions. The RFC 4231 vectors are in tests/core/hmac_test.cc.
+/// exceptions. The RFC 4231 vectors are in tests/drivers/hmac_test.cc.
 class HmacSha256 final {
  public:
   HmacSha256() = delete;

@@ -176,7 +176,7 @@ TEST(ReachControllerRestart, ARefusalNeverStartsAndTakesNoReadingAsNominal) {
   EXPECT_FALSE(runner.StartIfDue(true, true));
 }
 
-TEST(ReachPipelineGuard, AGuardNotPersistedAbortsAndRestoresTheNominal) {
+TEST(ReachSampleProcessorGuard, AGuardNotPersistedAbortsAndRestoresTheNominal) {
   ReachController runner(RunnerOptions());
   runner.OnPoll(Readings(1.2));
   ASSERT_TRUE(runner.StartIfDue(true, true));
