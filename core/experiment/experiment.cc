@@ -21,7 +21,7 @@ ExperimentTransition Abort(const ExperimentPlan& plan, ExperimentState state, Ab
   actions.write_setpoint = plan.prbs.nominal;
   actions.restore_nominal = true;
   actions.phase_changed = true;
-  return {std::move(state), actions};
+  return {state, actions};
 }
 
 ExperimentTransition Enter(ExperimentState state, ExperimentPhase phase) {
@@ -29,34 +29,34 @@ ExperimentTransition Enter(ExperimentState state, ExperimentPhase phase) {
   state.samples_in_phase = 0;
   ExperimentActions actions;
   actions.phase_changed = true;
-  return {std::move(state), actions};
+  return {state, actions};
 }
 
 ExperimentTransition OnSample(const ExperimentPlan& plan, ExperimentState state,
                               const ExperimentSample& s) {
-  if (!Running(state.phase)) return {std::move(state), {}};
-  if (!s.link_ok) return Abort(plan, std::move(state), AbortReason::kLinkLost);
+  if (!Running(state.phase)) return {state, {}};
+  if (!s.link_ok) return Abort(plan, state, AbortReason::kLinkLost);
   if (std::isfinite(s.time_s)) {
     const double gap = s.time_s - state.last_sample_time_s;
     if (std::isfinite(state.last_sample_time_s) && (gap > plan.max_sample_gap_s || gap < 0.0)) {
       state.sample_gap_s = gap;
-      return Abort(plan, std::move(state), AbortReason::kSampleGap);
+      return Abort(plan, state, AbortReason::kSampleGap);
     }
     state.last_sample_time_s = s.time_s;
   }
   if (!s.level_valid) {
     if (++state.invalid_run > plan.max_invalid_samples) {
-      return Abort(plan, std::move(state), AbortReason::kSensorInvalid);
+      return Abort(plan, state, AbortReason::kSensorInvalid);
     }
   } else {
     state.invalid_run = 0;
     if (s.level_m < plan.level_min_m || s.level_m > plan.level_max_m) {
-      return Abort(plan, std::move(state), AbortReason::kLevelOutOfBand);
+      return Abort(plan, state, AbortReason::kLevelOutOfBand);
     }
   }
   if (state.phase == ExperimentPhase::kSettling) {
-    if (++state.samples_in_phase < plan.settle_samples) return {std::move(state), {}};
-    ExperimentTransition t = Enter(std::move(state), ExperimentPhase::kExciting);
+    if (++state.samples_in_phase < plan.settle_samples) return {state, {}};
+    ExperimentTransition t = Enter(state, ExperimentPhase::kExciting);
     t.state.prbs.emplace(plan.prbs);
     t.state.setpoint = t.state.prbs->Next();
     t.actions.write_setpoint = t.state.setpoint;
@@ -66,7 +66,7 @@ ExperimentTransition OnSample(const ExperimentPlan& plan, ExperimentState state,
   ExperimentActions actions;
   actions.record_sample = true;
   if (++state.samples_in_phase >= plan.excite_samples) {
-    ExperimentTransition t = Enter(std::move(state), ExperimentPhase::kIdentifying);
+    ExperimentTransition t = Enter(state, ExperimentPhase::kIdentifying);
     t.state.setpoint = plan.prbs.nominal;
     t.actions.record_sample = true;
     t.actions.write_setpoint = plan.prbs.nominal;
@@ -76,7 +76,7 @@ ExperimentTransition OnSample(const ExperimentPlan& plan, ExperimentState state,
   }
   state.setpoint = state.prbs->Next();
   actions.write_setpoint = state.setpoint;
-  return {std::move(state), actions};
+  return {state, actions};
 }
 
 }  // namespace
@@ -168,7 +168,7 @@ ExperimentTransition Step(const ExperimentPlan& plan, const ExperimentState& sta
       fresh.setpoint = plan.prbs.nominal;
       // The run's first sample must follow the last one before the start within the bound.
       fresh.last_sample_time_s = event.sample.time_s;
-      ExperimentTransition t = Enter(std::move(fresh), ExperimentPhase::kSettling);
+      ExperimentTransition t = Enter(fresh, ExperimentPhase::kSettling);
       // Settling starts from the nominal setpoint, whatever the actuator was doing.
       t.actions.write_setpoint = plan.prbs.nominal;
       t.actions.restore_nominal = true;

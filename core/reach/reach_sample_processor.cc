@@ -20,7 +20,7 @@ ReachActions ReachSampleProcessor::Apply(const ExperimentEvent& event) {
   if (!options_.experiment) return actions;
   ExperimentTransition t = Step(*options_.experiment, experiment_state_, event);
   const bool starting = event.kind == ExperimentEventKind::kStart && t.actions.phase_changed;
-  experiment_state_ = std::move(t.state);
+  experiment_state_ = t.state;
   if (starting) recorded_ = 0;
   actions.write_setpoint = t.actions.write_setpoint;
   actions.restore_nominal = t.actions.restore_nominal;

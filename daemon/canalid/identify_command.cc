@@ -36,9 +36,9 @@ int RunIdentify(const IdentifyOptions& options) {
 }  // namespace
 
 const std::vector<std::string>& ModelKinds() {
-  static const std::vector<std::string> kinds = {"id",         "arx",     "foptd", "soptd",
-                                                 "frac-foptd", "frac-ss", "lpv"};
-  return kinds;
+  static const std::vector<std::string> kKinds = {"id",         "arx",     "foptd", "soptd",
+                                                  "frac-foptd", "frac-ss", "lpv"};
+  return kKinds;
 }
 
 nlohmann::json IdentifyModel(const IdentifyOptions& options, const drivers::CsvTable& table) {

@@ -4,8 +4,8 @@
 
 #include "drivers/modbus/plc_port.h"
 
-// libmodbus's context type, kept out of our headers.
-struct _modbus;
+// libmodbus's context type, kept out of our headers (its name is libmodbus's).
+struct _modbus;  // NOLINT(bugprone-reserved-identifier)
 
 namespace canalid::drivers {
 
