@@ -92,7 +92,7 @@ def folders_text(target):
     return ", ".join(sorted(source_folders(target)))
 
 
-def target_layer(name, target):
+def target_layer(target):
     folders = source_folders(target)
     layers = {layer_of_folder(f) for f in folders}
     if None in layers or len(layers) != 1:
@@ -128,7 +128,7 @@ def check_links(targets, extra_links, problems):
     for name, target in sorted(targets.items()):
         if target["type"] == "INTERFACE_LIBRARY" and name in UTILITY_TARGETS:
             continue
-        layer = target_layer(name, target)
+        layer = target_layer(target)
         if layer is None:
             if not target["folder"].startswith(("tests", "bench")) and target["sources"]:
                 problems.append(f"{name}: its sources span folders of different layers, or a "
@@ -140,7 +140,7 @@ def check_links(targets, extra_links, problems):
             if link in targets and source_folders(targets[link]) == source_folders(target):
                 continue  # a program and the library of the rest of it, in one folder
             if link in targets:
-                link_layer = target_layer(link, targets[link])
+                link_layer = target_layer(targets[link])
                 if link_layer is not None and link_layer >= layer:
                     way = "sideways" if link_layer == layer else "up"
                     problems.append(f"{name} (layer {layer}, {folders_text(target)}) links {link} "
@@ -183,7 +183,7 @@ def check_includes(source_dir, targets, extra_includes, problems):
 def graph_text(targets):
     """A Mermaid picture of the libraries and programs and their direct links."""
     shown = {n: t for n, t in targets.items()
-             if n not in UTILITY_TARGETS and target_layer(n, t) is not None
+             if n not in UTILITY_TARGETS and target_layer(t) is not None
              and not t["folder"].startswith(("tests", "bench"))
              and not n.endswith("_gen") and t["type"] != "UTILITY"}
     lines = ["```mermaid", "flowchart BT"]
