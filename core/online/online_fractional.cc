@@ -1,6 +1,8 @@
 #include "core/online/online_fractional.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "core/online/option_checks.h"
@@ -47,6 +49,7 @@ OnlineFractionalBank::OnlineFractionalBank(const OnlineFractionalOptions& option
   for (double a : options_.alphas) {
     regressors_.emplace_back(a, options_.memory_samples);
     estimators_.emplace_back(rls);
+    if (options_.output_error) simulated_.emplace_back(options_.memory_samples);
   }
   predictions_.assign(options_.alphas.size(), 0.0);
 }
@@ -64,11 +67,15 @@ bool OnlineFractionalBank::Update(double u, double y) {
   const double u_delayed = k_ >= options_.delay_samples ? u_history_[options_.delay_samples] : 0.0;
   for (int i = 0; i < num_candidates(); ++i) {
     const auto ui = static_cast<std::size_t>(i);
-    const Eigen::Vector2d phi(-regressors_[ui].Sum(y_history_), u_delayed);
+    const RingBuffer<double>& history = options_.output_error ? simulated_[ui] : y_history_;
+    const Eigen::Vector2d phi(-regressors_[ui].Sum(history), u_delayed);
     predictions_[ui] = estimators_[ui].Predict(phi);
-    if (!y_ok) continue;
-    const auto result = estimators_[ui].Update(phi, y);
-    selector_.Record(i, result.prediction_error);
+    if (y_ok) {
+      const auto result = estimators_[ui].Update(phi, y);
+      selector_.Record(i, result.prediction_error);
+    }
+    // The parallel model's output with the updated parameters (a posteriori), measured y or not.
+    if (options_.output_error) simulated_[ui].Push(estimators_[ui].Predict(phi));
   }
   if (y_ok) {
     selector_.Commit();
@@ -103,6 +110,24 @@ FractionalSnapshot OnlineFractionalBank::CandidateSnapshot(int index) const {
   s.time_constant_s = c * std::pow(options_.sample_time_s, s.alpha);
   s.theta1_std = rls.StandardDeviation(0);
   s.theta2_std = rls.StandardDeviation(1);
+  // K = theta2 / (1 - theta1), T = h^alpha theta1 / (1 - theta1): gradients in theta, then
+  // var = g' sigma2 P g.
+  Eigen::Matrix2d p;
+  rls.Covariance(p);
+  const double one_minus = 1.0 - s.theta1;
+  const Eigen::Vector2d gain_gradient(s.theta2 / (one_minus * one_minus), 1.0 / one_minus);
+  const double t_gradient = std::pow(options_.sample_time_s, s.alpha) / (one_minus * one_minus);
+  const double sigma2 = rls.innovation_variance();
+  s.gain_std = std::sqrt(std::max(0.0, sigma2 * gain_gradient.dot(p * gain_gradient)));
+  s.time_constant_std_s = std::sqrt(std::max(0.0, sigma2 * p(0, 0))) * t_gradient;
+  // Eigenvalues of the symmetric 2 x 2 P in closed form.
+  const double mean = 0.5 * (p(0, 0) + p(1, 1));
+  const double radius = std::hypot(0.5 * (p(0, 0) - p(1, 1)), p(0, 1));
+  const double lambda_max = mean + radius;
+  const double lambda_min = mean - radius;
+  s.condition_number =
+      lambda_min > 0.0 ? lambda_max / lambda_min : std::numeric_limits<double>::infinity();
+  s.information_min = lambda_max > 0.0 ? 1.0 / lambda_max : 0.0;
   s.prediction_error = rls.last_prediction_error();
   s.innovation_std = std::sqrt(rls.innovation_variance());
   s.loss = selector_.loss(index);

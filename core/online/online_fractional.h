@@ -20,6 +20,13 @@ struct OnlineFractionalOptions {
   BankSelectorOptions selector;
   double input_abs_max = 1e9;
   double output_abs_max = 1e9;
+  /// Output error (parallel model, Landau): each candidate's GL sum runs over its own simulated
+  /// output x(k) = theta' phi(k) instead of the measured y, so the a-priori error is the
+  /// simulation error the batch fit minimises and the selector picks alpha by it.  Equation error
+  /// (false) weights the fit by the model's high-pass (1 + c) + c sum w_j q^-j and on oversampled
+  /// records prefers an extrapolator: on the lab flume's gate step (Ts 0.15 s, T ~ 5 s^alpha) its
+  /// theta1 ran to the projection bound (T ~ 1e8, K ~ -4e9) at every alpha.
+  bool output_error = false;
 
   /// @throws std::invalid_argument naming the option out of range.
   void Validate() const;
@@ -35,6 +42,10 @@ struct FractionalSnapshot {
   double theta2 = 0.0;           ///< K / (1 + c)
   double theta1_std = 0.0;
   double theta2_std = 0.0;
+  double gain_std = 0.0;             ///< first order, from the full covariance sigma2 P
+  double time_constant_std_s = 0.0;  ///< first order (T depends on theta1 only)
+  double condition_number = 1.0;     ///< of P (exact: 2 x 2)
+  double information_min = 0.0;      ///< smallest eigenvalue of P^-1, 1 / lambda_max(P)
   double prediction_error = 0.0;
   double innovation_std = 0.0;
   double loss = 0.0;
@@ -75,6 +86,7 @@ class OnlineFractionalBank final {
  private:
   OnlineFractionalOptions options_;
   std::vector<OnlineGlRegressor> regressors_;
+  std::vector<RingBuffer<double>> simulated_;  // output_error: each candidate's x(k-1), x(k-2)...
   std::vector<Rls<2>> estimators_;
   std::vector<double> predictions_;
   BankSelector selector_;
