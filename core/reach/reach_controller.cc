@@ -1,5 +1,6 @@
 #include "core/reach/reach_controller.h"
 
+#include <limits>
 #include <stdexcept>
 #include <utility>
 
@@ -47,6 +48,13 @@ ReachPollOutcome ReachController::OnPoll(const ReachReadings& r) {
   sample.level_m = r.level_m;
   sample.link_ok = r.link_ok;
   sample.time_s = r.time_s;
+  constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
+  if (options_.channels.actuator_position >= 0) {
+    sample.input = r.actuator_position_valid ? r.actuator_position : kNan;
+  } else {
+    sample.input = r.actuator_valid ? r.actuator : kNan;
+  }
+  sample.scheduling = r.scheduling_valid ? r.scheduling : kNan;
   outcome.actions = pipeline_.OnSample(sample);
   return outcome;
 }

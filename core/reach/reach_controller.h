@@ -15,6 +15,9 @@ struct ReachChannels {
   int q_out = -1;
   int level = -1;
   int actuator = -1;
+  /// The actuator's measured position: the process models' input when given (else the actuator).
+  int actuator_position = -1;
+  int scheduling = -1;  ///< the lpv model's scheduling variable
 };
 
 /// Everything a reach runs, derived from the configuration (daemon/config/plan_from_config.h builds
@@ -32,11 +35,13 @@ struct ReachControllerOptions {
   std::string experiment_name;  ///< the reach's experiment (empty: none), for its guard
 };
 
-/// One poll of a reach's PLC as the reach reads it: the four channel values (engineering units)
-/// with their validity, and the poll's status.
+/// One poll of a reach's PLC as the reach reads it: the channel values (engineering units) with
+/// their validity, and the poll's status.
 struct ReachReadings {
   double q_in_m3s = 0.0, q_out_m3s = 0.0, level_m = 0.0, actuator = 0.0;
+  double actuator_position = 0.0, scheduling = 0.0;
   bool q_in_valid = false, q_out_valid = false, level_valid = false, actuator_valid = false;
+  bool actuator_position_valid = false, scheduling_valid = false;
   bool link_ok = true;    ///< the PLC answered (a disconnected poll is not)
   bool status_ok = true;  ///< every block of the poll was read
   double time_s = std::numeric_limits<double>::quiet_NaN();  ///< when the poll was taken (s)
@@ -55,6 +60,8 @@ ReachReadings ReadReach(const ReachChannels& c, const Values& values, Valid vali
   read(c.q_out, &r.q_out_m3s, &r.q_out_valid);
   read(c.level, &r.level_m, &r.level_valid);
   read(c.actuator, &r.actuator, &r.actuator_valid);
+  read(c.actuator_position, &r.actuator_position, &r.actuator_position_valid);
+  read(c.scheduling, &r.scheduling, &r.scheduling_valid);
   r.link_ok = link_ok;
   r.status_ok = status_ok;
   r.time_s = time_s;

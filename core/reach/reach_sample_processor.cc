@@ -11,7 +11,25 @@ ReachSampleProcessor::ReachSampleProcessor(const ReachSampleProcessorOptions& op
   if (!(options_.sample_time_s > 0.0))
     throw std::invalid_argument("reach sample_time_s must be > 0");
   options_.online_id.sample_time_s = options_.sample_time_s;
-  if (options_.online_id_enabled) online_id_.emplace(options_.online_id);
+  if (options_.online_id_enabled) {
+    OnlineModelOptions id;
+    id.kind = OnlineModelKind::kIntegratorDelay;
+    id.sample_time_s = options_.sample_time_s;
+    id.id = options_.online_id;
+    online_models_.push_back(MakeOnlineModel(id));
+    online_id_ = online_models_.back()->integrator_delay_bank();
+  }
+  std::uint32_t kinds = 0;
+  for (const OnlineModelOptions& model : options_.process_models) {
+    const auto bit = std::uint32_t{1} << static_cast<unsigned>(model.kind);
+    if (model.kind == OnlineModelKind::kIntegratorDelay || (kinds & bit) != 0) {
+      throw std::invalid_argument(
+          "reach process_models: " + std::string(OnlineModelKindName(model.kind)) +
+          " is not a process model kind, or is given twice");
+    }
+    kinds |= bit;
+    online_models_.push_back(MakeOnlineModel(model));
+  }
   if (options_.experiment) SetExperimentPlan(*options_.experiment);
 }
 
@@ -33,14 +51,14 @@ ReachActions ReachSampleProcessor::Apply(const ExperimentEvent& event) {
 ReachActions ReachSampleProcessor::OnSample(const ReachSample& s) {
   ++samples_;
   last_time_s_ = s.time_s;
-  bool online_updated = false;
-  if (online_id_) {
-    // Invalid values go in as NaN: the bank holds the integrators on the last good flows and
-    // skips the regression on a bad level, and counts both.
-    constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
-    online_updated =
-        online_id_->Update(s.q_in_valid ? s.q_in_m3s : kNan, s.q_out_valid ? s.q_out_m3s : kNan,
-                           s.level_valid ? s.level_m : kNan);
+  // Invalid values go in as NaN: the id bank holds the integrators on the last good flows and
+  // skips the regression on a bad level, the process models skip or bridge them; all count them.
+  constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
+  const OnlineSample online{s.q_in_valid ? s.q_in_m3s : kNan, s.q_out_valid ? s.q_out_m3s : kNan,
+                            s.level_valid ? s.level_m : kNan, s.input, s.scheduling};
+  std::uint32_t updated = 0;
+  for (std::size_t i = 0; i < online_models_.size(); ++i) {
+    if (online_models_[i]->Update(online)) updated |= std::uint32_t{1} << i;
   }
   ExperimentEvent event;
   event.kind = ExperimentEventKind::kSample;
@@ -55,7 +73,8 @@ ReachActions ReachSampleProcessor::OnSample(const ReachSample& s) {
     record_q_out_(i) = valid || i == 0 ? s.q_out_m3s : record_q_out_(i - 1);
     record_level_(i) = valid || i == 0 ? s.level_m : record_level_(i - 1);
   }
-  actions.online_updated = online_updated;
+  actions.online_updated = updated != 0;
+  actions.online_models_updated = updated;
   return actions;
 }
 
@@ -92,7 +111,7 @@ ReachActions ReachSampleProcessor::OnGuardNotPersisted() {
 }
 
 void ReachSampleProcessor::ResetOnlineEstimator() {
-  if (online_id_) online_id_.emplace(options_.online_id);
+  for (const auto& model : online_models_) model->Reset();
 }
 
 bool ReachSampleProcessor::SetExperimentPlan(const ExperimentPlan& plan) {

@@ -1,12 +1,16 @@
 #pragma once
 #include <Eigen/Core>
+#include <cstdint>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "core/experiment/experiment.h"
 #include "core/integrator_delay/identify_integrator_delay.h"
 #include "core/online/online_integrator_delay.h"
+#include "core/online/online_model.h"
 
 namespace canalid::core {
 
@@ -19,15 +23,23 @@ struct ReachSample {
   bool q_out_valid = false;
   bool level_valid = false;
   bool link_ok = true;  ///< the PLC answered this poll
+  /// The process models' input (the actuator's position or setpoint) and lpv's scheduling
+  /// variable; NaN: invalid or not read.
+  double input = std::numeric_limits<double>::quiet_NaN();
+  double scheduling = std::numeric_limits<double>::quiet_NaN();
   /// When the poll was taken (s; the daemon's wall clock, replay's log time; NaN: unknown).
   /// A running experiment aborts on a gap (ExperimentPlan::max_sample_gap_s).
   double time_s = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct ReachSampleProcessorOptions {
-  double sample_time_s = 1.0;              ///< plant seconds between samples
-  OnlineIntegratorDelayOptions online_id;  ///< sample_time_s is overwritten with the one above
+  double sample_time_s = 1.0;  ///< plant seconds between samples
+  /// The online id kind's options (sample_time_s is overwritten with the one above), and the
+  /// bounds every id model of the reach must satisfy (model_bounds()), enabled or not.
+  OnlineIntegratorDelayOptions online_id;
   bool online_id_enabled = true;
+  /// The other online kinds (arx, frac-foptd, lpv: the actuator to the level), each at most once.
+  std::vector<OnlineModelOptions> process_models;
   std::optional<ExperimentPlan> experiment;    ///< none: this reach never excites its actuator
   IntegratorDelayIdentificationOptions batch;  ///< identification at the end of each experiment
 };
@@ -38,7 +50,9 @@ struct ReachActions {
   bool restore_nominal = false;
   bool experiment_phase_changed = false;
   bool experiment_record_complete = false;  ///< call IdentifyRecord()
-  bool online_updated = false;              ///< the online estimate moved: publish it
+  bool online_updated = false;              ///< some online estimate moved: publish it
+  /// Bit i: online_models()[i] moved on this sample.
+  std::uint32_t online_models_updated = 0;
 };
 
 /// Everything one reach does per sample, as plain data in and out (no I/O, no clocks): the online
@@ -68,7 +82,7 @@ class ReachSampleProcessor final {
   /// @throws std::invalid_argument if the plan is invalid.
   bool SetExperimentPlan(const ExperimentPlan& plan);
 
-  /// Restarts the online estimator from its initial state (operator command, detected change).
+  /// Restarts the online estimators from their initial state (operator command, detected change).
   void ResetOnlineEstimator();
 
   /// Batch identification of the completed record (ID model pipeline); then the experiment
@@ -84,7 +98,10 @@ class ReachSampleProcessor final {
 
   const ExperimentState& experiment_state() const { return experiment_state_; }
   const std::optional<ExperimentPlan>& experiment_plan() const { return options_.experiment; }
-  const OnlineIntegratorDelayBank* online_id() const { return online_id_ ? &*online_id_ : nullptr; }
+  /// The id kind's bank (nullptr when the reach does not run it).
+  const OnlineIntegratorDelayBank* online_id() const { return online_id_; }
+  /// Every online estimator of the reach: id first when enabled, then process_models in order.
+  const std::vector<std::unique_ptr<OnlineModel>>& online_models() const { return online_models_; }
   Eigen::Index recorded_samples() const { return recorded_; }
   std::int64_t samples() const { return samples_; }
 
@@ -92,7 +109,8 @@ class ReachSampleProcessor final {
   ReachActions Apply(const ExperimentEvent& event);
 
   ReachSampleProcessorOptions options_;
-  std::optional<OnlineIntegratorDelayBank> online_id_;
+  std::vector<std::unique_ptr<OnlineModel>> online_models_;
+  const OnlineIntegratorDelayBank* online_id_ = nullptr;  // inside online_models_
   ExperimentState experiment_state_;
   Eigen::VectorXd record_q_in_, record_q_out_, record_level_;
   Eigen::Index recorded_ = 0;

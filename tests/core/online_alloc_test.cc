@@ -9,7 +9,9 @@
 #include "core/online/online_arx.h"
 #include "core/online/online_fractional.h"
 #include "core/online/online_integrator_delay.h"
+#include "core/online/online_model.h"
 #include "core/online/rls.h"
+#include "core/reach/reach_sample_processor.h"
 #include "tests/core/online_test_data.h"
 
 extern "C" void* __libc_malloc(std::size_t size);
@@ -207,6 +209,72 @@ TEST(OnlineAllocation, FractionalBankUpdateAndSnapshotNeverAllocate) {
   EXPECT_EQ(
       SisoBankAllocations(bank, 4, 400, 50, [](const FractionalSnapshot& s) { return s.theta1; }),
       0);
+}
+
+// Every kind of the online registry, as the daemon runs it (Update, then FillSnapshot for the
+// publication), with bad values of each input on the way.
+TEST(OnlineAllocation, EveryOnlineModelKindUpdatesAndSnapshotsWithoutAllocating) {
+  OnlineModelSettings settings;
+  settings.sample_time_s = 1.0;
+  settings.max_delay_s = 8.0;
+  settings.forgetting = 0.99;
+  settings.fractional_delay_s = 1.0;
+  settings.lpv_delay_s = 1.0;
+  for (const OnlineModelKind kind : kOnlineModelKinds) {
+    auto model = MakeOnlineModel(OnlineModelOptionsFor(kind, settings));
+    OnlineModelSnapshot snapshot;
+    testdata::TestRandom rnd(9);
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    const long before = g_allocations;
+    double y = 0.0, sum = 0.0;
+    for (int k = 0; k < 500; ++k) {
+      const double u = rnd.Uniform() < 0.5 ? -1.0 : 1.0;
+      y = 0.9 * y + 0.1 * u + 0.01 * rnd.Normal();
+      const OnlineSample s{1.0 + 0.1 * u, 1.0, k == 100 ? nan : y, k == 150 ? nan : u,
+                           k == 200 ? nan : 0.5 + 0.1 * u};
+      model->Update(s);
+      model->FillSnapshot(snapshot);
+      if (snapshot.valid) sum += snapshot.values[0];
+    }
+    EXPECT_EQ(g_allocations - before, 0) << OnlineModelKindName(kind);
+    EXPECT_TRUE(std::isfinite(sum)) << OnlineModelKindName(kind);
+  }
+}
+
+// A reach running every kind at once: OnSample allocates nothing.
+TEST(OnlineAllocation, AReachRunningEveryKindDoesNotAllocatePerSample) {
+  OnlineModelSettings settings;
+  settings.sample_time_s = 60.0;
+  settings.max_delay_s = 20 * 60.0;
+  settings.fractional_delay_s = 120.0;
+  settings.lpv_delay_s = 120.0;
+  ReachSampleProcessorOptions options;
+  options.sample_time_s = 60.0;
+  options.online_id = OnlineModelOptionsFor(OnlineModelKind::kIntegratorDelay, settings).id;
+  for (const OnlineModelKind kind :
+       {OnlineModelKind::kArx, OnlineModelKind::kFractionalFoptd, OnlineModelKind::kLpvArx}) {
+    options.process_models.push_back(OnlineModelOptionsFor(kind, settings));
+  }
+  ReachSampleProcessor reach(options);
+  ASSERT_EQ(reach.online_models().size(), 4U);
+  testdata::PoolSpec spec;
+  spec.samples = 600;
+  const testdata::PoolData d = testdata::MakePool(spec);
+  const long before = g_allocations;
+  std::uint32_t updated = 0;
+  for (std::size_t k = 0; k < d.level.size(); ++k) {
+    ReachSample s;
+    s.q_in_m3s = d.q_in[k];
+    s.q_out_m3s = d.q_out[k];
+    s.level_m = d.level[k];
+    s.q_in_valid = s.q_out_valid = s.level_valid = true;
+    s.input = d.q_in[k];
+    s.scheduling = d.level[k];
+    s.time_s = 60.0 * static_cast<double>(k);
+    updated |= reach.OnSample(s).online_models_updated;
+  }
+  EXPECT_EQ(g_allocations - before, 0);
+  EXPECT_EQ(updated, 0xFU);  // every model moved
 }
 
 }  // namespace

@@ -1,0 +1,68 @@
+// The "frac-foptd" kind of the online registry: OnlineFractionalBank (output error) from the
+// actuator to the level, in deviations from the operating point.
+#include <cmath>
+#include <limits>
+
+#include "core/online/online_model_kinds.h"
+
+namespace canalid::core {
+namespace {
+
+constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
+// kFlagLowExcitation below this many times the prior's information 1 / p0, as the id kind's
+// IntegratorDelayHealthOptions::information_min_per_p0.
+constexpr double kInformationMinPerP0 = 100.0;
+
+class OnlineFractionalModel final : public ProcessOnlineModel {
+ public:
+  explicit OnlineFractionalModel(const OnlineModelOptions& options)
+      : ProcessOnlineModel(options, {"gain", "time_constant_s", "alpha", "delay_s"}),
+        options_(options.fractional),
+        bank_(options.fractional) {}
+
+  OnlineModelKind kind() const override { return OnlineModelKind::kFractionalFoptd; }
+
+  bool Update(const OnlineSample& sample) override {
+    const Deviations d = Deviate(sample);
+    return bank_.Update(d.input, d.output);
+  }
+
+  void FillSnapshot(OnlineModelSnapshot& out) const override {
+    const FractionalSnapshot s = bank_.Snapshot();
+    SnapshotWriter w = Writer(out, "rls-bank", s.valid, s.health.updates);
+    w.Put(s.gain, s.gain_std);
+    w.Put(s.time_constant_s, s.time_constant_std_s);
+    w.Put(s.alpha, kNan);
+    w.Put(options_.delay_samples * options_.sample_time_s, kNan);
+    PutOperatingPoint(w);
+    int flags = 0;
+    if (s.information_min < kInformationMinPerP0 / options_.rls.initial_covariance) {
+      flags |= kFlagLowExcitation;
+    }
+    // T at the projection's bound 0, or alpha at an edge of a grid of several values.
+    const int last = bank_.num_candidates() - 1;
+    const int selected = bank_.selected_index();
+    if (!(s.time_constant_s > 0.0) || (last > 0 && (selected == 0 || selected == last))) {
+      flags |= kFlagOutOfBounds;
+    }
+    w.Finish(s.health, s.condition_number, s.information_min, s.innovation_std, condition_max(),
+             flags);
+  }
+
+  void Reset() override {
+    bank_ = OnlineFractionalBank(options_);
+    ResetOperatingPoint();
+  }
+
+ private:
+  OnlineFractionalOptions options_;
+  OnlineFractionalBank bank_;
+};
+
+}  // namespace
+
+std::unique_ptr<OnlineModel> MakeOnlineFractionalModel(const OnlineModelOptions& options) {
+  return std::make_unique<OnlineFractionalModel>(options);
+}
+
+}  // namespace canalid::core
