@@ -174,16 +174,23 @@ void Daemon::OnPoll(int index, const drivers::PollSample& s) {
     if (!outcome.plan_error.empty())
       LogError("reach " + reach.name() + ": no experiment: " + outcome.plan_error);
     Handle(reach, outcome.actions, s.time_s);
-    if (outcome.actions.online_updated && reach.pipeline().online_id() != nullptr) {
-      publisher_.PublishOnlineId(reach.name(), reach.pipeline().online_id()->Snapshot(), s.time_s,
-                                 "rls-bank");
-    }
+    if (outcome.actions.online_updated) PublishOnlineModels(reach, outcome.actions, s.time_s);
     if (reach.restore_pending && link_ok && !outcome.actions.write_setpoint)
       RequestSetpoint(reach, reach.restore_target);
     if (const auto start = reach.runner.StartIfDue(s.status.ok(), !stopping_)) {
       LogInfo("reach " + reach.name() + ": starting the experiment");
       Handle(reach, *start, s.time_s);
     }
+  }
+}
+
+void Daemon::PublishOnlineModels(ReachRuntime& reach, const core::ReachActions& actions,
+                                 double time_s) {
+  const auto& models = reach.pipeline().online_models();
+  for (std::size_t i = 0; i < models.size(); ++i) {
+    if ((actions.online_models_updated & (std::uint32_t{1} << i)) == 0) continue;
+    models[i]->FillSnapshot(snapshot_);
+    if (snapshot_.valid) publisher_.PublishOnlineModel(reach.name(), snapshot_, time_s);
   }
 }
 
@@ -317,9 +324,10 @@ void Daemon::OnCommand(const drivers::AcceptedCommand& command) {
       case drivers::CommandKind::kResetEstimator:
         reach->pipeline().ResetOnlineEstimator();
         // Marks the reset in the record (`canalid replay` resets its bank here too).
-        if (const core::OnlineIntegratorDelayBank* bank = reach->pipeline().online_id()) {
-          publisher_.PublishOnlineId(reach->name(), bank->Snapshot(), reach->last_time_s,
-                                     "rls-bank-reset");
+        if (!reach->pipeline().online_models().empty()) {
+          reach->pipeline().online_models().front()->FillSnapshot(snapshot_);
+          publisher_.PublishOnlineModel(reach->name(), snapshot_, reach->last_time_s,
+                                        "rls-bank-reset");
         }
         break;
       case drivers::CommandKind::kPublishConfig:

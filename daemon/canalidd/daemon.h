@@ -73,6 +73,8 @@ class Daemon final {
   void OnPoll(int plc, const drivers::PollSample& sample);
   void OnWriteResult(int plc, const drivers::WriteResult& result);
   void Handle(ReachRuntime& reach, const core::ReachActions& actions, double time_s);
+  /// Publishes the snapshot of every online model the sample moved.
+  void PublishOnlineModels(ReachRuntime& reach, const core::ReachActions& actions, double time_s);
   void RequestSetpoint(ReachRuntime& reach, double value);
   void StartHealthTimer();
   void PublishHealth();
@@ -105,6 +107,7 @@ class Daemon final {
   std::optional<DaemonPlan> reloaded_plan_;
   std::optional<StateStore> store_;
   std::unique_ptr<PersistenceWorker> model_saver_;  ///< with a state directory
+  core::OnlineModelSnapshot snapshot_;              ///< reused for every online model's publication
   DaemonExit exit_ = DaemonExit::kStopped;
   bool stopping_ = false;
   bool ready_ = false;

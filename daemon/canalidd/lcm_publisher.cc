@@ -86,23 +86,29 @@ void LcmPublisher::PublishSample(const std::string& plc,
   Send(Channel(sample_channels_, "SAMPLE_", plc), sample_);
 }
 
-void LcmPublisher::PublishOnlineId(const std::string& reach,
-                                   const core::IntegratorDelaySnapshot& snapshot, double time_s,
-                                   const char* estimator) {
+void LcmPublisher::PublishOnlineModel(const std::string& reach,
+                                      const core::OnlineModelSnapshot& snapshot, double time_s,
+                                      std::string_view estimator) {
   model_.utime = ToUtime(time_s);
   model_.reach = reach;
-  model_.model_kind = "id";
-  model_.estimator = estimator;
-  model_.samples_used = snapshot.health.updates;
-  SetParams(model_, {{"delay_s", {snapshot.delay_s, kNan}},
-                     {"area_m2", {snapshot.area_m2, snapshot.area_std_m2}},
-                     {"b", {snapshot.b, snapshot.b_std}},
-                     {"offset_m", {snapshot.c_m, snapshot.c_std_m}},
-                     {"drift_m_per_sample", {snapshot.d_m, snapshot.d_std_m}}});
-  model_.trace_p = snapshot.health.trace_p;
+  model_.model_kind = core::OnlineModelKindName(snapshot.kind);
+  model_.estimator = estimator.empty() ? snapshot.estimator : estimator;
+  model_.samples_used = snapshot.samples_used;
+  const auto n = static_cast<std::size_t>(snapshot.num_params);
+  model_.num_params = snapshot.num_params;
+  model_.param_names.resize(n);
+  model_.param_values.resize(n);
+  model_.param_std_devs.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    // Assigned only when different: the strings keep their storage from one message to the next.
+    if (model_.param_names[i] != snapshot.names[i]) model_.param_names[i] = snapshot.names[i];
+    model_.param_values[i] = snapshot.values[i];
+    model_.param_std_devs[i] = snapshot.std_devs[i];
+  }
+  model_.trace_p = snapshot.trace_p;
   model_.condition_number = snapshot.condition_number;
-  model_.excitation = snapshot.information_min;
-  model_.prediction_error_rms = snapshot.innovation_std_m;
+  model_.excitation = snapshot.excitation;
+  model_.prediction_error_rms = snapshot.prediction_error_rms;
   model_.flags = snapshot.flags;
   Send(Channel(model_channels_, "MODEL_", reach), model_);
 }

@@ -9,11 +9,13 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/experiment/experiment.h"
 #include "core/integrator_delay/identify_integrator_delay.h"
 #include "core/online/online_integrator_delay.h"
+#include "core/online/online_model.h"
 #include "drivers/lcm/bus.h"
 #include "drivers/modbus/plc_poller.h"
 
@@ -36,8 +38,10 @@ class LcmPublisher final {
 
   void PublishSample(const std::string& plc, const std::vector<std::string>& channel_names,
                      const drivers::PollSample& sample);
-  void PublishOnlineId(const std::string& reach, const core::IntegratorDelaySnapshot& snapshot,
-                       double time_s, const char* estimator);
+  /// An online estimator's snapshot (model_kind its kind's name, estimator the snapshot's, or
+  /// `estimator` when given: "rls-bank-reset" marks an operator's reset in the record).
+  void PublishOnlineModel(const std::string& reach, const core::OnlineModelSnapshot& snapshot,
+                          double time_s, std::string_view estimator = {});
   /// `out_of_bounds`: the model failed the reach's bounds (FLAG_OUT_OF_BOUNDS; not persisted).
   void PublishBatchId(const std::string& reach, const core::IntegratorDelayIdentification& result,
                       double time_s, std::int64_t samples, bool out_of_bounds);

@@ -64,18 +64,23 @@ class Reader {
     return node;
   }
 
+  // A TOML float or integer as a double; false (reported at `at`) for anything else.
+  bool NumberOf(const toml::node& node, const std::string& at, double& out) {
+    if (const auto* f = node.as_floating_point()) {
+      out = f->get();
+    } else if (const auto* i = node.as_integer()) {
+      out = static_cast<double>(i->get());
+    } else {
+      Problem(node.source(), at, std::string("expected a number, got ") + core::TomlTypeName(node));
+      return false;
+    }
+    return true;
+  }
+
   void Double(const toml::table& t, const std::string& path, std::string_view key, double& out,
               bool required = false) {
     const toml::node* node = Get(t, path, key, required);
-    if (node == nullptr) return;
-    if (const auto* f = node->as_floating_point()) {
-      out = f->get();
-    } else if (const auto* i = node->as_integer()) {
-      out = static_cast<double>(i->get());
-    } else {
-      Problem(node->source(), Join(path, key),
-              std::string("expected a number, got ") + core::TomlTypeName(*node));
-    }
+    if (node != nullptr) NumberOf(*node, Join(path, key), out);
   }
 
   void OptionalDouble(const toml::table& t, const std::string& path, std::string_view key,
@@ -157,26 +162,44 @@ class Reader {
     if (node != nullptr) EnumOf(*node, Join(path, key), out);
   }
 
-  template <class E>
-  void EnumList(const toml::table& t, const std::string& path, std::string_view key,
-                std::vector<E>& out) {
+  // An array at `key`: `element(node, "key[i]", value)` reads each element (false: reported).
+  template <class T, class Element>
+  void List(const toml::table& t, const std::string& path, std::string_view key,
+            const std::string& allowed, std::vector<T>& out, Element element) {
     const toml::node* node = Get(t, path, key, false);
     if (node == nullptr) return;
     const auto* array = node->as_array();
     if (array == nullptr) {
       Problem(node->source(), Join(path, key),
               std::string("expected an array, got ") + core::TomlTypeName(*node) +
-                  " (allowed: of " + config::AllowedNames<E>() + ")");
+                  " (allowed: " + allowed + ")");
       return;
     }
     out.clear();
     for (std::size_t i = 0; i < array->size(); ++i) {
       const std::string at = Join(path, key) + "[" + std::to_string(i) + "]";
-      const toml::node& element = *array->get(i);
-      Mark(at, element.source());
-      E value{};
-      if (EnumOf(element, at, value)) out.push_back(value);
+      const toml::node& item = *array->get(i);
+      Mark(at, item.source());
+      T value{};
+      if (element(item, at, value)) out.push_back(value);
     }
+  }
+
+  template <class E>
+  void EnumList(const toml::table& t, const std::string& path, std::string_view key,
+                std::vector<E>& out) {
+    List(t, path, key, "of " + config::AllowedNames<E>(), out,
+         [&](const toml::node& item, const std::string& at, E& value) {
+           return EnumOf(item, at, value);
+         });
+  }
+
+  void DoubleList(const toml::table& t, const std::string& path, std::string_view key,
+                  std::vector<double>& out) {
+    List(t, path, key, "of numbers", out,
+         [&](const toml::node& item, const std::string& at, double& value) {
+           return NumberOf(item, at, value);
+         });
   }
 
   const toml::table* Table(const toml::table& parent, const std::string& path,
@@ -331,10 +354,32 @@ void ReadChannel(Reader& r, const toml::table& t, const std::string& at, Channel
 
 void ReadReach(Reader& r, const toml::table& t, const std::string& at, ReachConfig& reach) {
   r.Keys(t, at,
-         {"name", "inflow", "outflow", "level", "actuator", "nominal_setpoint",
-          "actuator_gain_m3s_per_unit", "nominal_inflow_m3s", "expected_delay_s", "level_min_m",
-          "level_max_m", "online_models", "min_delay_s", "max_delay_s", "forgetting", "rls_method",
-          "closed_loop"});
+         {"name",
+          "inflow",
+          "outflow",
+          "level",
+          "actuator",
+          "nominal_setpoint",
+          "actuator_gain_m3s_per_unit",
+          "nominal_inflow_m3s",
+          "expected_delay_s",
+          "level_min_m",
+          "level_max_m",
+          "online_models",
+          "min_delay_s",
+          "max_delay_s",
+          "forgetting",
+          "rls_method",
+          "closed_loop",
+          "actuator_position",
+          "arx_na",
+          "arx_nb",
+          "fractional_alphas",
+          "fractional_delay_s",
+          "lpv_scheduling",
+          "lpv_na",
+          "lpv_nb",
+          "lpv_delay_s"});
   r.String(t, at, "name", reach.name, true);
   r.String(t, at, "inflow", reach.inflow, true);
   r.String(t, at, "outflow", reach.outflow, true);
@@ -354,6 +399,18 @@ void ReadReach(Reader& r, const toml::table& t, const std::string& at, ReachConf
   r.Double(t, at, "forgetting", reach.forgetting);
   r.Enum(t, at, "rls_method", reach.rls_method);
   r.Enum(t, at, "closed_loop", reach.closed_loop);
+  r.String(t, at, "actuator_position", reach.actuator_position);
+  r.Integer(t, at, "arx_na", reach.arx_na);
+  r.Integer(t, at, "arx_nb", reach.arx_nb);
+  r.DoubleList(t, at, "fractional_alphas", reach.fractional_alphas);
+  // Default: the operators' delay guess.
+  reach.fractional_delay_s = reach.expected_delay_s;
+  r.Double(t, at, "fractional_delay_s", reach.fractional_delay_s);
+  r.String(t, at, "lpv_scheduling", reach.lpv_scheduling);
+  r.Integer(t, at, "lpv_na", reach.lpv_na);
+  r.Integer(t, at, "lpv_nb", reach.lpv_nb);
+  reach.lpv_delay_s = reach.expected_delay_s;
+  r.Double(t, at, "lpv_delay_s", reach.lpv_delay_s);
 }
 
 void ReadExperiment(Reader& r, const toml::table& t, const std::string& at, ExperimentConfig& e) {

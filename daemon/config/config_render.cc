@@ -55,6 +55,11 @@ class Writer {
     }
     Key(key, text + "]");
   }
+  void Numbers(const char* key, const std::vector<double>& values) {
+    std::string text = "[";
+    for (std::size_t i = 0; i < values.size(); ++i) text += (i == 0 ? "" : ", ") + Float(values[i]);
+    Key(key, text + "]");
+  }
   std::string Take() { return std::move(out_); }
 
  private:
@@ -147,6 +152,15 @@ std::string RenderDaemonConfig(const config::DaemonConfig& c) {
     w.Key("forgetting", r.forgetting);
     w.Key("rls_method", config::EnumName(r.rls_method));
     w.Key("closed_loop", config::EnumName(r.closed_loop));
+    if (!r.actuator_position.empty()) w.Str("actuator_position", r.actuator_position);
+    w.Int("arx_na", r.arx_na);
+    w.Int("arx_nb", r.arx_nb);
+    w.Numbers("fractional_alphas", r.fractional_alphas);
+    w.Key("fractional_delay_s", r.fractional_delay_s);
+    if (!r.lpv_scheduling.empty()) w.Str("lpv_scheduling", r.lpv_scheduling);
+    w.Int("lpv_na", r.lpv_na);
+    w.Int("lpv_nb", r.lpv_nb);
+    w.Key("lpv_delay_s", r.lpv_delay_s);
   }
   for (const config::ExperimentConfig& e : c.experiments) {
     w.Line("");

@@ -1,5 +1,6 @@
 #include "daemon/config/daemon_config.h"
 
+#include <algorithm>
 #include <array>
 #include <charconv>
 #include <cmath>
@@ -8,6 +9,7 @@
 #include <stdexcept>
 
 #include "core/experiment/experiment_design.h"
+#include "core/online/online_arx.h"
 #include "core/signal/prbs.h"
 
 namespace canalid::config {
@@ -24,7 +26,8 @@ constexpr std::array kTables{RegisterTable::kInput, RegisterTable::kHolding};
 constexpr std::array kTypes{RegisterType::kU16, RegisterType::kI16, RegisterType::kU32,
                             RegisterType::kI32, RegisterType::kF32};
 constexpr std::array kWordOrders{WordOrder::kHighWordFirst, WordOrder::kLowWordFirst};
-constexpr std::array kModels{OnlineModel::kId, OnlineModel::kArx};
+constexpr std::array kModels{OnlineModel::kId, OnlineModel::kArx, OnlineModel::kFracFoptd,
+                             OnlineModel::kLpv};
 constexpr std::array kClosedLoopModes{ClosedLoopMode::kAuto, ClosedLoopMode::kOn,
                                       ClosedLoopMode::kOff};
 constexpr std::array kRlsMethods{RlsMethod::kUdDirectional, RlsMethod::kUdExponential,
@@ -277,6 +280,58 @@ const ChannelConfig* CheckReachChannel(const DaemonConfig& c, const std::string&
   return ch;
 }
 
+// The process models' settings and channels of a reach (arx, frac-foptd, lpv).
+void ValidateReachModels(const DaemonConfig& c, const ReachConfig& r, const ChannelConfig* level,
+                         const std::string& at, Collector& out) {
+  // A channel of the reach beside the four: exists, on the level's plc.
+  auto extra_channel = [&](const char* key, const std::string& name,
+                           std::initializer_list<ChannelRole> roles) {
+    const ChannelConfig* ch = CheckReachChannel(c, at + key, name, roles, false, out);
+    if (ch != nullptr && level != nullptr && ch->plc != level->plc) {
+      out.Add(at + key, "channel " + Quoted(name) + " is on plc " + Quoted(ch->plc) +
+                            " (allowed: the level's plc " + Quoted(level->plc) + ")");
+    }
+  };
+  if (!r.actuator_position.empty()) {
+    extra_channel("actuator_position", r.actuator_position,
+                  {ChannelRole::kGate, ChannelRole::kPump});
+  }
+  const bool lpv = std::find(r.online_models.begin(), r.online_models.end(), OnlineModel::kLpv) !=
+                   r.online_models.end();
+  if (!r.lpv_scheduling.empty()) {
+    extra_channel("lpv_scheduling", r.lpv_scheduling,
+                  {ChannelRole::kLevel, ChannelRole::kFlow, ChannelRole::kGate, ChannelRole::kPump,
+                   ChannelRole::kOther});
+  } else if (lpv) {
+    out.Add(at + "lpv_scheduling", "missing (required with online model \"lpv\")");
+  }
+  auto orders = [&](const char* na_key, int na, const char* nb_key, int nb) {
+    out.Range(at + na_key, na, 0, core::kMaxOnlineArxParams - 1);
+    out.Range(at + nb_key, nb, 1, core::kMaxOnlineArxParams);
+    if (na >= 0 && nb >= 1 && na + nb > core::kMaxOnlineArxParams) {
+      out.Add(at + nb_key, Num(nb) + " is out of range (allowed: " + na_key + " + " + nb_key +
+                               " <= " + Num(core::kMaxOnlineArxParams) + ")");
+    }
+  };
+  orders("arx_na", r.arx_na, "arx_nb", r.arx_nb);
+  orders("lpv_na", r.lpv_na, "lpv_nb", r.lpv_nb);
+  if (r.fractional_alphas.empty() || r.fractional_alphas.size() > 32) {
+    out.Add(at + "fractional_alphas",
+            Num(static_cast<double>(r.fractional_alphas.size())) + " values (allowed: 1 to 32)");
+  }
+  for (std::size_t k = 0; k < r.fractional_alphas.size(); ++k) {
+    out.Range(at + "fractional_alphas[" + std::to_string(k) + "]", r.fractional_alphas[k], 0.0, 2.0,
+              true, true);
+  }
+  double hi = 1e6;
+  if (c.FindReachPlc(r) != nullptr) {
+    const double ts = ReachSampleTimeS(c, r);
+    if (ts > 0.0 && std::isfinite(ts)) hi = kMaxDelaySamples * ts;
+  }
+  out.Range(at + "fractional_delay_s", r.fractional_delay_s, 0.0, hi);
+  out.Range(at + "lpv_delay_s", r.lpv_delay_s, 0.0, hi);
+}
+
 void ValidateReaches(const DaemonConfig& c, Collector& out) {
   std::set<std::string> names;
   for (std::size_t i = 0; i < c.reaches.size(); ++i) {
@@ -332,6 +387,7 @@ void ValidateReaches(const DaemonConfig& c, Collector& out) {
                     AllowedNames<OnlineModel>() + " once)");
       }
     }
+    ValidateReachModels(c, r, level, at, out);
     out.Range(at + "forgetting", r.forgetting, 0.0, 1.0, true);
     out.Range(at + "min_delay_s", r.min_delay_s, 0.0, 1e6);
     if (std::isfinite(r.min_delay_s) && r.min_delay_s >= 0.0) {
@@ -525,7 +581,9 @@ const char* EnumName(RegisterType v) {
   return NameIn(v, kTypes, {"u16", "i16", "u32", "i32", "f32"});
 }
 const char* EnumName(WordOrder v) { return NameIn(v, kWordOrders, {"high_first", "low_first"}); }
-const char* EnumName(OnlineModel v) { return NameIn(v, kModels, {"id", "arx"}); }
+const char* EnumName(OnlineModel v) {
+  return NameIn(v, kModels, {"id", "arx", "frac-foptd", "lpv"});
+}
 const char* EnumName(RlsMethod v) {
   return NameIn(v, kRlsMethods,
                 {"ud_directional", "ud_exponential", "exponential", "directional", "constant_trace",

@@ -32,7 +32,7 @@ enum class PlcTransport { kTcp, kRtu };
 enum class ChannelRole { kLevel, kFlow, kGate, kPump, kHeartbeat, kOther };
 /// Modbus table of a channel (function 4 input registers, function 3 holding registers).
 enum class RegisterTable { kInput, kHolding };
-enum class OnlineModel { kId, kArx };
+enum class OnlineModel { kId, kArx, kFracFoptd, kLpv };
 enum class ExperimentMode { kDesign, kExplicit };
 enum class ExperimentStart { kManual, kOnStart };
 
@@ -122,9 +122,21 @@ struct ReachConfig {
   double level_min_m = 0.0;         ///< safety band, finite, < level_max_m
   double level_max_m = 0.0;
   std::vector<OnlineModel> online_models{OnlineModel::kId};  ///< no duplicates
-  double min_delay_s = 0.0;                                  ///< smallest delay tried online, >= 0
-  double max_delay_s = 0.0;  ///< largest, >= min_delay_s, at most 2000 samples
-  double forgetting = 1.0;   ///< (0, 1]
+  /// The actuator's measured position (role gate or pump; empty: none): the process models'
+  /// input when given, else the actuator's own reading (its setpoint).
+  std::string actuator_position;
+  int arx_na = 2;  ///< arx: output lags, 0..15
+  int arx_nb = 2;  ///< arx: input lags, 1..16, arx_na + arx_nb <= 16
+  /// frac-foptd: the alpha grid, 1..32 values in (0, 2).
+  std::vector<double> fractional_alphas{0.5, 0.6, 0.7, 0.8, 0.9, 1.0, 1.2, 1.4};
+  double fractional_delay_s = 0.0;  ///< frac-foptd: known delay (default expected_delay_s)
+  std::string lpv_scheduling;       ///< lpv: the scheduling channel, required with lpv
+  int lpv_na = 1;                   ///< lpv: as arx_na
+  int lpv_nb = 1;                   ///< lpv: as arx_nb
+  double lpv_delay_s = 0.0;         ///< lpv: known delay (default expected_delay_s)
+  double min_delay_s = 0.0;         ///< smallest delay tried online, >= 0
+  double max_delay_s = 0.0;         ///< largest, >= min_delay_s, at most 2000 samples
+  double forgetting = 1.0;          ///< (0, 1]
   RlsMethod rls_method = RlsMethod::kUdDirectional;
   /// Batch identification at the end of an experiment: "auto" decides from the data whether the
   /// outflow follows the level (three-step closed-loop method), "on"/"off" force it.

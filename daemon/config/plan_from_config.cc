@@ -79,18 +79,29 @@ ExperimentPlan BuildExperimentPlan(const DaemonConfig& config, const ExperimentC
   return plan;
 }
 
+core::OnlineModelSettings BuildOnlineModelSettings(const DaemonConfig& config,
+                                                   const ReachConfig& reach) {
+  core::OnlineModelSettings settings;
+  settings.sample_time_s = ReachSampleTimeS(config, reach);
+  settings.rls_method = reach.rls_method;
+  settings.forgetting = reach.forgetting;
+  settings.min_delay_s = reach.min_delay_s;
+  settings.max_delay_s = reach.max_delay_s;
+  settings.arx_na = reach.arx_na;
+  settings.arx_nb = reach.arx_nb;
+  settings.fractional_alphas = reach.fractional_alphas;
+  settings.fractional_delay_s = reach.fractional_delay_s;
+  settings.lpv_na = reach.lpv_na;
+  settings.lpv_nb = reach.lpv_nb;
+  settings.lpv_delay_s = reach.lpv_delay_s;
+  return settings;
+}
+
 OnlineIntegratorDelayOptions BuildOnlineIntegratorDelayOptions(const DaemonConfig& config,
                                                                const ReachConfig& reach) {
-  OnlineIntegratorDelayOptions options;
-  options.sample_time_s = ReachSampleTimeS(config, reach);
-  options.min_delay_samples =
-      static_cast<int>(std::lround(reach.min_delay_s / options.sample_time_s));
-  options.max_delay_samples =
-      static_cast<int>(std::lround(reach.max_delay_s / options.sample_time_s));
-  options.rls.method = reach.rls_method;
-  options.rls.forgetting = reach.forgetting;
-  options.Validate();
-  return options;
+  return core::OnlineModelOptionsFor(core::OnlineModelKind::kIntegratorDelay,
+                                     BuildOnlineModelSettings(config, reach))
+      .id;
 }
 
 ReachControllerOptions BuildReachControllerOptions(
@@ -104,9 +115,33 @@ ReachControllerOptions BuildReachControllerOptions(
   options.channels.actuator = channel_index(reach.actuator);
   ReachSampleProcessorOptions& pipeline = options.pipeline;
   pipeline.sample_time_s = ReachSampleTimeS(*config, reach);
-  pipeline.online_id_enabled = std::find(reach.online_models.begin(), reach.online_models.end(),
-                                         OnlineModel::kId) != reach.online_models.end();
-  pipeline.online_id = BuildOnlineIntegratorDelayOptions(*config, reach);
+  if (!reach.actuator_position.empty())
+    options.channels.actuator_position = channel_index(reach.actuator_position);
+  if (!reach.lpv_scheduling.empty())
+    options.channels.scheduling = channel_index(reach.lpv_scheduling);
+  const core::OnlineModelSettings settings = BuildOnlineModelSettings(*config, reach);
+  pipeline.online_id_enabled = false;
+  for (const OnlineModel model : reach.online_models) {
+    switch (model) {
+      case OnlineModel::kId:
+        pipeline.online_id_enabled = true;
+        break;
+      case OnlineModel::kArx:
+        pipeline.process_models.push_back(
+            core::OnlineModelOptionsFor(core::OnlineModelKind::kArx, settings));
+        break;
+      case OnlineModel::kFracFoptd:
+        pipeline.process_models.push_back(
+            core::OnlineModelOptionsFor(core::OnlineModelKind::kFractionalFoptd, settings));
+        break;
+      case OnlineModel::kLpv:
+        pipeline.process_models.push_back(
+            core::OnlineModelOptionsFor(core::OnlineModelKind::kLpvArx, settings));
+        break;
+    }
+  }
+  pipeline.online_id =
+      core::OnlineModelOptionsFor(core::OnlineModelKind::kIntegratorDelay, settings).id;
   pipeline.batch.fit.min_nk = pipeline.online_id.min_delay_samples;
   pipeline.batch.fit.max_nk = pipeline.online_id.max_delay_samples;
   pipeline.batch.fit.closed_loop = reach.closed_loop;

@@ -6,6 +6,7 @@
 #include "core/experiment/experiment.h"
 #include "core/experiment/experiment_design.h"
 #include "core/online/online_integrator_delay.h"
+#include "core/online/online_model.h"
 #include "core/reach/reach_controller.h"
 #include "daemon/config/daemon_config.h"
 
@@ -40,16 +41,24 @@ ExperimentDesign DesignExperiment(const DaemonConfig& config, const ExperimentCo
 ExperimentPlan BuildExperimentPlan(const DaemonConfig& config, const ExperimentConfig& experiment,
                                    double nominal_setpoint);
 
-/// Options of the reach's OnlineIntegratorDelayBank: Ts as above, delays min_delay_s / Ts ..
-/// max_delay_s / Ts (rounded to the nearest sample), the reach's RLS method and forgetting, other
-/// options default.
+/// The reach's online settings (core::OnlineModelSettings): Ts as above, the RLS method and
+/// forgetting, the delay range, the arx, frac-foptd and lpv keys; the rest at their defaults.
+/// @throws std::invalid_argument when the reach does not resolve.
+core::OnlineModelSettings BuildOnlineModelSettings(const DaemonConfig& config,
+                                                   const ReachConfig& reach);
+
+/// Options of the reach's OnlineIntegratorDelayBank: core::OnlineModelOptionsFor the id kind and
+/// BuildOnlineModelSettings (delays min_delay_s / Ts .. max_delay_s / Ts, rounded to the nearest
+/// sample).
 /// @throws std::invalid_argument when the reach does not resolve or an option is out of range.
 OnlineIntegratorDelayOptions BuildOnlineIntegratorDelayOptions(const DaemonConfig& config,
                                                                const ReachConfig& reach);
 
 /// Everything `reach` runs (the daemon live, `canalid replay` from a log): its channels in its
 /// PLC's poll (`channel_index(name)`, which throws std::invalid_argument for a channel not polled),
-/// sample time, online estimator, batch options (delay range of the bank, closed-loop setting),
+/// sample time, online estimators (online_models: id, then the process models arx, frac-foptd,
+/// lpv in the configured order, with the actuator_position and lpv_scheduling channels), batch
+/// options (delay range of the bank, closed-loop setting),
 /// nominal setpoint, and its experiment factory (the first experiment of the reach; the factory
 /// keeps `config` alive).
 /// @throws std::invalid_argument when the reach does not resolve.

@@ -1,5 +1,7 @@
 #include "drivers/json/model_json.h"
 
+#include <cmath>
+
 namespace canalid::drivers {
 
 nlohmann::json ToJson(const core::FitMetrics& metrics) {
@@ -216,6 +218,21 @@ nlohmann::json OnlineIntegratorDelayJson(const core::IntegratorDelaySnapshot& s,
           {"area_std_m2", s.area_std_m2},
           {"prediction_error_m", s.prediction_error_m},
           {"innovation_std_m", s.innovation_std_m}};
+}
+
+nlohmann::json OnlineModelJson(const core::OnlineModelSnapshot& s, double sample_time_s) {
+  nlohmann::json j = {{"model", core::OnlineModelKindName(s.kind)}, {"estimator", "online"}};
+  for (std::size_t i = 0; i < static_cast<std::size_t>(s.num_params); ++i) {
+    j[s.names[i]] = s.values[i];
+    if (std::isfinite(s.std_devs[i])) j[s.names[i] + "_std"] = s.std_devs[i];
+  }
+  j["sample_time_s"] = sample_time_s;
+  j["samples_used"] = s.samples_used;
+  j["flags"] = s.flags;
+  j["trace_p"] = s.trace_p;
+  j["condition_number"] = s.condition_number;
+  j["prediction_error_rms"] = s.prediction_error_rms;
+  return j;
 }
 
 }  // namespace canalid::drivers

@@ -12,6 +12,7 @@
 #include "core/linear/process_model_fit.h"
 #include "core/numerics/metrics.h"
 #include "core/online/online_integrator_delay.h"
+#include "core/online/online_model.h"
 
 namespace canalid::drivers {
 
@@ -45,5 +46,10 @@ nlohmann::json ToJson(const core::LpvIdentification& lpv, double sample_time_s);
 /// errors and "estimator": "online".
 nlohmann::json OnlineIntegratorDelayJson(const core::IntegratorDelaySnapshot& snapshot,
                                          double sample_time_s);
+/// A snapshot of any online model (core::OnlineModel) as published on LCM: "model" (the kind's
+/// name), "estimator": "online", each parameter under its name with "<name>_std" where its
+/// standard deviation is known, sample_time_s, samples_used, flags, trace_p, condition_number,
+/// prediction_error_rms.
+nlohmann::json OnlineModelJson(const core::OnlineModelSnapshot& snapshot, double sample_time_s);
 
 }  // namespace canalid::drivers

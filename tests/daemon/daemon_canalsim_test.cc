@@ -26,6 +26,7 @@
 
 #include <canalid/experiment_state_t.hpp>
 #include <canalid/health_t.hpp>
+#include <canalid/model_snapshot_t.hpp>
 #include <canalid/sample_t.hpp>
 
 #include "tests/sim/serve_process.h"
@@ -235,6 +236,103 @@ TEST(DaemonCanalsim, DesignedExperimentIdentifiesRestoresReplaysAndResumes) {
   ASSERT_TRUE(persisted.is_object()) << resumed;
   EXPECT_DOUBLE_EQ(persisted.at("area_m2").get<double>(), area);
   EXPECT_EQ(again->Stop(SIGTERM), 0) << again->output();
+}
+
+// The last online snapshot the daemon published per model kind (MODEL_<reach> messages of its
+// LCM log, estimator not "batch"/"persisted").
+std::map<std::string, canalid::model_snapshot_t> LastOnlineModels(const fs::path& log_path,
+                                                                  const std::string& channel) {
+  std::map<std::string, canalid::model_snapshot_t> last;
+  lcm::LogFile log(log_path.string(), "r");
+  if (!log.good()) return last;
+  while (const lcm::LogEvent* e = log.readNextEvent()) {
+    if (e->channel != channel) continue;
+    canalid::model_snapshot_t m;
+    if (m.decode(e->data, 0, e->datalen) != e->datalen) continue;
+    if (m.estimator == "batch" || m.estimator == "persisted") continue;
+    last[m.model_kind] = m;
+  }
+  return last;
+}
+
+// Every parameter of `live` that `json` has under its name is the same double; returns the first
+// difference (empty when none) and counts the parameters compared.
+std::string SameParameters(const canalid::model_snapshot_t& live, const nlohmann::json& json,
+                           int* compared) {
+  *compared = 0;
+  for (std::size_t i = 0; i < live.param_names.size(); ++i) {
+    const std::string& name = live.param_names[i];
+    if (!json.contains(name) || !json[name].is_number()) continue;
+    ++*compared;
+    if (json[name].get<double>() != live.param_values[i]) {
+      std::ostringstream m;
+      m.precision(17);
+      m << live.model_kind << " " << name << ": live " << live.param_values[i] << ", other "
+        << json[name].get<double>();
+      return m.str();
+    }
+  }
+  return {};
+}
+
+// Every online kind the daemon runs on pool 2 (id, arx, frac-foptd), live over Modbus: the last
+// snapshot of each that it published equals, bit for bit, the final one of `canalid replay` of
+// its log and that of `canalid identify --online --config` on the record `canalid export` wrote
+// (the same registry, settings and samples); each kind was published.
+TEST(DaemonCanalsim, EveryOnlineKindIsReproducedByReplayAndIdentify) {
+  const fs::path dir = TestDir();
+  Canal canal(dir);
+  auto keys = BaseKeys(canal.serve.port(), dir);
+  keys.emplace_back("online_models", "[\"id\", \"arx\", \"frac-foptd\"]");
+  const std::string config = WriteConfig(dir / "canalidd.toml", keys, ExplicitExperiment(0.05, 6));
+  auto daemon = StartDaemon(dir, config);
+  // 126 samples of excitation at 10 samples per wall second.
+  ASSERT_FALSE(daemon->WaitForLine("reach pool2: identified ", 60000).empty()) << daemon->output();
+  EXPECT_EQ(daemon->Stop(SIGTERM), 0) << daemon->output();
+
+  const auto live = LastOnlineModels(dir / "run.lcmlog", "CANALID_ASCE2_MODEL_pool2");
+  ASSERT_EQ(live.size(), 3U);
+  for (const char* kind : {"id", "arx", "frac-foptd"}) {
+    ASSERT_EQ(live.count(kind), 1U) << kind;
+    EXPECT_GT(live.at(kind).samples_used, 100) << kind;
+  }
+  EXPECT_EQ(live.at("frac-foptd").num_params, 6);
+
+  // Replay, a snapshot after every sample: the last of each kind is the final state.
+  const ProgramRun replay = RunProgram(
+      CanalidProgram() + " replay --json --snapshot-every 1 " + (dir / "run.lcmlog").string(), dir);
+  ASSERT_EQ(replay.exit_code, 0) << replay.err;
+  std::map<std::string, nlohmann::json> replayed;
+  std::istringstream lines(replay.out);
+  std::string text;
+  while (std::getline(lines, text)) {
+    const nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
+    if (j.is_object() && j.value("estimator", "") == "online") replayed[j.value("model", "")] = j;
+  }
+  for (const auto& [kind, model] : live) {
+    ASSERT_EQ(replayed.count(kind), 1U) << kind << "\n" << replay.out;
+    int compared = 0;
+    EXPECT_EQ(SameParameters(model, replayed[kind], &compared), "");
+    EXPECT_GE(compared, 4) << kind;
+  }
+
+  const ProgramRun exported =
+      RunProgram(CanalidProgram() + " export " + (dir / "run.lcmlog").string() + " --out " +
+                     (dir / "export").string(),
+                 dir);
+  ASSERT_EQ(exported.exit_code, 0) << exported.err;
+  for (const auto& [kind, model] : live) {
+    const ProgramRun identify =
+        RunProgram(CanalidProgram() + " identify --online --model " + kind + " --config " + config +
+                       " --reach pool2 --input " + (dir / "export" / "pool2.csv").string(),
+                   dir);
+    ASSERT_EQ(identify.exit_code, 0) << kind << ": " << identify.err;
+    const nlohmann::json json = nlohmann::json::parse(identify.out, nullptr, false);
+    ASSERT_TRUE(json.is_object()) << identify.out;
+    int compared = 0;
+    EXPECT_EQ(SameParameters(model, json, &compared), "");
+    EXPECT_EQ(compared, model.num_params) << kind;
+  }
 }
 
 // 2. A level band the excitation has to leave: the experiment aborts and the nominal comes back.

@@ -1,0 +1,197 @@
+// The reach keys of the online model registry, read from TOML as canalidd reads them: each key
+// changes what the reach runs (the estimators built, their orders, grid, delays and input
+// channels), and bad values name their key.  The estimators themselves are checked in
+// tests/core/online_model_test.cc.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/reach/reach_controller.h"
+#include "daemon/config/config_loader.h"
+#include "daemon/config/plan_from_config.h"
+
+namespace canalid::daemon {
+namespace {
+
+using ::testing::HasSubstr;
+
+// One PLC polled every 0.1 s at time scale 600 (Ts = 60 plant s), a reach with every channel a
+// process model can read; `reach_keys` are appended to its table.
+std::string Config(const std::string& reach_keys) {
+  std::string text = R"([daemon]
+time_scale = 600.0
+
+[[plc]]
+name = "p"
+host = "127.0.0.1"
+poll_period_s = 0.1
+response_timeout_s = 0.05
+)";
+  const char* channels[][3] = {{"q_in", "flow", "input"},     {"q_out", "flow", "input"},
+                               {"level", "level", "input"},   {"gate", "gate", "holding"},
+                               {"gate_pos", "gate", "input"}, {"level_up", "level", "input"}};
+  int address = 0;
+  for (const auto& ch : channels) {
+    text += "\n[[channel]]\nname = \"" + std::string(ch[0]) + "\"\nplc = \"p\"\nrole = \"" + ch[1] +
+            "\"\nregister = \"" + ch[2] + "\"\naddress = " + std::to_string(address) +
+            "\ntype = \"f32\"\n";
+    if (std::string(ch[0]) == "gate") {
+      text += "writable = true\nsetpoint_min = 0.0\nsetpoint_max = 2.0\nmax_rate_per_s = 1.0\n";
+    }
+    address += 2;
+  }
+  text += R"(
+[[reach]]
+name = "pool2"
+inflow = "q_in"
+outflow = "q_out"
+level = "level"
+actuator = "gate"
+nominal_inflow_m3s = 10.0
+expected_delay_s = 600.0
+level_min_m = 1.0
+level_max_m = 3.0
+max_delay_s = 1200.0
+)" + reach_keys;
+  return text;
+}
+
+// The reach as canalidd builds it: channels are indexed in the order above.
+core::ReachControllerOptions Build(const std::string& reach_keys) {
+  const auto config =
+      std::make_shared<const config::DaemonConfig>(ParseDaemonConfig(Config(reach_keys), "t.toml"));
+  const std::vector<std::string> order = {"q_in", "q_out", "level", "gate", "gate_pos", "level_up"};
+  return config::BuildReachControllerOptions(config, config->reaches[0], [&](const std::string& c) {
+    for (std::size_t i = 0; i < order.size(); ++i) {
+      if (order[i] == c) return static_cast<int>(i);
+    }
+    throw std::invalid_argument("not polled: " + c);
+  });
+}
+
+std::vector<std::string> Issues(const std::string& reach_keys) {
+  try {
+    ParseDaemonConfig(Config(reach_keys), "t.toml");
+  } catch (const ConfigError& e) {
+    std::vector<std::string> out;
+    for (const ConfigIssue& issue : e.issues()) out.push_back(issue.ToString());
+    return out;
+  }
+  return {};
+}
+
+std::vector<core::OnlineModelKind> Kinds(const core::ReachController& reach) {
+  std::vector<core::OnlineModelKind> kinds;
+  for (const auto& model : reach.pipeline().online_models()) kinds.push_back(model->kind());
+  return kinds;
+}
+
+TEST(OnlineModelsConfig, OnlineModelsBuildEveryListedKindInOrderAndNothingElse) {
+  using K = core::OnlineModelKind;
+  EXPECT_EQ(Kinds(core::ReachController(Build(""))), (std::vector<K>{K::kIntegratorDelay}));
+  EXPECT_EQ(Kinds(core::ReachController(Build("online_models = []\n"))), std::vector<K>{});
+  EXPECT_EQ(Kinds(core::ReachController(
+                Build("online_models = [\"frac-foptd\", \"id\", \"arx\", \"lpv\"]\n"
+                      "lpv_scheduling = \"level_up\"\n"))),
+            (std::vector<K>{K::kIntegratorDelay, K::kFractionalFoptd, K::kArx, K::kLpvArx}));
+  EXPECT_EQ(Kinds(core::ReachController(Build("online_models = [\"arx\"]\n"))),
+            (std::vector<K>{K::kArx}));
+}
+
+TEST(OnlineModelsConfig, OrdersGridAndDelaysReachTheEstimators) {
+  const core::ReachControllerOptions defaults =
+      Build("online_models = [\"arx\", \"frac-foptd\", \"lpv\"]\nlpv_scheduling = \"level_up\"\n");
+  const auto& d = defaults.pipeline.process_models;
+  ASSERT_EQ(d.size(), 3U);
+  EXPECT_EQ(d[0].arx.na, 2);
+  EXPECT_EQ(d[0].arx.nb, 2);
+  EXPECT_EQ(d[0].arx.max_delay_samples, 20);  // 1200 s / 60 s
+  EXPECT_EQ(d[1].fractional.alphas.size(), 8U);
+  EXPECT_EQ(d[1].fractional.delay_samples, 10);  // expected_delay_s 600 s
+  EXPECT_EQ(d[2].lpv.na, 1);
+  EXPECT_EQ(d[2].lpv.delay_samples, 10);
+
+  const core::ReachControllerOptions set = Build(
+      "online_models = [\"arx\", \"frac-foptd\", \"lpv\"]\nlpv_scheduling = \"level_up\"\n"
+      "arx_na = 1\narx_nb = 3\nfractional_alphas = [0.7, 0.9]\nfractional_delay_s = 125.0\n"
+      "lpv_na = 2\nlpv_nb = 2\nlpv_delay_s = 0.0\nmin_delay_s = 120.0\n");
+  const auto& s = set.pipeline.process_models;
+  EXPECT_EQ(s[0].arx.na, 1);
+  EXPECT_EQ(s[0].arx.nb, 3);
+  EXPECT_EQ(s[0].arx.min_delay_samples, 2);
+  EXPECT_EQ(s[1].fractional.alphas, (std::vector<double>{0.7, 0.9}));
+  EXPECT_EQ(s[1].fractional.delay_samples, 2);  // 125 / 60 = 2.08
+  EXPECT_EQ(s[2].lpv.na, 2);
+  EXPECT_EQ(s[2].lpv.nb, 2);
+  EXPECT_EQ(s[2].lpv.delay_samples, 0);
+}
+
+// The input of the process models: the actuator's reading, or actuator_position's; lpv's
+// scheduling variable from lpv_scheduling.  Seen in the operating points the models take from
+// the first poll.
+TEST(OnlineModelsConfig, ActuatorPositionAndSchedulingChannelsFeedTheProcessModels) {
+  auto first_operating_point = [](const std::string& keys) {
+    core::ReachController reach(Build(keys));
+    // Channel values: q_in, q_out, level, gate setpoint, gate position, upstream level.
+    const std::vector<double> values = {10.0, 9.0, 2.1, 0.6, 0.55, 2.4};
+    const core::ReachReadings r = core::ReadReach(
+        reach.options().channels, values, [](std::size_t) { return true; }, true, true, 0.0);
+    reach.OnPoll(r);
+    core::OnlineModelSnapshot s;
+    reach.pipeline().online_models().back()->FillSnapshot(s);
+    return s.Value("input_operating_point");
+  };
+  EXPECT_EQ(first_operating_point("online_models = [\"arx\"]\n"), 0.6);
+  EXPECT_EQ(first_operating_point("online_models = [\"arx\"]\nactuator_position = \"gate_pos\"\n"),
+            0.55);
+  const core::ReachControllerOptions lpv =
+      Build("online_models = [\"lpv\"]\nlpv_scheduling = \"level_up\"\n");
+  EXPECT_EQ(lpv.channels.scheduling, 5);
+  EXPECT_EQ(lpv.channels.actuator_position, -1);
+}
+
+TEST(OnlineModelsConfig, BadValuesNameTheirKey) {
+  EXPECT_THAT(
+      Issues("online_models = [\"lpv\"]\n"),
+      ::testing::Contains(HasSubstr("reach[0].lpv_scheduling: missing (required with online "
+                                    "model \"lpv\")")));
+  EXPECT_THAT(Issues("online_models = [\"frac\"]\n"),
+              ::testing::Contains(HasSubstr("\"frac\" is not allowed (allowed: id, arx, "
+                                            "frac-foptd, lpv)")));
+  EXPECT_THAT(Issues("arx_na = 10\narx_nb = 7\n"),
+              ::testing::Contains(HasSubstr("reach[0].arx_nb: 7 is out of range")));
+  EXPECT_THAT(Issues("arx_nb = 0\n"), ::testing::Contains(HasSubstr("reach[0].arx_nb")));
+  EXPECT_THAT(Issues("fractional_alphas = []\n"),
+              ::testing::Contains(HasSubstr("reach[0].fractional_alphas")));
+  EXPECT_THAT(Issues("fractional_alphas = [0.5, 2.0]\n"),
+              ::testing::Contains(HasSubstr("reach[0].fractional_alphas[1]")));
+  EXPECT_THAT(Issues("fractional_alphas = [0.5, \"x\"]\n"),
+              ::testing::Contains(HasSubstr("reach[0].fractional_alphas[1]: expected a number")));
+  EXPECT_THAT(Issues("fractional_delay_s = -1.0\n"),
+              ::testing::Contains(HasSubstr("reach[0].fractional_delay_s")));
+  EXPECT_THAT(Issues("lpv_delay_s = 1e9\n"),
+              ::testing::Contains(HasSubstr("reach[0].lpv_delay_s")));
+  EXPECT_THAT(Issues("actuator_position = \"level_up\"\n"),
+              ::testing::Contains(HasSubstr("reach[0].actuator_position: channel \"level_up\" has "
+                                            "role \"level\"")));
+  EXPECT_THAT(Issues("lpv_scheduling = \"nope\"\n"),
+              ::testing::Contains(HasSubstr("reach[0].lpv_scheduling: unknown channel")));
+  EXPECT_TRUE(Issues("online_models = [\"id\", \"arx\", \"frac-foptd\", \"lpv\"]\n"
+                     "lpv_scheduling = \"level_up\"\nactuator_position = \"gate_pos\"\n")
+                  .empty());
+}
+
+// The effective configuration canalidd publishes reads back to the same configuration.
+TEST(OnlineModelsConfig, RenderedConfigurationReadsBackTheSame) {
+  const config::DaemonConfig c = ParseDaemonConfig(
+      Config("online_models = [\"id\", \"lpv\"]\nlpv_scheduling = \"level_up\"\n"
+             "actuator_position = \"gate_pos\"\nfractional_alphas = [0.7, 0.95]\narx_na = 3\n"),
+      "t.toml");
+  EXPECT_EQ(ParseDaemonConfig(RenderDaemonConfig(c), "rendered.toml"), c);
+}
+
+}  // namespace
+}  // namespace canalid::daemon
