@@ -142,6 +142,10 @@ void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code)
       "  canalid identify --model arx --input F.csv --u u --y y --online --forgetting 0.999\n"
       "  canalid identify --model id --input pool2.csv --online --trace trace.csv\n"
       "  canalid identify --model id --input gate.csv --online --closed-loop iv --p22 0.0216\n"
+      "  canalid identify --model frac-foptd --input flume.csv --u gate --y level --online --nk "
+      "27\n"
+      "  canalid identify --model frac-foptd --input export/pool2.csv --online \\\n"
+      "                   --config canalidd.toml --reach pool2\n"
       "  canalid identify --compare foptd,soptd,frac-foptd --input 'steps/*.csv' [--json]\n"
       "Output: one JSON object on stdout (keys in docs/model-json.md); --compare prints a table.\n"
       "Exit 2 on bad input.");
@@ -158,7 +162,8 @@ void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code)
   cmd->add_option("--out", options.out, "Also write the model JSON to this file");
   cmd->add_flag("--pretty", options.pretty, "Indent the JSON");
   AddIdentifyModelOptions(*cmd, options);
-  auto* online = cmd->add_option_group("Online estimation (--model id|arx --online)");
+  auto* online =
+      cmd->add_option_group("Online estimation (--model id|arx|frac-foptd|lpv --online)");
   online->add_flag("--online", options.online,
                    "Run the recursive estimator sample by sample; print its final snapshot");
   online->add_option("--forgetting", options.forgetting, "Forgetting factor lambda, 0 < L <= 1")
@@ -170,6 +175,13 @@ void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code)
       ->capture_default_str();
   online->add_option("--trace", options.trace,
                      "Write the parameter and health trajectory to this CSV (time_s first)");
+  auto* config = online->add_option(
+      "--config", options.config,
+      "--online: a canalidd configuration; the estimator takes the settings of --reach (as the "
+      "daemon runs it) and its channel names as columns");
+  auto* reach = online->add_option("--reach", options.reach, "--config: the reach");
+  config->needs(reach);
+  reach->needs(config);
   cmd->add_flag("--json", options.json, "--compare: print JSON (summary and per-file) instead");
   cmd->callback([&options, &exit_code] { exit_code = RunIdentify(options); });
 }

@@ -51,7 +51,9 @@ struct IdentifyOptions {
   bool online = false;
   double forgetting = 1.0;
   std::string method = "ud_directional";
-  std::string trace;  ///< --trace OUT.csv
+  std::string trace;   ///< --trace OUT.csv
+  std::string config;  ///< --config canalidd.toml: the reach's online settings and columns
+  std::string reach;   ///< --reach NAME, with --config
   // --compare
   std::string compare;
   bool json = false;
@@ -93,6 +95,11 @@ nlohmann::json IdentifyLpv(const IdentifyOptions& options, const drivers::CsvTab
 /// `--online` with --model id or arx: the recursive estimator run sample by sample over the table,
 /// its final snapshot in the batch keys plus `estimator` and `health`; --trace writes every step.
 nlohmann::json IdentifyOnline(const IdentifyOptions& options, const drivers::CsvTable& table);
+/// `--online` through the online model registry (the daemon's estimators): --model frac-foptd or
+/// lpv with the flags (--u, --y, --nk as the known delay, --alpha, --schedule, --na, --nb), or
+/// any registry kind with --config and --reach (the reach's settings, its channel names as
+/// columns).  The final snapshot as drivers::OnlineModelJson, plus method and forgetting.
+nlohmann::json IdentifyOnlineModel(const IdentifyOptions& options, const drivers::CsvTable& table);
 
 /// `--compare`: fits every listed kind to every file of the glob in options.input and prints
 /// the flume paper's Table 1 (mean, max, std of norm_error per model), or JSON with --json.

@@ -19,6 +19,7 @@
 #include "daemon/canalid/identify_command.h"
 #include "daemon/canalid/input_error.h"
 #include "daemon/canalid/table_columns.h"
+#include "daemon/canalid/trace_writer.h"
 #include "drivers/json/model_json.h"
 
 namespace canalid::cli {
@@ -77,38 +78,6 @@ nlohmann::json HealthJson(const core::RlsHealth& h) {
           {"resets", h.resets},
           {"trace_bounded", h.trace_bounded}};
 }
-
-// The trajectory file: time_s first, then the given columns, 17 significant digits, one row per
-// sample with a valid estimate.
-class TraceWriter {
- public:
-  TraceWriter(const std::string& path, const std::vector<std::string>& names) : path_(path) {
-    if (path.empty()) return;
-    file_.reset(std::fopen(path.c_str(), "w"));
-    if (!file_) throw InputError("--trace " + path + ": cannot open for writing");
-    std::fputs("time_s", file_.get());
-    for (const auto& name : names) std::fprintf(file_.get(), ",%s", name.c_str());
-    std::fputc('\n', file_.get());
-  }
-  bool enabled() const { return file_ != nullptr; }
-  void Row(double time_s, const double* values, std::size_t count) {
-    std::fprintf(file_.get(), "%.17g", time_s);
-    for (std::size_t i = 0; i < count; ++i) std::fprintf(file_.get(), ",%.17g", values[i]);
-    std::fputc('\n', file_.get());
-  }
-  void Close() {
-    if (file_ && std::fclose(file_.release()) != 0) {
-      throw InputError("--trace " + path_ + ": cannot write");
-    }
-  }
-
- private:
-  struct Closer {
-    void operator()(std::FILE* f) const { std::fclose(f); }
-  };
-  std::string path_;
-  std::unique_ptr<std::FILE, Closer> file_;
-};
 
 nlohmann::json OnlineId(const IdentifyOptions& options, const drivers::CsvTable& table) {
   const Eigen::VectorXd q_in = RequireMovingColumn(table, options.qin);
@@ -319,10 +288,10 @@ nlohmann::json OnlineArx(const IdentifyOptions& options, const drivers::CsvTable
 }  // namespace
 
 nlohmann::json IdentifyOnline(const IdentifyOptions& options, const drivers::CsvTable& table) {
+  if (!options.config.empty()) return IdentifyOnlineModel(options, table);
   if (options.model == "id") return OnlineId(options, table);
   if (options.model == "arx") return OnlineArx(options, table);
-  throw InputError("--online: --model " + options.model +
-                   " has no online estimator (online: id, arx)");
+  return IdentifyOnlineModel(options, table);
 }
 
 }  // namespace canalid::cli

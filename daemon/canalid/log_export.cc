@@ -1,5 +1,6 @@
 #include "daemon/canalid/log_export.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -21,7 +22,7 @@ void Cell(std::FILE* f, double value) { std::fprintf(f, ",%.17g", value); }
 struct LogExporter::ReachFile {
   std::string name;
   std::string plc;
-  std::vector<std::string> channels;  // inflow, outflow, level, actuator names
+  std::vector<std::string> channels;  // inflow, outflow, level, actuator names, then extras
   std::vector<int> indices;           // in the PLC's samples; empty until its first sample
   double sample_time_s = 1.0;
   std::FILE* file = nullptr;
@@ -74,6 +75,14 @@ void LogExporter::OnSample(const std::string& plc, const canalid::sample_t& samp
       r->name = reach.name;
       r->plc = plc;
       r->channels = {reach.inflow, reach.outflow, reach.level, reach.actuator};
+      // The process models' extra inputs, so the file holds everything the reach's estimators
+      // read (`canalid identify --online --config` takes them by name).
+      for (const std::string* extra : {&reach.actuator_position, &reach.lpv_scheduling}) {
+        if (!extra->empty() &&
+            std::find(r->channels.begin(), r->channels.end(), *extra) == r->channels.end()) {
+          r->channels.push_back(*extra);
+        }
+      }
       r->sample_time_s = config::ReachSampleTimeS(*config_.config(), reach);
       r->file = Open(reach.name + ".csv");
       std::fprintf(r->file, "time_s");

@@ -20,8 +20,19 @@ std::string Describe(const ReplayModel& model) {
   std::ostringstream s;
   const nlohmann::json& j = model.json;
   s << "t=+" << model.log_time_s << " s  " << model.reach << "  "
-    << (model.batch ? "batch id" : "online id") << ": delay " << j.value("delay_s", NAN)
-    << " s, area " << j.value("area_m2", NAN) << " m2";
+    << (model.batch ? "batch " : "online ") << model.kind << ":";
+  if (model.kind != "id") {
+    // The parameters in the order the model publishes them.
+    for (const auto& [key, value] : j.items()) {
+      if (value.is_number() && key.find("_std") == std::string::npos && key != "flags" &&
+          key != "samples_used" && key != "sample_time_s" && key != "trace_p" &&
+          key != "condition_number" && key != "prediction_error_rms") {
+        s << " " << key << " " << value.get<double>();
+      }
+    }
+    return s.str();
+  }
+  s << " delay " << j.value("delay_s", NAN) << " s, area " << j.value("area_m2", NAN) << " m2";
   if (model.batch && j.contains("metrics"))
     s << ", fit " << j["metrics"].value("fit_percent", NAN) << " %";
   if (!model.batch) s << " (" << j.value("samples", 0) << " samples)";
@@ -32,7 +43,7 @@ std::string Describe(const ReplayModel& model) {
 void CompareWithLive(const ReplaySession& session, const ReplayModel& model) {
   const auto reach = session.live_models().find(model.reach);
   if (reach == session.live_models().end()) return;
-  const auto live = reach->second.find(model.batch ? "batch" : "rls-bank");
+  const auto live = reach->second.find(ReplaySession::LiveKey(model.kind, model.estimator));
   if (live == reach->second.end()) return;
   double worst = 0.0;
   for (std::size_t i = 0; i < live->second.param_names.size(); ++i) {
@@ -42,9 +53,9 @@ void CompareWithLive(const ReplaySession& session, const ReplayModel& model) {
     const double b = live->second.param_values[i];
     worst = std::max(worst, std::abs(a - b) / std::max(std::abs(b), 1e-300));
   }
-  std::cerr << "canalid replay: " << model.reach << ": " << (model.batch ? "batch" : "online")
-            << " model vs the last one published live: largest relative difference " << worst
-            << "\n";
+  std::cerr << "canalid replay: " << model.reach << ": " << (model.batch ? "batch " : "online ")
+            << model.kind << " model vs the last one published live: largest relative difference "
+            << worst << "\n";
 }
 
 int RunReplay(const ReplayOptions& options) {

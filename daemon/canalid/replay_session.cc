@@ -138,10 +138,7 @@ void ReplaySession::OnSample(const std::string& plc_name, const canalid::sample_
   }
   if (options_.snapshot_every > 0 && samples_used_ % options_.snapshot_every == 0) {
     for (const auto& reach : reaches_) {
-      if (reach->runner && reach->runner->pipeline().online_id() != nullptr &&
-          reach->runner->pipeline().online_id()->Snapshot().valid) {
-        on_model_(OnlineModel(*reach, t));
-      }
+      OnlineModels(*reach, t, true, [&](const ReplayModel& model) { on_model_(model); });
     }
   }
 }
@@ -159,6 +156,7 @@ void ReplaySession::Step(Reach& reach, const core::ReachActions& actions, double
   model.reach = reach.config.name;
   model.log_time_s = log_time_s;
   model.batch = true;
+  model.estimator = "batch";
   model.json = drivers::ToJson(*result);
   model.json["reach"] = reach.config.name;
   reach.last_batch = model;
@@ -211,15 +209,16 @@ void ReplaySession::OnModel(const canalid::model_snapshot_t& model,
     }
     return;
   }
-  live_models_[model.reach][model.estimator] = model;
+  live_models_[model.reach][LiveKey(model.model_kind, model.estimator)] = model;
 }
 
-ReplayModel ReplaySession::OnlineModel(const Reach& reach, double log_time_s) const {
+ReplayModel ReplaySession::OnlineIdModel(const Reach& reach, double log_time_s) const {
   const core::OnlineIntegratorDelayBank& bank = *reach.runner->pipeline().online_id();
   const core::IntegratorDelaySnapshot s = bank.Snapshot();
   ReplayModel model;
   model.reach = reach.config.name;
   model.log_time_s = log_time_s;
+  model.estimator = "rls-bank";
   model.json =
       drivers::OnlineIntegratorDelayJson(s, reach.runner->options().pipeline.sample_time_s);
   model.json["samples"] = bank.health().samples;
@@ -227,14 +226,38 @@ ReplayModel ReplaySession::OnlineModel(const Reach& reach, double log_time_s) co
   return model;
 }
 
+void ReplaySession::OnlineModels(const Reach& reach, double log_time_s, bool with_id,
+                                 const std::function<void(ReplayModel)>& sink) const {
+  if (!reach.runner) return;
+  core::OnlineModelSnapshot snapshot;
+  for (const auto& online : reach.runner->pipeline().online_models()) {
+    online->FillSnapshot(snapshot);
+    if (!snapshot.valid) continue;
+    if (online->kind() == core::OnlineModelKind::kIntegratorDelay) {
+      if (with_id) sink(OnlineIdModel(reach, log_time_s));
+      continue;
+    }
+    ReplayModel model;
+    model.reach = reach.config.name;
+    model.log_time_s = log_time_s;
+    model.kind = core::OnlineModelKindName(snapshot.kind);
+    model.estimator = snapshot.estimator;
+    model.json = drivers::OnlineModelJson(snapshot, reach.runner->options().pipeline.sample_time_s);
+    model.json["reach"] = reach.config.name;
+    sink(std::move(model));
+  }
+}
+
 std::vector<ReplayModel> ReplaySession::FinalModels() const {
   std::vector<ReplayModel> models;
   for (const auto& reach : reaches_) {
+    OnlineModels(*reach, reach->last_time_s, false,
+                 [&](ReplayModel model) { models.push_back(std::move(model)); });
     if (reach->last_batch) {
       models.push_back(*reach->last_batch);
     } else if (reach->runner && reach->runner->pipeline().online_id() != nullptr &&
                reach->runner->pipeline().online_id()->Snapshot().valid) {
-      models.push_back(OnlineModel(*reach, reach->last_time_s));
+      models.push_back(OnlineIdModel(*reach, reach->last_time_s));
     }
   }
   return models;

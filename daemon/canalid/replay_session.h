@@ -21,7 +21,9 @@ struct ReplayModel {
   std::string reach;
   double log_time_s = 0.0;  ///< seconds since the first sample of the log (wall clock)
   bool batch = false;
-  nlohmann::json json;  ///< the model JSON (docs/model-json.md) with "reach"
+  std::string kind = "id";  ///< the model kind ("id", "arx", "frac-foptd", "lpv")
+  std::string estimator;    ///< as the daemon publishes it: "batch", "rls-bank", "rls"
+  nlohmann::json json;      ///< the model JSON (docs/model-json.md) with "reach"
 };
 
 struct ReplaySessionOptions {
@@ -54,11 +56,16 @@ class ReplaySession final : public drivers::LogMessageVisitor {
                     const drivers::LogEvent& event) override;
   void OnModel(const canalid::model_snapshot_t& model, const drivers::LogEvent& event) override;
 
-  /// The final model of every replayed reach (the last batch model, else the online snapshot),
-  /// in configuration order.
+  /// The final models of every replayed reach, in configuration order: the final snapshot of
+  /// each online process model (arx, frac-foptd, lpv), then the reach's id model (the last batch
+  /// model, else the online id snapshot).
   std::vector<ReplayModel> FinalModels() const;
+  /// The key of live_models(): "<model kind>/<estimator>" ("id/batch", "arx/rls-bank").
+  static std::string LiveKey(const std::string& kind, const std::string& estimator) {
+    return kind + "/" + estimator;
+  }
   /// The last model each reach published live (from the log's MODEL_ messages), by reach and
-  /// estimator ("batch", "rls-bank").
+  /// LiveKey.
   const std::map<std::string, std::map<std::string, canalid::model_snapshot_t>>& live_models()
       const {
     return live_models_;
@@ -73,7 +80,10 @@ class ReplaySession final : public drivers::LogMessageVisitor {
   void Restart();
   Plc* FindPlc(const std::string& name);
   void Step(Reach& reach, const core::ReachActions& actions, double log_time_s);
-  ReplayModel OnlineModel(const Reach& reach, double log_time_s) const;
+  ReplayModel OnlineIdModel(const Reach& reach, double log_time_s) const;
+  // Every online model of the reach with a valid snapshot, id first, to `sink`.
+  void OnlineModels(const Reach& reach, double log_time_s, bool with_id,
+                    const std::function<void(ReplayModel)>& sink) const;
 
   ReplaySessionOptions options_;
   ModelSink on_model_;

@@ -76,6 +76,10 @@ EXCEPTIONS = [
     ("docs/deployment.md", "scripts/setup", "installs Debian packages with apt-get (root)"),
     ("docs/deployment.md", "scripts/build", "builds the whole tree (minutes); this test runs from "
      "a build"),
+    ("docs/model-json.md", "canalid export run.lcmlog", "needs the LCM log of a live canalidd "
+     "run; DaemonCanalsim.EveryOnlineKindIsReproducedByReplayAndIdentify runs it on one"),
+    ("docs/model-json.md", "canalid identify --model frac-foptd --online --config", "reads the "
+     "export of a live run (the line before); the daemon suite runs it"),
     ("docs/reliability.md", "scripts/fuzz", "builds a second tree with clang and sanitizers "
      "(tens of minutes) and fuzzes for minutes per target; ctest -L fuzz replays what it keeps"),
 ]
