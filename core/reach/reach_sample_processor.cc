@@ -66,13 +66,22 @@ ReachActions ReachSampleProcessor::OnSample(const ReachSample& s) {
   event.sample = {s.level_m, s.level_valid && s.q_in_valid && s.q_out_valid, s.link_ok, s.time_s};
   ReachActions actions = Apply(event);
   if (record_this_sample_) {
+    // The process models start from rest: the sample before the record is its rest point.
+    if (recorded_ == 0) {
+      rest_input_ = previous_input_;
+      rest_level_ = previous_level_;
+    }
     // A tolerated invalid sample (max_invalid_samples) repeats the previous values.
     const Eigen::Index i = recorded_++;
     const bool valid = s.level_valid && s.q_in_valid && s.q_out_valid;
     record_q_in_(i) = valid || i == 0 ? s.q_in_m3s : record_q_in_(i - 1);
     record_q_out_(i) = valid || i == 0 ? s.q_out_m3s : record_q_out_(i - 1);
     record_level_(i) = valid || i == 0 ? s.level_m : record_level_(i - 1);
+    // The actuator's reading may be invalid on its own: it repeats the previous one then.
+    record_input_(i) = std::isfinite(s.input) || i == 0 ? s.input : record_input_(i - 1);
   }
+  if (std::isfinite(s.input)) previous_input_ = s.input;
+  if (s.level_valid) previous_level_ = s.level_m;
   actions.online_updated = updated != 0;
   actions.online_models_updated = updated;
   return actions;
@@ -126,6 +135,7 @@ bool ReachSampleProcessor::SetExperimentPlan(const ExperimentPlan& plan) {
   record_q_in_.resize(n);
   record_q_out_.resize(n);
   record_level_.resize(n);
+  record_input_.resize(n);
   recorded_ = 0;
   return true;
 }
@@ -134,20 +144,46 @@ std::optional<IntegratorDelayIdentification> ReachSampleProcessor::IdentifyRecor
     ReachActions* actions) {
   ExperimentEvent event;
   std::optional<IntegratorDelayIdentification> result;
-  try {
-    result = IdentifyIntegratorDelay(record_q_in_.head(recorded_), record_q_out_.head(recorded_),
-                                     record_level_.head(recorded_), options_.sample_time_s,
-                                     options_.batch);
-    const IntegratorDelayModel& m = result->fit.model;
-    identification_problem_ = IntegratorDelayBoundsProblem(m.area_m2(), m.nk, options_.online_id);
-    if (!std::isfinite(m.b)) identification_problem_ = "b is not finite";
-    event.kind = identification_problem_.empty() ? ExperimentEventKind::kIdentificationSucceeded
-                                                 : ExperimentEventKind::kIdentificationFailed;
-  } catch (const std::invalid_argument& e) {
-    result.reset();
-    identification_problem_ = e.what();
-    event.kind = ExperimentEventKind::kIdentificationFailed;
+  identification_problem_.clear();
+  if (options_.batch_id) {
+    try {
+      result = IdentifyIntegratorDelay(record_q_in_.head(recorded_), record_q_out_.head(recorded_),
+                                       record_level_.head(recorded_), options_.sample_time_s,
+                                       options_.batch);
+      const IntegratorDelayModel& m = result->fit.model;
+      identification_problem_ = IntegratorDelayBoundsProblem(m.area_m2(), m.nk, options_.online_id);
+      if (!std::isfinite(m.b)) identification_problem_ = "b is not finite";
+    } catch (const std::invalid_argument& e) {
+      result.reset();
+      identification_problem_ = e.what();
+    }
   }
+  process_results_.clear();
+  const double max_delay_s = options_.online_id.max_delay_samples * options_.sample_time_s;
+  bool process_ok = false;
+  // The record with its rest point (the sample before it, at the nominal setpoint) first: the
+  // fits take the first sample as the state of rest the input moves from.
+  Eigen::VectorXd input(recorded_ + 1), level(recorded_ + 1);
+  input << rest_input_, record_input_.head(recorded_);
+  level << rest_level_, record_level_.head(recorded_);
+  for (const ProcessBatchKind kind : options_.batch_process_models) {
+    if (!input.allFinite() || !level.allFinite()) {
+      ProcessBatchResult none;
+      none.kind = kind;
+      none.problem = "the actuator's reading was invalid from the start of the record";
+      process_results_.push_back(none);
+      continue;
+    }
+    process_results_.push_back(
+        FitProcessBatch(kind, input, level, options_.sample_time_s, max_delay_s));
+    process_ok = process_ok || process_results_.back().ok();
+  }
+  if (!options_.batch_id && !process_ok) {
+    identification_problem_ = process_results_.empty() ? "no batch model is configured"
+                                                       : process_results_.front().problem;
+  }
+  event.kind = identification_problem_.empty() ? ExperimentEventKind::kIdentificationSucceeded
+                                               : ExperimentEventKind::kIdentificationFailed;
   const ReachActions done = Apply(event);
   if (actions != nullptr) *actions = done;
   return result;

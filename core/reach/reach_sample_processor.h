@@ -11,6 +11,7 @@
 #include "core/integrator_delay/identify_integrator_delay.h"
 #include "core/online/online_integrator_delay.h"
 #include "core/online/online_model.h"
+#include "core/reach/process_batch.h"
 
 namespace canalid::core {
 
@@ -42,6 +43,10 @@ struct ReachSampleProcessorOptions {
   std::vector<OnlineModelOptions> process_models;
   std::optional<ExperimentPlan> experiment;    ///< none: this reach never excites its actuator
   IntegratorDelayIdentificationOptions batch;  ///< identification at the end of each experiment
+  bool batch_id = true;  ///< the integrator-delay model is identified at the end of experiments
+  /// The process models identified at the end of experiments too, from the recorded input (the
+  /// actuator, as the process models' online input) and level, delays up to the bank's largest.
+  std::vector<ProcessBatchKind> batch_process_models;
 };
 
 /// What the daemon must do after a sample or a command.
@@ -85,17 +90,22 @@ class ReachSampleProcessor final {
   /// Restarts the online estimators from their initial state (operator command, detected change).
   void ResetOnlineEstimator();
 
-  /// Batch identification of the completed record (ID model pipeline); then the experiment
-  /// ends done (a model inside the bounds of the reach's delay bank, IntegratorDelayBoundsProblem)
-  /// or aborted (kIdentificationFailed; the result, if any, is still returned for the operator to
-  /// see, and identification_problem() says why it is not the reach's model).
+  /// Batch identification of the completed record: the ID model pipeline (when batch_id; else
+  /// no result) and every batch process model (process_batch_results()).  Then the experiment
+  /// ends done or aborted (kIdentificationFailed): with batch_id by the ID model (inside the
+  /// bounds of the reach's delay bank, IntegratorDelayBoundsProblem; the result, if any, is still
+  /// returned for the operator to see, and identification_problem() says why it is not the
+  /// reach's model), else done when some process model fitted.
   /// @pre a record is complete.
   std::optional<IntegratorDelayIdentification> IdentifyRecord(ReachActions* actions);
   /// Why the last IdentifyRecord gave no usable model (empty when it did).
   const std::string& identification_problem() const { return identification_problem_; }
+  /// The process models of the last IdentifyRecord, in batch_process_models' order.
+  const std::vector<ProcessBatchResult>& process_batch_results() const { return process_results_; }
   /// The bounds a model of this reach must satisfy (the online bank's delay range and Ts).
   const OnlineIntegratorDelayOptions& model_bounds() const { return options_.online_id; }
 
+  const ReachSampleProcessorOptions& options() const { return options_; }
   const ExperimentState& experiment_state() const { return experiment_state_; }
   const std::optional<ExperimentPlan>& experiment_plan() const { return options_.experiment; }
   /// The id kind's bank (nullptr when the reach does not run it).
@@ -112,7 +122,13 @@ class ReachSampleProcessor final {
   std::vector<std::unique_ptr<OnlineModel>> online_models_;
   const OnlineIntegratorDelayBank* online_id_ = nullptr;  // inside online_models_
   ExperimentState experiment_state_;
-  Eigen::VectorXd record_q_in_, record_q_out_, record_level_;
+  Eigen::VectorXd record_q_in_, record_q_out_, record_level_, record_input_;
+  std::vector<ProcessBatchResult> process_results_;
+  // The last valid input and level, and those of the sample before the record (its rest point).
+  double previous_input_ = std::numeric_limits<double>::quiet_NaN();
+  double previous_level_ = std::numeric_limits<double>::quiet_NaN();
+  double rest_input_ = std::numeric_limits<double>::quiet_NaN();
+  double rest_level_ = std::numeric_limits<double>::quiet_NaN();
   Eigen::Index recorded_ = 0;
   bool record_this_sample_ = false;
   std::int64_t samples_ = 0;

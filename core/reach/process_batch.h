@@ -1,0 +1,44 @@
+#pragma once
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "core/fractional/fractional_foptd_fit.h"
+#include "core/linear/process_model_fit.h"
+
+namespace canalid::core {
+
+/// The process models (actuator to level) a reach identifies at the end of an experiment, beside
+/// the integrator-delay model: the batch fits of `canalid identify`.
+enum class ProcessBatchKind : std::uint8_t {
+  kFoptd,            ///< "foptd": K e^{-tau s} / (1 + T s)  (FitFoptd)
+  kFractionalFoptd,  ///< "frac-foptd": K e^{-tau s} / (1 + T s^alpha)  (FitFractionalFoptd)
+};
+inline constexpr std::array kProcessBatchKinds{ProcessBatchKind::kFoptd,
+                                               ProcessBatchKind::kFractionalFoptd};
+/// The kind's name in configurations and model JSON.
+std::string_view ProcessBatchKindName(ProcessBatchKind kind);
+
+/// One end-of-experiment fit: the kind's result, or why there is none.
+struct ProcessBatchResult {
+  ProcessBatchKind kind = ProcessBatchKind::kFoptd;
+  std::optional<FoptdFit> foptd;                       ///< kFoptd
+  std::optional<FractionalFoptdFitResult> fractional;  ///< kFractionalFoptd
+  OustaloupOptions band;  ///< kFractionalFoptd: the band the fit simulated with
+  /// Empty when the model is the reach's: fitted, finite, T > 0, delay inside [0, max_delay_s].
+  std::string problem;
+
+  bool ok() const { return problem.empty(); }
+};
+
+/// Fits `kind` to the record of input u (the actuator) and level y sampled every Ts, with delays
+/// up to max_delay_s (> 0).  Never throws for bad data: the fit's error becomes `problem`.
+ProcessBatchResult FitProcessBatch(ProcessBatchKind kind,
+                                   const Eigen::Ref<const Eigen::VectorXd>& u,
+                                   const Eigen::Ref<const Eigen::VectorXd>& y, double sample_time_s,
+                                   double max_delay_s);
+
+}  // namespace canalid::core

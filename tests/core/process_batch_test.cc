@@ -1,0 +1,122 @@
+// The end-of-experiment process models of a reach (core/reach/process_batch.h and
+// ReachSampleProcessor::IdentifyRecord): an experiment on a plant written here in closed form, a
+// first-order lag with delay discretised exactly under ZOH, gives its gain, time constant and
+// delay from both batch kinds; the integrator-delay fit can be left out; failures are reported.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "core/reach/reach_sample_processor.h"
+
+namespace canalid::core {
+namespace {
+
+constexpr double kTs = 0.15, kGain = 0.55, kTime = 8.0;
+constexpr std::size_t kDelaySamples = 20;  // 3 s
+
+// Level = 0.05 + y, y(k+1) = a y(k) + K (1 - a) (u(k - d) - u0), a = exp(-Ts / T): the exact
+// sampled FOPTD (continuous delay d Ts = 3 s) under a zero-order hold.
+class FoptdFlume {
+ public:
+  double Step(double gate) {
+    gates_.push_back(gate);
+    const double a = std::exp(-kTs / kTime);
+    const std::size_t n = gates_.size();
+    const double delayed = n > kDelaySamples ? gates_[n - 1 - kDelaySamples] : 0.015;
+    const double level = 0.05 + y_;
+    y_ = a * y_ + kGain * (1.0 - a) * (delayed - 0.015);
+    return level;
+  }
+
+ private:
+  std::vector<double> gates_;
+  double y_ = 0.0;
+};
+
+ReachSampleProcessorOptions FlumeOptions(bool batch_id) {
+  ReachSampleProcessorOptions o;
+  o.sample_time_s = kTs;
+  o.online_id_enabled = false;
+  o.online_id.max_delay_samples = 60;  // delays up to 9 s
+  o.batch_id = batch_id;
+  o.batch_process_models = {ProcessBatchKind::kFoptd, ProcessBatchKind::kFractionalFoptd};
+  ExperimentPlan plan;
+  plan.prbs.nominal = 0.015;
+  plan.prbs.amplitude = 0.002;
+  plan.prbs.clock_period_samples = 40;
+  plan.prbs.order = 6;
+  plan.settle_samples = 10;
+  plan.excite_samples = 63 * 40;
+  plan.level_min_m = 0.03;
+  plan.level_max_m = 0.07;
+  o.experiment = plan;
+  return o;
+}
+
+// Runs the experiment to its end; the gate follows every setpoint written.
+void RunExperiment(ReachSampleProcessor& reach) {
+  FoptdFlume flume;
+  double gate = 0.015;
+  ReachActions a = reach.StartExperiment();
+  if (a.write_setpoint) gate = *a.write_setpoint;
+  for (int k = 0; k < 4000 && !a.experiment_record_complete; ++k) {
+    ReachSample s;
+    s.level_m = flume.Step(gate);
+    s.q_in_m3s = s.q_out_m3s = 3e-4;
+    s.q_in_valid = s.q_out_valid = s.level_valid = true;
+    s.input = gate;
+    a = reach.OnSample(s);
+    if (a.write_setpoint) gate = *a.write_setpoint;
+  }
+  ASSERT_TRUE(a.experiment_record_complete);
+}
+
+TEST(ProcessBatch, AnExperimentGivesTheFoptdOfTheFlumeFromBothKinds) {
+  ReachSampleProcessor reach(FlumeOptions(false));
+  RunExperiment(reach);
+  ReachActions done;
+  EXPECT_FALSE(reach.IdentifyRecord(&done).has_value());  // no integrator-delay fit asked
+  EXPECT_EQ(reach.experiment_state().phase, ExperimentPhase::kDone);
+  const auto& results = reach.process_batch_results();
+  ASSERT_EQ(results.size(), 2U);
+  ASSERT_TRUE(results[0].ok()) << results[0].problem;
+  ASSERT_TRUE(results[0].foptd.has_value());
+  const FoptdModel& m = results[0].foptd->model;
+  // Exact data of the model's own structure: the simulation-error fit finds it.
+  EXPECT_NEAR(m.gain, kGain, 1e-3 * kGain);
+  EXPECT_NEAR(m.time_constant_s, kTime, 1e-2 * kTime);
+  EXPECT_NEAR(m.delay_s, static_cast<double>(kDelaySamples) * kTs, 0.5 * kTs);
+  ASSERT_TRUE(results[1].ok()) << results[1].problem;
+  const FractionalFoptdParams& f = results[1].fractional->params;
+  // A first-order lag is the fractional model at alpha 1.
+  EXPECT_NEAR(f.alpha, 1.0, 0.05);
+  EXPECT_NEAR(f.gain, kGain, 0.02 * kGain);
+  EXPECT_NEAR(f.time_constant_s, kTime, 0.15 * kTime);
+  EXPECT_NEAR(f.delay_s, static_cast<double>(kDelaySamples) * kTs, 2.0 * kTs);
+}
+
+TEST(ProcessBatch, WithoutAnyModelTheExperimentFailsAndSaysWhy) {
+  ReachSampleProcessorOptions o = FlumeOptions(false);
+  o.batch_process_models.clear();
+  ReachSampleProcessor reach(o);
+  RunExperiment(reach);
+  ReachActions done;
+  reach.IdentifyRecord(&done);
+  EXPECT_EQ(reach.experiment_state().phase, ExperimentPhase::kAborted);
+  EXPECT_EQ(reach.identification_problem(), "no batch model is configured");
+}
+
+TEST(ProcessBatch, AFitThatCannotRunIsAProblemNotAThrow) {
+  const Eigen::VectorXd still = Eigen::VectorXd::Constant(100, 0.015);
+  const Eigen::VectorXd level = Eigen::VectorXd::Constant(100, 0.05);
+  for (const ProcessBatchKind kind : kProcessBatchKinds) {
+    const ProcessBatchResult r = FitProcessBatch(kind, still, level, kTs, 9.0);
+    EXPECT_FALSE(r.ok()) << ProcessBatchKindName(kind);
+    EXPECT_FALSE(r.foptd.has_value() || r.fractional.has_value());
+  }
+  EXPECT_EQ(ProcessBatchKindName(ProcessBatchKind::kFractionalFoptd), "frac-foptd");
+}
+
+}  // namespace
+}  // namespace canalid::core
