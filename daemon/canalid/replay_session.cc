@@ -34,6 +34,7 @@ struct ReplaySession::Reach {
   config::ReachConfig config;
   std::optional<core::ReachController> runner;  // built at the first sample of its PLC in a run
   std::optional<ReplayModel> last_batch;
+  std::map<std::string, ReplayModel> last_process_batch;  // by kind
   double last_time_s = 0.0;
 };
 
@@ -146,10 +147,28 @@ void ReplaySession::OnSample(const std::string& plc_name, const canalid::sample_
 void ReplaySession::Step(Reach& reach, const core::ReachActions& actions, double log_time_s) {
   if (!actions.experiment_record_complete) return;
   core::ReachActions after;
+  const core::ReachSampleProcessor& pipeline = reach.runner->pipeline();
   const std::optional<core::IntegratorDelayIdentification> result =
       reach.runner->pipeline().IdentifyRecord(&after);
+  for (const core::ProcessBatchResult& process : pipeline.process_batch_results()) {
+    std::optional<nlohmann::json> json =
+        drivers::ProcessBatchJson(process, pipeline.options().sample_time_s);
+    if (!json) continue;
+    (*json)["reach"] = reach.config.name;
+    ReplayModel model;
+    model.reach = reach.config.name;
+    model.log_time_s = log_time_s;
+    model.batch = true;
+    model.kind = core::ProcessBatchKindName(process.kind);
+    model.estimator = "batch";
+    model.json = std::move(*json);
+    reach.last_process_batch[model.kind] = model;
+    on_model_(model);
+  }
   if (!result) {
-    on_warning_("reach " + reach.config.name + ": the experiment record could not be identified");
+    if (pipeline.options().batch_id) {
+      on_warning_("reach " + reach.config.name + ": the experiment record could not be identified");
+    }
     return;
   }
   ReplayModel model;
@@ -253,6 +272,7 @@ std::vector<ReplayModel> ReplaySession::FinalModels() const {
   for (const auto& reach : reaches_) {
     OnlineModels(*reach, reach->last_time_s, false,
                  [&](ReplayModel model) { models.push_back(std::move(model)); });
+    for (const auto& [kind, model] : reach->last_process_batch) models.push_back(model);
     if (reach->last_batch) {
       models.push_back(*reach->last_batch);
     } else if (reach->runner && reach->runner->pipeline().online_id() != nullptr &&

@@ -57,8 +57,9 @@ class ReplaySession final : public drivers::LogMessageVisitor {
   void OnModel(const canalid::model_snapshot_t& model, const drivers::LogEvent& event) override;
 
   /// The final models of every replayed reach, in configuration order: the final snapshot of
-  /// each online process model (arx, frac-foptd, lpv), then the reach's id model (the last batch
-  /// model, else the online id snapshot).
+  /// each online process model (arx, frac-foptd, lpv), the last batch process model of each kind
+  /// (foptd, frac-foptd), then the reach's id model (the last batch model, else the online id
+  /// snapshot).
   std::vector<ReplayModel> FinalModels() const;
   /// The key of live_models(): "<model kind>/<estimator>" ("id/batch", "arx/rls-bank").
   static std::string LiveKey(const std::string& kind, const std::string& estimator) {

@@ -272,10 +272,41 @@ void Daemon::Handle(ReachRuntime& reach, const core::ReachActions& actions, doub
         LogWarning("reach " + name + ": identified a model outside the bounds (" + problem +
                    "); not persisted: " + json.dump());
       }
-    } else {
+    } else if (reach.pipeline().options().batch_id) {
       LogWarning("reach " + name + ": the experiment record could not be identified");
     }
+    ReportProcessModels(reach, time_s);
     Handle(reach, after, time_s);
+  }
+}
+
+void Daemon::ReportProcessModels(const ReachRuntime& reach, double time_s) {
+  const std::string& name = reach.name();
+  for (const core::ProcessBatchResult& process : reach.pipeline().process_batch_results()) {
+    const std::string kind(core::ProcessBatchKindName(process.kind));
+    std::optional<nlohmann::json> json =
+        drivers::ProcessBatchJson(process, reach.pipeline().options().sample_time_s);
+    if (!json) {
+      LogWarning("reach " + name + ": no " + kind + " model: " + process.problem);
+      continue;
+    }
+    (*json)["reach"] = name;
+    publisher_.PublishModelJson(name, *json, time_s, "batch", reach.pipeline().recorded_samples(),
+                                process.ok() ? 0 : core::kFlagOutOfBounds);
+    if (!process.ok()) {
+      LogWarning("reach " + name + ": identified a " + kind + " model outside the bounds (" +
+                 process.problem + "); not persisted: " + json->dump());
+      continue;
+    }
+    LogInfo("reach " + name + ": identified " + kind + " " + json->dump());
+    if (model_saver_) {
+      PersistedModel model;
+      model.reach = name;
+      model.model_kind = kind;
+      model.saved_utime_us = ToUtime(WallNowS());
+      model.model = *json;
+      model_saver_->Submit(std::move(model));
+    }
   }
 }
 
@@ -289,7 +320,7 @@ void Daemon::LoadState() {
   model_saver_ = std::make_unique<PersistenceWorker>(
       [store = *store_](const PersistedModel& model) mutable { store.Save(model); },
       [](const std::string& what) { LogError("state: " + what); },
-      std::max<std::size_t>(reaches_.size(), 1));
+      std::max<std::size_t>(BatchModelCount(reaches_), 1));
 }
 
 void Daemon::SaveModel(const ReachRuntime& reach,

@@ -73,6 +73,8 @@ class Daemon final {
   void OnPoll(int plc, const drivers::PollSample& sample);
   void OnWriteResult(int plc, const drivers::WriteResult& result);
   void Handle(ReachRuntime& reach, const core::ReachActions& actions, double time_s);
+  /// Publishes, logs and persists the process models of the reach's last identification.
+  void ReportProcessModels(const ReachRuntime& reach, double time_s);
   /// Publishes the snapshot of every online model the sample moved.
   void PublishOnlineModels(ReachRuntime& reach, const core::ReachActions& actions, double time_s);
   void RequestSetpoint(ReachRuntime& reach, double value);

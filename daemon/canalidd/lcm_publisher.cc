@@ -138,12 +138,13 @@ void LcmPublisher::PublishBatchId(const std::string& reach,
 }
 
 void LcmPublisher::PublishModelJson(const std::string& reach, const nlohmann::json& model,
-                                    double time_s) {
+                                    double time_s, const char* estimator, std::int64_t samples,
+                                    std::int32_t flags) {
   model_.utime = ToUtime(time_s);
   model_.reach = reach;
   model_.model_kind = model.value("model", std::string("unknown"));
-  model_.estimator = "persisted";
-  model_.samples_used = 0;
+  model_.estimator = estimator;
+  model_.samples_used = samples;
   model_.param_names.clear();
   model_.param_values.clear();
   model_.param_std_devs.clear();
@@ -159,8 +160,12 @@ void LcmPublisher::PublishModelJson(const std::string& reach, const nlohmann::js
   model_.trace_p = kNan;
   model_.condition_number = kNan;
   model_.excitation = kNan;
-  model_.prediction_error_rms = kNan;
-  model_.flags = 0;
+  const nlohmann::json* metrics = model.contains("metrics") ? &model["metrics"] : nullptr;
+  model_.prediction_error_rms =
+      metrics != nullptr && metrics->contains("rmse") && (*metrics)["rmse"].is_number()
+          ? (*metrics)["rmse"].get<double>()
+          : kNan;
+  model_.flags = flags;
   Send(Channel(model_channels_, "MODEL_", reach), model_);
 }
 

@@ -45,8 +45,13 @@ class LcmPublisher final {
   /// `out_of_bounds`: the model failed the reach's bounds (FLAG_OUT_OF_BOUNDS; not persisted).
   void PublishBatchId(const std::string& reach, const core::IntegratorDelayIdentification& result,
                       double time_s, std::int64_t samples, bool out_of_bounds);
-  /// A model from the state directory (estimator "persisted"): the numeric keys of its JSON.
-  void PublishModelJson(const std::string& reach, const nlohmann::json& model, double time_s);
+  /// A model given as its model JSON (the numeric keys delay_s, area_m2, b, p21_s_per_m2,
+  /// offset_m, gain, time_constant_s, alpha; prediction_error_rms from metrics.rmse): one from
+  /// the state directory (estimator "persisted"), or an end-of-experiment process model
+  /// ("batch", with the samples it used and its flags).
+  void PublishModelJson(const std::string& reach, const nlohmann::json& model, double time_s,
+                        const char* estimator = "persisted", std::int64_t samples = 0,
+                        std::int32_t flags = 0);
   void PublishExperiment(const std::string& reach, const core::ExperimentState& state,
                          const core::ExperimentPlan& plan, const std::string& actuator,
                          double time_s);

@@ -5,6 +5,7 @@
 
 #include "daemon/canalidd/clock.h"
 #include "daemon/canalidd/log.h"
+#include "daemon/canalidd/persisted_model_checks.h"
 #include "drivers/json/model_json.h"
 
 namespace canalid::daemon {
@@ -23,8 +24,7 @@ void ResumePersistedModels(const StateStore& store,
     if (reach == reaches.end()) continue;
     // Read back like any input: a file edited by hand or written by a build without these checks
     // must not come back as the reach's model.
-    const std::string problem =
-        PersistedIntegratorDelayProblem(model, (*reach)->pipeline().model_bounds());
+    const std::string problem = PersistedModelProblem(model, (*reach)->pipeline().model_bounds());
     if (!problem.empty()) {
       LogWarning("state: " + store.PathFor(model.reach, model.model_kind).string() + ": reach " +
                  model.reach + ": " + problem + "; ignored");
@@ -53,6 +53,15 @@ PersistedModel MakePersistedModel(const ReachRuntime& reach,
                     {"samples", bank->health().samples}};
   }
   return model;
+}
+
+std::size_t BatchModelCount(const std::vector<std::unique_ptr<ReachRuntime>>& reaches) {
+  std::size_t count = 0;
+  for (const auto& reach : reaches) {
+    const core::ReachSampleProcessorOptions& o = reach->pipeline().options();
+    count += (o.batch_id ? 1U : 0U) + o.batch_process_models.size();
+  }
+  return count;
 }
 
 }  // namespace canalid::daemon

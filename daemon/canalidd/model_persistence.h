@@ -1,5 +1,8 @@
 #pragma once
 #include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include "core/integrator_delay/identify_integrator_delay.h"
@@ -11,11 +14,15 @@ namespace canalid::daemon {
 
 /// At start: the models of the state directory, each read back like any input (a file edited by
 /// hand or written by a build without these checks must not come back as the reach's model:
-/// PersistedIntegratorDelayProblem against the reach's bank), published on the bus and logged;
+/// PersistedModelProblem against the reach's bank), published on the bus and logged;
 /// problems, leftover temp files and models of unknown reaches are logged or skipped.
 void ResumePersistedModels(const StateStore& store,
                            const std::vector<std::unique_ptr<ReachRuntime>>& reaches,
                            LcmPublisher& publisher);
+
+/// Models the daemon may persist at once: one per reach and batch kind (the save queue's size,
+/// so that a new model never waits on the disk).
+std::size_t BatchModelCount(const std::vector<std::unique_ptr<ReachRuntime>>& reaches);
 
 /// The state file of a reach's identified model: the batch result's model JSON and, when the
 /// reach runs an online bank, its snapshot (taken here, on the caller's thread: the bank is not

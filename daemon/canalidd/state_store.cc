@@ -97,40 +97,6 @@ std::optional<nlohmann::json> ReadStateDocument(const std::filesystem::path& pat
 
 }  // namespace
 
-std::string PersistedIntegratorDelayProblem(const PersistedModel& persisted,
-                                            const core::OnlineIntegratorDelayOptions& bank) {
-  const nlohmann::json& j = persisted.model;
-  if (persisted.model_kind != "id") {
-    return "model kind '" + persisted.model_kind + "' is not one the daemon persists (id)";
-  }
-  drivers::IntegratorDelayModelRecord record;
-  try {
-    record = drivers::IntegratorDelayModelFromJson(j, "model");
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  const core::IntegratorDelayModel& m = record.model;
-  const double ts = bank.sample_time_s;
-  std::ostringstream why;
-  auto differs = [](double a, double b) { return !(std::abs(a - b) <= 1e-6 * std::abs(b)); };
-  if (!std::isfinite(m.b)) {
-    why << "b " << m.b << " is not finite";
-  } else if (!j.contains("sample_time_s") || differs(m.sample_time_s, ts)) {
-    why << "sample_time_s " << (j.contains("sample_time_s") ? j.at("sample_time_s").dump() : "none")
-        << " is not the reach's " << ts << " s";
-  } else if (j.contains("delay_s") &&
-             (!j.at("delay_s").is_number() || differs(j.at("delay_s").get<double>(), m.nk * ts))) {
-    why << "delay_s " << j.at("delay_s").dump() << " is not nk x sample_time_s = " << m.nk * ts;
-  } else if (std::string bounds = core::IntegratorDelayBoundsProblem(ts / m.b, m.nk, bank);
-             !bounds.empty()) {
-    return bounds;
-  } else if (j.contains("area_m2") &&
-             (!j.at("area_m2").is_number() || differs(j.at("area_m2").get<double>(), ts / m.b))) {
-    why << "area_m2 " << j.at("area_m2").dump() << " is not sample_time_s / b = " << ts / m.b;
-  }
-  return why.str();
-}
-
 StateStore::StateStore(std::filesystem::path directory) : directory_(std::move(directory)) {
   if (directory_.empty()) throw std::invalid_argument("state directory is empty: give a path");
 }

@@ -32,15 +32,6 @@ struct StateLoadReport {
   std::vector<std::filesystem::path> leftover_temp_files;
 };
 
-/// Why a persisted model cannot be resumed as the model of a reach whose online bank has these
-/// options (empty when it can), checked like any input: kind "id" (the only kind the daemon
-/// persists), readable by drivers::IntegratorDelayModelFromJson (b finite, nk an integer >= 0,
-/// ...), sample_time_s present and equal to the bank's Ts, delay_s (when present) finite and equal
-/// to nk Ts and area_m2 (when present) equal to Ts / b (both to 1e-6), and inside
-/// core::IntegratorDelayBoundsProblem (A > 0, nk within the bank and not at its edge).  Pure.
-std::string PersistedIntegratorDelayProblem(const PersistedModel& model,
-                                            const core::OnlineIntegratorDelayOptions& bank);
-
 /// Models persisted in the state directory (systemd StateDirectory=, /var/lib/canalidd), one file
 /// per reach and model kind: `<reach>.<model_kind>.json` holding
 ///   {"format": "canalid-state-v1", "reach", "model_kind", "saved_utime_us", "model", "online"}.

@@ -371,6 +371,7 @@ void ReadReach(Reader& r, const toml::table& t, const std::string& at, ReachConf
           "forgetting",
           "rls_method",
           "closed_loop",
+          "batch_models",
           "actuator_position",
           "arx_na",
           "arx_nb",
@@ -399,6 +400,7 @@ void ReadReach(Reader& r, const toml::table& t, const std::string& at, ReachConf
   r.Double(t, at, "forgetting", reach.forgetting);
   r.Enum(t, at, "rls_method", reach.rls_method);
   r.Enum(t, at, "closed_loop", reach.closed_loop);
+  r.EnumList(t, at, "batch_models", reach.batch_models);
   r.String(t, at, "actuator_position", reach.actuator_position);
   r.Integer(t, at, "arx_na", reach.arx_na);
   r.Integer(t, at, "arx_nb", reach.arx_nb);

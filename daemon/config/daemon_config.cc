@@ -28,6 +28,7 @@ constexpr std::array kTypes{RegisterType::kU16, RegisterType::kI16, RegisterType
 constexpr std::array kWordOrders{WordOrder::kHighWordFirst, WordOrder::kLowWordFirst};
 constexpr std::array kModels{OnlineModel::kId, OnlineModel::kArx, OnlineModel::kFracFoptd,
                              OnlineModel::kLpv};
+constexpr std::array kBatchModels{BatchModel::kId, BatchModel::kFoptd, BatchModel::kFracFoptd};
 constexpr std::array kClosedLoopModes{ClosedLoopMode::kAuto, ClosedLoopMode::kOn,
                                       ClosedLoopMode::kOff};
 constexpr std::array kRlsMethods{RlsMethod::kUdDirectional, RlsMethod::kUdExponential,
@@ -280,6 +281,19 @@ const ChannelConfig* CheckReachChannel(const DaemonConfig& c, const std::string&
   return ch;
 }
 
+// Each model of a list at most once.
+template <class E>
+void NoDuplicates(const std::string& path, const std::vector<E>& models, Collector& out) {
+  std::set<E> seen;
+  for (std::size_t m = 0; m < models.size(); ++m) {
+    if (!seen.insert(models[m]).second) {
+      out.Add(path + "[" + std::to_string(m) + "]",
+              "duplicate model " + Quoted(EnumName(models[m])) + " (allowed: each of " +
+                  AllowedNames<E>() + " once)");
+    }
+  }
+}
+
 // The process models' settings and channels of a reach (arx, frac-foptd, lpv).
 void ValidateReachModels(const DaemonConfig& c, const ReachConfig& r, const ChannelConfig* level,
                          const std::string& at, Collector& out) {
@@ -379,13 +393,11 @@ void ValidateReaches(const DaemonConfig& c, Collector& out) {
                                       "level_min_m " +
                                       Num(r.level_min_m) + ")");
     }
-    std::set<OnlineModel> models;
-    for (std::size_t m = 0; m < r.online_models.size(); ++m) {
-      if (!models.insert(r.online_models[m]).second) {
-        out.Add(at + "online_models[" + std::to_string(m) + "]",
-                "duplicate model " + Quoted(EnumName(r.online_models[m])) + " (allowed: each of " +
-                    AllowedNames<OnlineModel>() + " once)");
-      }
+    NoDuplicates(at + "online_models", r.online_models, out);
+    NoDuplicates(at + "batch_models", r.batch_models, out);
+    if (r.batch_models.empty()) {
+      out.Add(at + "batch_models",
+              "is empty (allowed: at least one of " + AllowedNames<BatchModel>() + ")");
     }
     ValidateReachModels(c, r, level, at, out);
     out.Range(at + "forgetting", r.forgetting, 0.0, 1.0, true);
@@ -581,6 +593,9 @@ const char* EnumName(RegisterType v) {
   return NameIn(v, kTypes, {"u16", "i16", "u32", "i32", "f32"});
 }
 const char* EnumName(WordOrder v) { return NameIn(v, kWordOrders, {"high_first", "low_first"}); }
+const char* EnumName(BatchModel v) {
+  return NameIn(v, kBatchModels, {"id", "foptd", "frac-foptd"});
+}
 const char* EnumName(OnlineModel v) {
   return NameIn(v, kModels, {"id", "arx", "frac-foptd", "lpv"});
 }
@@ -626,6 +641,10 @@ std::span<const WordOrder> AllValues<WordOrder>() {
 template <>
 std::span<const OnlineModel> AllValues<OnlineModel>() {
   return kModels;
+}
+template <>
+std::span<const BatchModel> AllValues<BatchModel>() {
+  return kBatchModels;
 }
 template <>
 std::span<const RlsMethod> AllValues<RlsMethod>() {

@@ -33,6 +33,8 @@ enum class ChannelRole { kLevel, kFlow, kGate, kPump, kHeartbeat, kOther };
 /// Modbus table of a channel (function 4 input registers, function 3 holding registers).
 enum class RegisterTable { kInput, kHolding };
 enum class OnlineModel { kId, kArx, kFracFoptd, kLpv };
+/// The models identified at the end of an experiment.
+enum class BatchModel { kId, kFoptd, kFracFoptd };
 enum class ExperimentMode { kDesign, kExplicit };
 enum class ExperimentStart { kManual, kOnStart };
 
@@ -122,6 +124,9 @@ struct ReachConfig {
   double level_min_m = 0.0;         ///< safety band, finite, < level_max_m
   double level_max_m = 0.0;
   std::vector<OnlineModel> online_models{OnlineModel::kId};  ///< no duplicates
+  /// Identified at the end of each experiment, published with estimator "batch" and persisted;
+  /// at least one, no duplicates.
+  std::vector<BatchModel> batch_models{BatchModel::kId};
   /// The actuator's measured position (role gate or pump; empty: none): the process models'
   /// input when given, else the actuator's own reading (its setpoint).
   std::string actuator_position;
@@ -225,6 +230,7 @@ const char* EnumName(RegisterTable value);
 const char* EnumName(RegisterType value);
 const char* EnumName(WordOrder value);
 const char* EnumName(OnlineModel value);
+const char* EnumName(BatchModel value);
 const char* EnumName(RlsMethod value);
 const char* EnumName(ClosedLoopMode value);
 const char* EnumName(ExperimentMode value);
@@ -248,6 +254,8 @@ template <>
 std::span<const WordOrder> AllValues<WordOrder>();
 template <>
 std::span<const OnlineModel> AllValues<OnlineModel>();
+template <>
+std::span<const BatchModel> AllValues<BatchModel>();
 template <>
 std::span<const RlsMethod> AllValues<RlsMethod>();
 template <>

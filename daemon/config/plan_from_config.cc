@@ -142,6 +142,20 @@ ReachControllerOptions BuildReachControllerOptions(
   }
   pipeline.online_id =
       core::OnlineModelOptionsFor(core::OnlineModelKind::kIntegratorDelay, settings).id;
+  pipeline.batch_id = false;
+  for (const BatchModel model : reach.batch_models) {
+    switch (model) {
+      case BatchModel::kId:
+        pipeline.batch_id = true;
+        break;
+      case BatchModel::kFoptd:
+        pipeline.batch_process_models.push_back(core::ProcessBatchKind::kFoptd);
+        break;
+      case BatchModel::kFracFoptd:
+        pipeline.batch_process_models.push_back(core::ProcessBatchKind::kFractionalFoptd);
+        break;
+    }
+  }
   pipeline.batch.fit.min_nk = pipeline.online_id.min_delay_samples;
   pipeline.batch.fit.max_nk = pipeline.online_id.max_delay_samples;
   pipeline.batch.fit.closed_loop = reach.closed_loop;

@@ -235,4 +235,18 @@ nlohmann::json OnlineModelJson(const core::OnlineModelSnapshot& s, double sample
   return j;
 }
 
+std::optional<nlohmann::json> ProcessBatchJson(const core::ProcessBatchResult& result,
+                                               double sample_time_s) {
+  nlohmann::json json;
+  if (result.foptd) {
+    json = ToJson(*result.foptd);
+  } else if (result.fractional) {
+    json = ToJson(*result.fractional, result.band);
+  } else {
+    return std::nullopt;
+  }
+  json["sample_time_s"] = sample_time_s;
+  return json;
+}
+
 }  // namespace canalid::drivers

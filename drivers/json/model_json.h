@@ -1,5 +1,6 @@
 #pragma once
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "core/experiment/experiment_design.h"
 #include "core/fractional/commensurate_state_space.h"
@@ -13,6 +14,7 @@
 #include "core/numerics/metrics.h"
 #include "core/online/online_integrator_delay.h"
 #include "core/online/online_model.h"
+#include "core/reach/process_batch.h"
 
 namespace canalid::drivers {
 
@@ -51,5 +53,10 @@ nlohmann::json OnlineIntegratorDelayJson(const core::IntegratorDelaySnapshot& sn
 /// standard deviation is known, sample_time_s, samples_used, flags, trace_p, condition_number,
 /// prediction_error_rms.
 nlohmann::json OnlineModelJson(const core::OnlineModelSnapshot& snapshot, double sample_time_s);
+/// An end-of-experiment process model (core::ProcessBatchResult): the model JSON of its kind
+/// (foptd, frac-foptd with its Oustaloup band) plus sample_time_s; none when the fit gave no
+/// model at all.
+std::optional<nlohmann::json> ProcessBatchJson(const core::ProcessBatchResult& result,
+                                               double sample_time_s);
 
 }  // namespace canalid::drivers

@@ -184,10 +184,32 @@ TEST(OnlineModelsConfig, BadValuesNameTheirKey) {
                   .empty());
 }
 
+// batch_models: which fits run at the end of an experiment (the fits: process_batch_test).
+TEST(OnlineModelsConfig, BatchModelsChooseTheEndOfExperimentFits) {
+  const core::ReachSampleProcessorOptions defaults = Build("").pipeline;
+  EXPECT_TRUE(defaults.batch_id);
+  EXPECT_TRUE(defaults.batch_process_models.empty());
+  const core::ReachSampleProcessorOptions set =
+      Build("batch_models = [\"frac-foptd\", \"foptd\"]\n").pipeline;
+  EXPECT_FALSE(set.batch_id);
+  EXPECT_EQ(set.batch_process_models,
+            (std::vector<core::ProcessBatchKind>{core::ProcessBatchKind::kFractionalFoptd,
+                                                 core::ProcessBatchKind::kFoptd}));
+  EXPECT_THAT(Issues("batch_models = []\n"),
+              ::testing::Contains(HasSubstr("reach[0].batch_models: is empty (allowed: at least "
+                                            "one of id, foptd, frac-foptd)")));
+  EXPECT_THAT(Issues("batch_models = [\"id\", \"id\"]\n"),
+              ::testing::Contains(HasSubstr("reach[0].batch_models[1]: duplicate model \"id\"")));
+  EXPECT_THAT(Issues("batch_models = [\"arx\"]\n"),
+              ::testing::Contains(HasSubstr("\"arx\" is not allowed (allowed: id, foptd, "
+                                            "frac-foptd)")));
+}
+
 // The effective configuration canalidd publishes reads back to the same configuration.
 TEST(OnlineModelsConfig, RenderedConfigurationReadsBackTheSame) {
   const config::DaemonConfig c = ParseDaemonConfig(
       Config("online_models = [\"id\", \"lpv\"]\nlpv_scheduling = \"level_up\"\n"
+             "batch_models = [\"id\", \"frac-foptd\"]\n"
              "actuator_position = \"gate_pos\"\nfractional_alphas = [0.7, 0.95]\narx_na = 3\n"),
       "t.toml");
   EXPECT_EQ(ParseDaemonConfig(RenderDaemonConfig(c), "rendered.toml"), c);

@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "daemon/canalidd/persisted_model_checks.h"
 #include "daemon/canalidd/state_store.h"
 #include "tests/support/run_program.h"
 
