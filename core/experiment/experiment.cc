@@ -32,6 +32,17 @@ ExperimentTransition Enter(ExperimentState state, ExperimentPhase phase) {
   return {state, actions};
 }
 
+// The setpoint of the excitation's current sample (samples_in_phase of exciting): the step's
+// level, or the PRBS's next bit.
+double ExcitationSetpoint(const ExperimentPlan& plan, ExperimentState& state) {
+  if (plan.step_hold_samples > 0) {
+    return state.samples_in_phase < plan.step_hold_samples ? plan.prbs.nominal + plan.prbs.amplitude
+                                                           : plan.prbs.nominal;
+  }
+  if (!state.prbs) state.prbs.emplace(plan.prbs);
+  return state.prbs->Next();
+}
+
 ExperimentTransition OnSample(const ExperimentPlan& plan, ExperimentState state,
                               const ExperimentSample& s) {
   if (!Running(state.phase)) return {state, {}};
@@ -57,8 +68,8 @@ ExperimentTransition OnSample(const ExperimentPlan& plan, ExperimentState state,
   if (state.phase == ExperimentPhase::kSettling) {
     if (++state.samples_in_phase < plan.settle_samples) return {state, {}};
     ExperimentTransition t = Enter(state, ExperimentPhase::kExciting);
-    t.state.prbs.emplace(plan.prbs);
-    t.state.setpoint = t.state.prbs->Next();
+    t.state.prbs.reset();
+    t.state.setpoint = ExcitationSetpoint(plan, t.state);
     t.actions.write_setpoint = t.state.setpoint;
     return t;
   }
@@ -74,7 +85,7 @@ ExperimentTransition OnSample(const ExperimentPlan& plan, ExperimentState state,
     t.actions.start_identification = true;
     return t;
   }
-  state.setpoint = state.prbs->Next();
+  state.setpoint = ExcitationSetpoint(plan, state);
   actions.write_setpoint = state.setpoint;
   return {state, actions};
 }
@@ -145,6 +156,12 @@ void ExperimentPlan::Validate() const {
     throw std::invalid_argument("experiment excite_samples must be >= 1 (got " +
                                 std::to_string(excite_samples) + ")");
   }
+  if (step_hold_samples < 0 || (step_hold_samples > 0 && excite_samples != 2 * step_hold_samples)) {
+    throw std::invalid_argument("experiment step_hold_samples " +
+                                std::to_string(step_hold_samples) +
+                                " must be >= 0, and half of excite_samples (" +
+                                std::to_string(excite_samples) + ") when > 0");
+  }
   if (!(level_max_m > level_min_m)) {
     throw std::invalid_argument("experiment level band: level_max_m (" +
                                 std::to_string(level_max_m) + ") must be above level_min_m (" +
@@ -174,8 +191,8 @@ ExperimentTransition Step(const ExperimentPlan& plan, const ExperimentState& sta
       t.actions.restore_nominal = true;
       if (plan.settle_samples == 0) {
         t.state.phase = ExperimentPhase::kExciting;
-        t.state.prbs.emplace(plan.prbs);
-        t.state.setpoint = t.state.prbs->Next();
+        t.state.prbs.reset();
+        t.state.setpoint = ExcitationSetpoint(plan, t.state);
         t.actions.write_setpoint = t.state.setpoint;
         t.actions.restore_nominal = false;
       }

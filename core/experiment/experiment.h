@@ -42,10 +42,13 @@ struct ExperimentPlan {
   PrbsSignalSpec
       prbs;  ///< nominal = the actuator's nominal setpoint, amplitude, clock, order, seed
   std::int64_t settle_samples = 0;  ///< samples at nominal before exciting, >= 0
-  std::int64_t excite_samples = 1;  ///< samples of PRBS, >= 1
-  double level_min_m = 0.0;         ///< the band the level must stay in while the actuator moves
-  double level_max_m = 0.0;         ///< > level_min_m
-  int max_invalid_samples = 0;      ///< consecutive invalid level samples tolerated, >= 0
+  std::int64_t excite_samples = 1;  ///< samples of excitation, >= 1
+  /// > 0: a step experiment instead of the PRBS: nominal + prbs.amplitude for this many samples,
+  /// then back to nominal for as many (excite_samples = 2 step_hold_samples); 0: the PRBS.
+  std::int64_t step_hold_samples = 0;
+  double level_min_m = 0.0;     ///< the band the level must stay in while the actuator moves
+  double level_max_m = 0.0;     ///< > level_min_m
+  int max_invalid_samples = 0;  ///< consecutive invalid level samples tolerated, >= 0
   /// Largest time between two consecutive samples while settling or exciting (s of the samples'
   /// clock, > 0; infinity: not checked).  A longer gap, or time going back, means the record is
   /// not uniformly sampled: the experiment aborts (kSampleGap).

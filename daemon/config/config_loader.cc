@@ -417,32 +417,52 @@ void ReadReach(Reader& r, const toml::table& t, const std::string& at, ReachConf
 
 void ReadExperiment(Reader& r, const toml::table& t, const std::string& at, ExperimentConfig& e) {
   r.Enum(t, at, "mode", e.mode);
-  const bool design = e.mode == config::ExperimentMode::kDesign;
   const std::string design_only = "mode = \"design\"";
   const std::string explicit_only = "mode = \"explicit\"";
-  if (design) {
-    r.Keys(t, at,
-           {"name", "reach", "mode", "amplitude_percent", "duration_factor", "seed", "settle_s",
-            "start", "max_invalid_samples", "max_sample_gap_periods"},
-           {{"amplitude", explicit_only},
-            {"clock_period_s", explicit_only},
-            {"order", explicit_only},
-            {"periods", explicit_only}});
-    r.Double(t, at, "amplitude_percent", e.amplitude_percent);
-    r.Double(t, at, "duration_factor", e.duration_factor);
-  } else {
-    r.Keys(t, at,
-           {"name", "reach", "mode", "amplitude", "clock_period_s", "order", "periods", "seed",
-            "settle_s", "start", "max_invalid_samples", "max_sample_gap_periods"},
-           {{"amplitude_percent", design_only}, {"duration_factor", design_only}});
-    r.Double(t, at, "amplitude", e.amplitude, true);
-    r.Double(t, at, "clock_period_s", e.clock_period_s, true);
-    r.Integer(t, at, "order", e.order);
-    r.Integer(t, at, "periods", e.periods);
+  const std::string prbs_only = "mode = \"design\" or \"explicit\"";
+  const std::string step_only = "mode = \"step\"";
+  switch (e.mode) {
+    case config::ExperimentMode::kDesign:
+      r.Keys(t, at,
+             {"name", "reach", "mode", "amplitude_percent", "duration_factor", "seed", "settle_s",
+              "start", "max_invalid_samples", "max_sample_gap_periods"},
+             {{"amplitude", explicit_only},
+              {"clock_period_s", explicit_only},
+              {"order", explicit_only},
+              {"periods", explicit_only},
+              {"hold_s", step_only}});
+      r.Double(t, at, "amplitude_percent", e.amplitude_percent);
+      r.Double(t, at, "duration_factor", e.duration_factor);
+      break;
+    case config::ExperimentMode::kExplicit:
+      r.Keys(t, at,
+             {"name", "reach", "mode", "amplitude", "clock_period_s", "order", "periods", "seed",
+              "settle_s", "start", "max_invalid_samples", "max_sample_gap_periods"},
+             {{"amplitude_percent", design_only},
+              {"duration_factor", design_only},
+              {"hold_s", step_only}});
+      r.Double(t, at, "amplitude", e.amplitude, true);
+      r.Double(t, at, "clock_period_s", e.clock_period_s, true);
+      r.Integer(t, at, "order", e.order);
+      r.Integer(t, at, "periods", e.periods);
+      break;
+    case config::ExperimentMode::kStep:
+      r.Keys(t, at,
+             {"name", "reach", "mode", "amplitude", "hold_s", "settle_s", "start",
+              "max_invalid_samples", "max_sample_gap_periods"},
+             {{"amplitude_percent", design_only},
+              {"duration_factor", design_only},
+              {"clock_period_s", explicit_only},
+              {"order", explicit_only},
+              {"periods", explicit_only},
+              {"seed", prbs_only}});
+      r.Double(t, at, "amplitude", e.amplitude, true);
+      r.Double(t, at, "hold_s", e.hold_s, true);
+      break;
   }
   r.String(t, at, "name", e.name, true);
   r.String(t, at, "reach", e.reach, true);
-  r.Integer(t, at, "seed", e.seed);
+  if (e.mode != config::ExperimentMode::kStep) r.Integer(t, at, "seed", e.seed);
   r.Double(t, at, "settle_s", e.settle_s);
   r.Enum(t, at, "start", e.start);
   r.Integer(t, at, "max_invalid_samples", e.max_invalid_samples);

@@ -172,13 +172,16 @@ std::string RenderDaemonConfig(const config::DaemonConfig& c) {
     if (e.mode == config::ExperimentMode::kDesign) {
       w.Key("amplitude_percent", e.amplitude_percent);
       w.Key("duration_factor", e.duration_factor);
+    } else if (e.mode == config::ExperimentMode::kStep) {
+      w.Key("amplitude", e.amplitude);
+      w.Key("hold_s", e.hold_s);
     } else {
       w.Key("amplitude", e.amplitude);
       w.Key("clock_period_s", e.clock_period_s);
       w.Int("order", e.order);
       w.Int("periods", e.periods);
     }
-    w.Int("seed", e.seed);
+    if (e.mode != config::ExperimentMode::kStep) w.Int("seed", e.seed);
     w.Key("settle_s", e.settle_s);
     w.Key("start", config::EnumName(e.start));
     w.Int("max_invalid_samples", e.max_invalid_samples);

@@ -35,7 +35,8 @@ constexpr std::array kRlsMethods{RlsMethod::kUdDirectional, RlsMethod::kUdExpone
                                  RlsMethod::kExponential,   RlsMethod::kDirectional,
                                  RlsMethod::kConstantTrace, RlsMethod::kStabilised,
                                  RlsMethod::kKalman,        RlsMethod::kNlms};
-constexpr std::array kModes{ExperimentMode::kDesign, ExperimentMode::kExplicit};
+constexpr std::array kModes{ExperimentMode::kDesign, ExperimentMode::kExplicit,
+                            ExperimentMode::kStep};
 constexpr std::array kStarts{ExperimentStart::kManual, ExperimentStart::kOnStart};
 constexpr std::array kCommandKinds{CommandKind::kStartExperiment, CommandKind::kAbortExperiment,
                                    CommandKind::kResetEstimator, CommandKind::kPublishConfig};
@@ -419,6 +420,17 @@ void ValidateReaches(const DaemonConfig& c, Collector& out) {
   }
 }
 
+// A duration of n >= 1 whole samples of Ts (unchecked when Ts is unknown: its keys report it).
+void WholeSamples(const std::string& path, double seconds, double ts, Collector& out) {
+  if (!(ts > 0.0)) return;
+  const double samples = seconds / ts;
+  if (!(samples >= 1.0 && samples <= 1e6 &&
+        std::abs(samples - std::round(samples)) <= 1e-9 * samples)) {
+    out.Add(path, Num(seconds) + " is not a whole number of samples (allowed: n * sample time " +
+                      Num(ts) + " s, n >= 1)");
+  }
+}
+
 void ValidateExperiments(const DaemonConfig& c, Collector& out) {
   std::set<std::string> names;
   for (std::size_t i = 0; i < c.experiments.size(); ++i) {
@@ -465,22 +477,18 @@ void ValidateExperiments(const DaemonConfig& c, Collector& out) {
           order = 0;
         }
       }
+    } else if (e.mode == ExperimentMode::kStep) {
+      if (!(std::isfinite(e.amplitude) && e.amplitude > 0.0)) {
+        out.Add(at + "amplitude", Num(e.amplitude) + " is out of range (allowed: > 0, finite)");
+      }
+      WholeSamples(at + "hold_s", e.hold_s, ts, out);
     } else {
       if (!(std::isfinite(e.amplitude) && e.amplitude > 0.0)) {
         out.Add(at + "amplitude", Num(e.amplitude) + " is out of range (allowed: > 0, finite)");
       }
       out.IntRange(at + "order", e.order, kMinLfsrOrder, kMaxLfsrOrder);
       out.IntRange(at + "periods", e.periods, 1, 1000);
-      if (ts > 0.0) {
-        const double samples = e.clock_period_s / ts;
-        if (!(samples >= 1.0 && samples <= 1e6 &&
-              std::abs(samples - std::round(samples)) <= 1e-9 * samples)) {
-          out.Add(at + "clock_period_s",
-                  Num(e.clock_period_s) +
-                      " is not a whole number of samples (allowed: n * sample time " + Num(ts) +
-                      " s, n >= 1)");
-        }
-      }
+      WholeSamples(at + "clock_period_s", e.clock_period_s, ts, out);
     }
     if (e.seed < 1 || e.seed > 0x7fffffff) {
       out.IntRange(at + "seed", e.seed, 1, 0x7fffffff);
@@ -607,7 +615,7 @@ const char* EnumName(RlsMethod v) {
 const char* EnumName(ClosedLoopMode v) {
   return NameIn(v, kClosedLoopModes, {"auto", "on", "off"});
 }
-const char* EnumName(ExperimentMode v) { return NameIn(v, kModes, {"design", "explicit"}); }
+const char* EnumName(ExperimentMode v) { return NameIn(v, kModes, {"design", "explicit", "step"}); }
 const char* EnumName(ExperimentStart v) { return NameIn(v, kStarts, {"manual", "on_start"}); }
 const char* EnumName(CommandKind v) {
   return NameIn(v, kCommandKinds,

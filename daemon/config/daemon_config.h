@@ -35,7 +35,7 @@ enum class RegisterTable { kInput, kHolding };
 enum class OnlineModel { kId, kArx, kFracFoptd, kLpv };
 /// The models identified at the end of an experiment.
 enum class BatchModel { kId, kFoptd, kFracFoptd };
-enum class ExperimentMode { kDesign, kExplicit };
+enum class ExperimentMode { kDesign, kExplicit, kStep };
 enum class ExperimentStart { kManual, kOnStart };
 
 /// The PLC's watchdog register, written with a changing value every period_s (wall seconds).
@@ -149,8 +149,8 @@ struct ReachConfig {
   bool operator==(const ReachConfig&) const = default;
 };
 
-/// A PRBS experiment on a reach's actuator, designed from the rules
-/// (core/experiment/experiment_design.h) or given explicitly.
+/// An experiment on a reach's actuator: a PRBS designed from the rules
+/// (core/experiment/experiment_design.h) or given explicitly, or a step and back.
 struct ExperimentConfig {
   std::string name;
   std::string reach;
@@ -163,6 +163,8 @@ struct ExperimentConfig {
   double clock_period_s = 0.0;  ///< plant s, a whole number of samples (>= 1)
   int order = 7;                ///< 2..31
   int periods = 1;              ///< 1..1000
+  // step (amplitude as explicit)
+  double hold_s = 0.0;  ///< plant s at nominal + amplitude, then as long at nominal; n x Ts
   // both
   std::int64_t seed = 1;  ///< 1..2^31-1, nonzero in its low `order` bits
   double settle_s = 0.0;  ///< plant s at nominal before the PRBS, >= 0

@@ -47,6 +47,11 @@ ExperimentPlan BuildExperimentPlan(const DaemonConfig& config, const ExperimentC
     plan.prbs.clock_period_samples = design.clock_period_samples;
     plan.prbs.order = design.order;
     plan.excite_samples = design.num_samples;
+  } else if (experiment.mode == ExperimentMode::kStep) {
+    // Up by the amplitude, hold, back to nominal, hold; the PRBS fields stay valid but unused.
+    plan.prbs.amplitude = experiment.amplitude;
+    plan.step_hold_samples = std::llround(experiment.hold_s / ts);
+    plan.excite_samples = 2 * plan.step_hold_samples;
   } else {
     plan.prbs.amplitude = experiment.amplitude;
     plan.prbs.clock_period_samples = static_cast<int>(std::lround(experiment.clock_period_s / ts));

@@ -262,3 +262,62 @@ TEST(ExperimentSampleGap, TheBoundMustBePositive) {
 
 }  // namespace
 }  // namespace canalid::core
+
+namespace canalid::core {
+namespace {
+
+// A step experiment: nominal + amplitude for step_hold_samples samples, then nominal for as many,
+// every sample recorded, then identification with the nominal restored; the safety rules are
+// those of the PRBS (a level out of band mid-step aborts to nominal).
+TEST(ExperimentStep, StepsUpHoldsStepsBackAndRecordsBothHolds) {
+  Driver d;
+  d.plan.step_hold_samples = 5;
+  d.plan.excite_samples = 10;
+  d.plan.settle_samples = 2;
+  d.plan.Validate();
+  d.Apply(Event(ExperimentEventKind::kStart));
+  EXPECT_EQ(d.Apply(Sample(2.1)).write_setpoint, std::nullopt);  // settling
+  // The last settling sample writes the step's first level.
+  EXPECT_EQ(d.Apply(Sample(2.1)).write_setpoint, std::optional<double>(0.54));
+  std::vector<double> written;
+  int recorded = 0;
+  ExperimentActions a;
+  for (int k = 0; k < 10; ++k) {
+    a = d.Apply(Sample(2.1));
+    recorded += a.record_sample;
+    if (a.write_setpoint) written.push_back(*a.write_setpoint);
+  }
+  EXPECT_EQ(recorded, 10);
+  EXPECT_TRUE(a.start_identification);
+  EXPECT_TRUE(a.restore_nominal);
+  // Samples 1..4 of the step up hold it; 5..9 are back at nominal; the end writes nominal.
+  EXPECT_EQ(written, (std::vector<double>{0.54, 0.54, 0.54, 0.54, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5}));
+  EXPECT_EQ(d.state.phase, ExperimentPhase::kIdentifying);
+}
+
+TEST(ExperimentStep, ALevelOutOfBandMidStepAbortsToNominal) {
+  Driver d;
+  d.plan.step_hold_samples = 20;
+  d.plan.excite_samples = 40;
+  d.plan.settle_samples = 0;
+  d.Apply(Event(ExperimentEventKind::kStart));
+  EXPECT_DOUBLE_EQ(d.state.setpoint, 0.54);
+  d.Apply(Sample(2.2));
+  const ExperimentActions a = d.Apply(Sample(2.35));
+  EXPECT_EQ(d.state.phase, ExperimentPhase::kAborted);
+  EXPECT_EQ(d.state.abort_reason, AbortReason::kLevelOutOfBand);
+  EXPECT_EQ(a.write_setpoint, std::optional<double>(0.5));
+  EXPECT_TRUE(a.restore_nominal);
+}
+
+TEST(ExperimentStep, TheExcitationIsTwoHolds) {
+  ExperimentPlan plan = Plan();
+  plan.step_hold_samples = 5;
+  plan.excite_samples = 11;
+  EXPECT_THROW(plan.Validate(), std::invalid_argument);
+  plan.step_hold_samples = -1;
+  EXPECT_THROW(plan.Validate(), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace canalid::core

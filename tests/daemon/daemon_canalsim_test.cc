@@ -563,6 +563,51 @@ std::vector<double> ChannelValues(const std::vector<canalid::sample_t>& samples,
   return values;
 }
 
+// mode = "step" live on pool 2, the process models reading the gate's measured position
+// (actuator_position): the setpoint goes up by the amplitude for hold_s, back to nominal for as
+// long (the daemon's own SAMPLE messages of the setpoint register), the foptd fit of the response
+// is logged, and the nominal is where it ends.
+TEST(DaemonCanalsim, StepExperimentStepsHoldsReturnsAndFitsAFoptd) {
+  const fs::path dir = TestDir();
+  Canal canal(dir);
+  const double nominal = ReadSetpoint(canal.master);
+  auto keys = BaseKeys(canal.serve.port(), dir);
+  keys.emplace_back("online_models",
+                    "[\"id\", \"frac-foptd\"]\nbatch_models = [\"id\", \"foptd\"]\n"
+                    "actuator_position = \"gate1_position\"");
+  // 60 samples up, 60 back (Ts = 60 plant s): 12 wall s.
+  const std::string step =
+      "[[experiment]]\nname = \"pool2_step\"\nreach = \"pool2\"\nmode = \"step\"\n"
+      "amplitude = 0.05\nhold_s = 3600.0\nsettle_s = 0.0\nstart = \"on_start\"\n"
+      "max_sample_gap_periods = 5.0\n\n[commands]\nenabled = false\n";
+  const std::string config = WriteConfig(dir / "canalidd.toml", keys, step);
+  auto daemon = StartDaemon(dir, config);
+  const std::string line = daemon->WaitForLine("reach pool2: identified foptd ", 60000);
+  ASSERT_FALSE(line.empty()) << daemon->output();
+  const nlohmann::json foptd = JsonAfter(line, "identified foptd ");
+  ASSERT_TRUE(foptd.is_object()) << line;
+  EXPECT_GT(foptd.at("gain").get<double>(), 0.0) << line;
+  EXPECT_GT(foptd.at("delay_s").get<double>(), 0.0) << line;
+  EXPECT_LE(foptd.at("delay_s").get<double>(), 1400.0) << line;
+  EXPECT_NEAR(foptd.at("input_offset").get<double>(), nominal, 2e-3) << line;  // the position
+  EXPECT_EQ(daemon->Stop(SIGTERM), 0) << daemon->output();
+  EXPECT_NEAR(ReadSetpoint(canal.master), nominal, 1e-4);
+
+  const std::vector<double> setpoints =
+      ChannelValues(ReadLcmLog(dir / "run.lcmlog").samples, "gate1_setpoint");
+  int up = 0, above = 0;
+  for (const double v : setpoints) {
+    up += std::abs(v - (nominal + 0.05)) < 1e-4;
+    above += v > nominal + 0.05 + 1e-4;
+  }
+  // The hold is 60 samples; the register shows a write one poll later at most.
+  EXPECT_GE(up, 58);
+  EXPECT_LE(up, 61);
+  EXPECT_EQ(above, 0);
+  ASSERT_FALSE(setpoints.empty());
+  EXPECT_NEAR(setpoints.back(), nominal, 1e-4);
+}
+
 // 4a. SIGKILL mid-PRBS and an immediate restart, as systemd's Restart=on-failure does (RestartSec=5
 // is far inside the PLC's 300 s watchdog; here the watchdog is 36000 plant s = 60 wall s, so the
 // gate stays at the PRBS level the killed daemon left, as on site): the restarted daemon's first

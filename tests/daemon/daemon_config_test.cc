@@ -280,6 +280,26 @@ TEST(DaemonPlanTest, ExplicitExperiment) {
   EXPECT_DOUBLE_EQ(plan.prbs.amplitude, 0.05);
 }
 
+TEST(DaemonPlanTest, StepExperiment) {
+  DaemonConfig c = ValidConfig();
+  ExperimentConfig& e = c.experiments[0];
+  e.mode = ExperimentMode::kStep;
+  e.amplitude = 0.05;
+  e.hold_s = 3600.0;  // Ts = 0.2 x 50 = 10 s: 360 samples
+  EXPECT_THAT(Problems(c), IsEmpty());
+  const ExperimentPlan plan = BuildExperimentPlan(c, e, 0.8);
+  EXPECT_EQ(plan.step_hold_samples, 360);
+  EXPECT_EQ(plan.excite_samples, 720);
+  EXPECT_DOUBLE_EQ(plan.prbs.amplitude, 0.05);
+  e.hold_s = 3605.0;  // not a whole number of samples
+  EXPECT_THAT(Problems(c), ElementsAre("experiment[0].hold_s: 3605 is not a whole number of "
+                                       "samples (allowed: n * sample time 10 s, n >= 1)"));
+  e.hold_s = 3600.0;
+  e.amplitude = 0.0;
+  EXPECT_THAT(Problems(c),
+              ElementsAre("experiment[0].amplitude: 0 is out of range (allowed: > 0, finite)"));
+}
+
 TEST(DaemonPlanTest, AmplitudeMustStayInsideTheActuatorRange) {
   DaemonConfig c = ValidConfig();
   EXPECT_THROW(BuildExperimentPlan(c, c.experiments[0], 1.98), std::invalid_argument);

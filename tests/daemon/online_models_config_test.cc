@@ -205,6 +205,28 @@ TEST(OnlineModelsConfig, BatchModelsChooseTheEndOfExperimentFits) {
                                             "frac-foptd)")));
 }
 
+// mode = "step": amplitude and hold_s, the PRBS keys refused by name.
+TEST(OnlineModelsConfig, StepExperimentKeys) {
+  const std::string step =
+      "\n[[experiment]]\nname = \"step\"\nreach = \"pool2\"\nmode = \"step\"\n"
+      "amplitude = 0.1\nhold_s = 1800.0\n";
+  const config::DaemonConfig c = ParseDaemonConfig(Config(step), "t.toml");
+  ASSERT_EQ(c.experiments.size(), 1U);
+  EXPECT_EQ(c.experiments[0].mode, config::ExperimentMode::kStep);
+  EXPECT_EQ(c.experiments[0].hold_s, 1800.0);
+  EXPECT_EQ(config::BuildExperimentPlan(c, c.experiments[0], 1.0).step_hold_samples, 30);
+  EXPECT_EQ(ParseDaemonConfig(RenderDaemonConfig(c), "rendered.toml"), c);
+  EXPECT_THAT(Issues(step + "seed = 3\n"),
+              ::testing::Contains(HasSubstr("experiment[0].seed: only allowed when mode = "
+                                            "\"design\" or \"explicit\"")));
+  EXPECT_THAT(Issues(step + "clock_period_s = 60.0\n"),
+              ::testing::Contains(HasSubstr("experiment[0].clock_period_s: only allowed when "
+                                            "mode = \"explicit\"")));
+  EXPECT_THAT(Issues("\n[[experiment]]\nname = \"s\"\nreach = \"pool2\"\nmode = \"step\"\n"
+                     "amplitude = 0.1\n"),
+              ::testing::Contains(HasSubstr("experiment[0].hold_s: missing (required)")));
+}
+
 // The effective configuration canalidd publishes reads back to the same configuration.
 TEST(OnlineModelsConfig, RenderedConfigurationReadsBackTheSame) {
   const config::DaemonConfig c = ParseDaemonConfig(
