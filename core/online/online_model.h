@@ -49,8 +49,8 @@ struct OnlineModelSettings {
   double sample_time_s = 1.0;  ///< Ts > 0
   // Every kind's recursive least squares.
   RlsMethod rls_method = RlsMethod::kUdDirectional;
-  double forgetting = 1.0;          ///< (0, 1]
-  double initial_covariance = 1e4;  ///< P0 = p0 I
+  double forgetting = 1.0;                                      ///< (0, 1]
+  double initial_covariance = RlsOptions{}.initial_covariance;  ///< P0 = p0 I (1e6)
   // id and arx: the delays of the bank (rounded to whole samples).
   double min_delay_s = 0.0;
   double max_delay_s = 0.0;

@@ -170,7 +170,9 @@ std::optional<IntegratorDelayIdentification> ReachSampleProcessor::IdentifyRecor
     if (!input.allFinite() || !level.allFinite()) {
       ProcessBatchResult none;
       none.kind = kind;
-      none.problem = "the actuator's reading was invalid from the start of the record";
+      none.problem = !input.allFinite()
+                         ? "no valid actuator reading before or at the start of the record"
+                         : "no valid level before or at the start of the record";
       process_results_.push_back(none);
       continue;
     }

@@ -22,7 +22,7 @@ std::string Describe(const ReplayModel& model) {
   s << "t=+" << model.log_time_s << " s  " << model.reach << "  "
     << (model.batch ? "batch " : "online ") << model.kind << ":";
   if (model.kind != "id") {
-    // The parameters in the order the model publishes them.
+    // The model's numbers (its JSON keys, alphabetical), without the health fields.
     for (const auto& [key, value] : j.items()) {
       if (value.is_number() && key.find("_std") == std::string::npos && key != "flags" &&
           key != "samples_used" && key != "sample_time_s" && key != "trace_p" &&

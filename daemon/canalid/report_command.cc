@@ -80,7 +80,7 @@ int RunReport(const ReportOptions& options, const std::string& command_line) {
     std::filesystem::create_directories(dir / "gnuplot");
     std::filesystem::create_directories(dir / "models");
     WriteModelFiles(dir, models);
-    const std::vector<Plot> plots = WritePlotScripts(table, models, dir);
+    const std::vector<Plot> plots = WritePlotScripts(table, models, dir, input.online);
     RenderPlots(plots, options.gnuplot, dir, [&progress](std::size_t i, std::size_t total) {
       progress.Show("plotting " + std::to_string(i + 1) + "/" + std::to_string(total) + "...");
     });

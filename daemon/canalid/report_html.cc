@@ -153,7 +153,8 @@ void WriteReportHtml(const std::filesystem::path& path, const drivers::CsvTable&
       {"fit", "Measured and simulated output"},
       {"residuals", "Residuals and their autocorrelation"},
       {"steps", "Step responses"},
-      {"lpv", "LPV parameters against the scheduling variable"}};
+      {"lpv", "LPV parameters against the scheduling variable"},
+      {"online", "Online estimates over the log (+-2 sigma)"}};
   for (const auto& [section, heading] : sections) {
     bool opened = false;
     for (const auto& p : plots) {

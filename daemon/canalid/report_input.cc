@@ -33,9 +33,10 @@ ReportInput FromLog(const std::string& path, const ReportLogOptions& options) {
     scan.prefix = config->lcm.channel_prefix;
   }
   LogExporter exporter(options.data_dir, config, options.reach, {}, path);
+  OnlineModelRecorder recorder(exporter);
   drivers::LogScanResult result;
   try {
-    result = drivers::ScanCanalidLog(path, scan, exporter);
+    result = drivers::ScanCanalidLog(path, scan, recorder);
   } catch (const InputError&) {
     throw;
   } catch (const std::runtime_error& e) {
@@ -65,7 +66,7 @@ ReportInput FromLog(const std::string& path, const ReportLogOptions& options) {
   if (channels == exporter.reach_channels().end())
     throw InputError("--reach " + reach + ": no samples of this reach in " + path);
   ReportInput input{ReadCsv((std::filesystem::path(options.data_dir) / (reach + ".csv")).string()),
-                    channels->second};
+                    channels->second, recorder.Trajectories(reach)};
   return input;
 }
 
@@ -84,7 +85,7 @@ ReportInput LoadReportInput(const std::string& path, const ReportLogOptions& log
   if (IsLcmLog(path)) return FromLog(path, log);
   if (!log.reach.empty() || !log.config.empty())
     throw InputError(path + ": --reach and --config apply to an LCM log input, not to a CSV");
-  return ReportInput{ReadCsv(path), std::nullopt};
+  return ReportInput{ReadCsv(path), std::nullopt, {}};
 }
 
 IdentifyOptions WithReachColumns(IdentifyOptions options,

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "daemon/canalid/identify_command.h"
+#include "daemon/canalid/report_online.h"
 #include "drivers/csv/csv_table.h"
 
 namespace canalid::cli {
@@ -22,6 +23,8 @@ struct ReportInput {
   /// `table`, used as identify's defaults (id: q_in, q_out, level; others: u = actuator,
   /// y = level).
   std::optional<std::array<std::string, 4>> reach_channels;
+  /// For a log: the reach's online models as the daemon published them.
+  std::vector<OnlineTrajectory> online;
 };
 
 /// The record of a report as an in-memory table (time_s first, named columns, uniform sampling):

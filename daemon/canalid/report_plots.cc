@@ -288,11 +288,50 @@ void LpvPlots(PlotWriter& w, const ModelAnalysis& m) {
   }
 }
 
+// One figure per online model: a panel per parameter, the estimate over time and its +-2 sigma
+// band (where the daemon published a standard deviation).
+void OnlinePlots(PlotWriter& w, const OnlineTrajectory& t) {
+  if (t.time_s.size() == 0 || t.names.empty()) return;
+  const TimeAxis axis = AxisFor(t.time_s(t.time_s.size() - 1) - t.time_s(0));
+  const std::string name = "online_" + t.kind;
+  std::vector<std::string> columns{"time"};
+  std::vector<Eigen::VectorXd> data{t.time_s / axis.divisor};
+  for (std::size_t j = 0; j < t.names.size(); ++j) {
+    const auto c = static_cast<Eigen::Index>(j);
+    columns.insert(columns.end(), {t.names[j], t.names[j] + "_low", t.names[j] + "_high"});
+    data.push_back(t.values.col(c));
+    data.push_back(t.values.col(c) - 2.0 * t.std_devs.col(c));
+    data.push_back(t.values.col(c) + 2.0 * t.std_devs.col(c));
+  }
+  const std::string file = w.Data(name, columns, data);
+  std::ostringstream plot;
+  const std::size_t panels = t.names.size();
+  // One panel per parameter, stacked: the figure grows with them.
+  plot << "set terminal pngcairo size 960," << 160 * panels + 80
+       << " noenhanced font 'sans,10' linewidth 1.2\nset output " << Quote(name + ".png")
+       << "\nset multiplot layout " << panels << ",1 title "
+       << Quote("Online " + t.kind + " estimates as the daemon published them")
+       << "\nunset title\nset key top left\n";
+  for (std::size_t j = 0; j < panels; ++j) {
+    const std::size_t col = 2 + 3 * j;
+    plot << "set ylabel " << Quote(t.names[j]) << "\n"
+         << (j + 1 == panels ? "set xlabel " + Quote("time (" + axis.unit + ")") + "\n" : "")
+         << "plot " << file << " using 1:" << col + 1 << ":" << col + 2
+         << " with filledcurves fc rgb '#c6dbef' fs solid 0.6 title '+-2 sigma', '' using 1:" << col
+         << " with lines lw 2 lc rgb " << Quote(Colour(j)) << " title " << Quote(t.names[j])
+         << "\n";
+  }
+  plot << "unset multiplot\n";
+  w.Add(name, "online", t.kind, "Online " + t.kind + " estimates as the daemon published them",
+        plot.str());
+}
+
 }  // namespace
 
 std::vector<Plot> WritePlotScripts(const drivers::CsvTable& table,
                                    const std::vector<ModelAnalysis>& models,
-                                   const std::filesystem::path& dir) {
+                                   const std::filesystem::path& dir,
+                                   const std::vector<OnlineTrajectory>& online) {
   const Eigen::VectorXd t = table.time_s();
   const TimeAxis axis = AxisFor(t(t.size() - 1) - t(0));
   PlotWriter w(dir);
@@ -304,6 +343,7 @@ std::vector<Plot> WritePlotScripts(const drivers::CsvTable& table,
   for (const auto& m : models) {
     if (m.has_lpv) LpvPlots(w, m);
   }
+  for (const auto& trajectory : online) OnlinePlots(w, trajectory);
   return w.Take();
 }
 

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "daemon/canalid/report_analysis.h"
+#include "daemon/canalid/report_online.h"
 #include "drivers/csv/csv_table.h"
 
 namespace canalid::cli {
@@ -23,11 +24,13 @@ struct Plot {
 /// the inputs (PRBS/excitation, schedule) and the outputs over time; per simulated model the
 /// measured and simulated output (solid and dashed, as the Arizona study's Figures 6-7), the
 /// residuals and their autocorrelation with the 99 % band; the step responses of all models;
-/// per LPV parameter its polynomial in theta with the local estimates.
+/// per LPV parameter its polynomial in theta with the local estimates; per online model of a log
+/// (`online`) each parameter over time with its +-2 sigma band.
 /// @throws ToolError if a file cannot be written.
 std::vector<Plot> WritePlotScripts(const drivers::CsvTable& table,
                                    const std::vector<ModelAnalysis>& models,
-                                   const std::filesystem::path& dir);
+                                   const std::filesystem::path& dir,
+                                   const std::vector<OnlineTrajectory>& online = {});
 
 /// Runs `gnuplot` (a program name or path) once per plot, in `dir`, with the plot's script as
 /// its only argument; `before_each(i, n)` is called before plot i of n.  gnuplot's stderr is kept

@@ -1,5 +1,6 @@
 #include "daemon/canalidd/lcm_publisher.h"
 
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -34,12 +35,20 @@ int8_t ExperimentStateCode(core::ExperimentPhase phase) {
   return canalid::experiment_state_t::STATE_IDLE;
 }
 
+// num_params = n; the arrays only ever grow (LCM encodes num_params entries), so that the names'
+// strings keep their storage when kinds with fewer parameters are published in between.
+void SetParamCount(canalid::model_snapshot_t& m, std::size_t n) {
+  m.num_params = static_cast<int32_t>(n);
+  if (m.param_names.size() < n) {
+    m.param_names.resize(n);
+    m.param_values.resize(n);
+    m.param_std_devs.resize(n);
+  }
+}
+
 void SetParams(canalid::model_snapshot_t& m,
                std::initializer_list<std::pair<const char*, std::pair<double, double>>> p) {
-  m.num_params = static_cast<int32_t>(p.size());
-  m.param_names.resize(p.size());
-  m.param_values.resize(p.size());
-  m.param_std_devs.resize(p.size());
+  SetParamCount(m, p.size());
   std::size_t i = 0;
   for (const auto& [name, value] : p) {
     if (m.param_names[i] != name) m.param_names[i] = name;
@@ -95,10 +104,7 @@ void LcmPublisher::PublishOnlineModel(const std::string& reach,
   model_.estimator = estimator.empty() ? snapshot.estimator : estimator;
   model_.samples_used = snapshot.samples_used;
   const auto n = static_cast<std::size_t>(snapshot.num_params);
-  model_.num_params = snapshot.num_params;
-  model_.param_names.resize(n);
-  model_.param_values.resize(n);
-  model_.param_std_devs.resize(n);
+  SetParamCount(model_, n);
   for (std::size_t i = 0; i < n; ++i) {
     // Assigned only when different: the strings keep their storage from one message to the next.
     if (model_.param_names[i] != snapshot.names[i]) model_.param_names[i] = snapshot.names[i];
@@ -145,18 +151,18 @@ void LcmPublisher::PublishModelJson(const std::string& reach, const nlohmann::js
   model_.model_kind = model.value("model", std::string("unknown"));
   model_.estimator = estimator;
   model_.samples_used = samples;
-  model_.param_names.clear();
-  model_.param_values.clear();
-  model_.param_std_devs.clear();
-  for (const char* key : {"delay_s", "area_m2", "b", "p21_s_per_m2", "offset_m", "gain",
-                          "time_constant_s", "alpha"}) {
-    if (model.contains(key) && model[key].is_number()) {
-      model_.param_names.emplace_back(key);
-      model_.param_values.push_back(model[key].get<double>());
-      model_.param_std_devs.push_back(kNan);
-    }
+  static constexpr std::array kKeys{
+      "delay_s", "area_m2", "b", "p21_s_per_m2", "offset_m", "gain", "time_constant_s", "alpha"};
+  std::size_t n = 0;
+  for (const char* key : kKeys) n += model.contains(key) && model[key].is_number() ? 1U : 0U;
+  SetParamCount(model_, n);
+  std::size_t i = 0;
+  for (const char* key : kKeys) {
+    if (!model.contains(key) || !model[key].is_number()) continue;
+    model_.param_names[i] = key;
+    model_.param_values[i] = model[key].get<double>();
+    model_.param_std_devs[i++] = kNan;
   }
-  model_.num_params = static_cast<int32_t>(model_.param_names.size());
   model_.trace_p = kNan;
   model_.condition_number = kNan;
   model_.excitation = kNan;

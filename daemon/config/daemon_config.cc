@@ -343,8 +343,15 @@ void ValidateReachModels(const DaemonConfig& c, const ReachConfig& r, const Chan
     const double ts = ReachSampleTimeS(c, r);
     if (ts > 0.0 && std::isfinite(ts)) hi = kMaxDelaySamples * ts;
   }
-  out.Range(at + "fractional_delay_s", r.fractional_delay_s, 0.0, hi);
-  out.Range(at + "lpv_delay_s", r.lpv_delay_s, 0.0, hi);
+  // Checked for the kinds the reach runs: their defaults follow expected_delay_s, which may be
+  // longer than a bank of 2000 samples.
+  const auto runs = [&](OnlineModel m) {
+    return std::find(r.online_models.begin(), r.online_models.end(), m) != r.online_models.end();
+  };
+  if (runs(OnlineModel::kFracFoptd)) {
+    out.Range(at + "fractional_delay_s", r.fractional_delay_s, 0.0, hi);
+  }
+  if (lpv) out.Range(at + "lpv_delay_s", r.lpv_delay_s, 0.0, hi);
 }
 
 void ValidateReaches(const DaemonConfig& c, Collector& out) {

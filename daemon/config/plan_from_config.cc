@@ -61,15 +61,18 @@ ExperimentPlan BuildExperimentPlan(const DaemonConfig& config, const ExperimentC
                           plan.prbs.clock_period_samples;
   }
   if (!(plan.prbs.amplitude > 0.0)) {
-    throw std::invalid_argument(where + "PRBS amplitude " + std::to_string(plan.prbs.amplitude) +
+    throw std::invalid_argument(where + "amplitude " + std::to_string(plan.prbs.amplitude) +
                                 " (actuator units) must be > 0 (nominal setpoint " +
                                 std::to_string(nominal_setpoint) + ")");
   }
-  const double low = nominal_setpoint - plan.prbs.amplitude;
+  // A step covers [nominal, nominal + amplitude], a PRBS nominal +- amplitude.
+  const bool step = plan.step_hold_samples > 0;
+  const double low = step ? nominal_setpoint : nominal_setpoint - plan.prbs.amplitude;
   const double high = nominal_setpoint + plan.prbs.amplitude;
   if (!(low >= actuator->setpoint_min && high <= actuator->setpoint_max)) {
-    throw std::invalid_argument(where + "nominal " + std::to_string(nominal_setpoint) + " +- " +
-                                std::to_string(plan.prbs.amplitude) + " leaves the actuator's [" +
+    throw std::invalid_argument(where + "nominal " + std::to_string(nominal_setpoint) +
+                                (step ? " + step " : " +- ") + std::to_string(plan.prbs.amplitude) +
+                                " leaves the actuator's [" +
                                 std::to_string(actuator->setpoint_min) + ", " +
                                 std::to_string(actuator->setpoint_max) + "]");
   }

@@ -344,6 +344,35 @@ TEST(DaemonCanalsim, EveryOnlineKindIsReproducedByReplayAndIdentify) {
     EXPECT_EQ(SameParameters(model, json, &compared), "");
     EXPECT_EQ(compared, model.num_params) << kind;
   }
+
+  // `canalid report --input LOG` draws every online kind's trajectory with its +-2 sigma band:
+  // one figure per kind, whose data's last row is the last snapshot published.
+  const ProgramRun report =
+      RunProgram(CanalidProgram() + " report --input " + (dir / "run.lcmlog").string() +
+                     " --model id --out " + (dir / "report").string(),
+                 dir);
+  ASSERT_EQ(report.exit_code, 0) << report.err;
+  const std::string html = ReadText(dir / "report" / "index.html");
+  for (const auto& [kind, model] : live) {
+    const std::string image = "online_" + kind + ".png";
+    EXPECT_GT(fs::file_size(dir / "report" / image), 1000U) << kind;
+    EXPECT_NE(html.find(image), std::string::npos) << kind;
+    std::ifstream data(dir / "report" / "gnuplot" / ("online_" + kind + ".dat"));
+    std::string row, last;
+    while (std::getline(data, row)) last = row;
+    std::istringstream cells(last);
+    std::vector<double> numbers;
+    for (std::string cell; cells >> cell;) numbers.push_back(std::stod(cell));
+    // time, then (value, value - 2 sigma, value + 2 sigma) per parameter, operating points left
+    // out: the first parameter is the snapshot's first.
+    ASSERT_GE(numbers.size(), 4U) << last;
+    EXPECT_NEAR(numbers[1], model.param_values[0], 1e-9 * std::abs(model.param_values[0])) << kind;
+    if (std::isfinite(model.param_std_devs[1])) {
+      EXPECT_NEAR(numbers[6] - numbers[5], 4.0 * model.param_std_devs[1],
+                  1e-6 * std::abs(model.param_std_devs[1]) + 1e-9 * std::abs(model.param_values[1]))
+          << kind;
+    }
+  }
 }
 
 // batch_models = ["id", "foptd", "frac-foptd"] on pool 2, live: at the end of the experiment each

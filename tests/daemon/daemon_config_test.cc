@@ -294,6 +294,19 @@ TEST(DaemonPlanTest, StepExperiment) {
   e.hold_s = 3605.0;  // not a whole number of samples
   EXPECT_THAT(Problems(c), ElementsAre("experiment[0].hold_s: 3605 is not a whole number of "
                                        "samples (allowed: n * sample time 10 s, n >= 1)"));
+  // A step covers [nominal, nominal + amplitude]: from just above setpoint_min (0.05) it fits,
+  // where a PRBS of the same amplitude would go below the range.
+  EXPECT_EQ(BuildExperimentPlan(c, e, 0.06).step_hold_samples, 360);
+  e.mode = ExperimentMode::kExplicit;
+  e.clock_period_s = 360.0;
+  EXPECT_THROW(BuildExperimentPlan(c, e, 0.06), std::invalid_argument);
+  e.mode = ExperimentMode::kStep;
+  try {
+    BuildExperimentPlan(c, e, 1.98);
+    ADD_FAILURE() << "a step above setpoint_max was accepted";
+  } catch (const std::invalid_argument& error) {
+    EXPECT_NE(std::string(error.what()).find("+ step 0.05"), std::string::npos) << error.what();
+  }
   e.hold_s = 3600.0;
   e.amplitude = 0.0;
   EXPECT_THAT(Problems(c),

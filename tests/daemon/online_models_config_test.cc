@@ -109,6 +109,10 @@ TEST(OnlineModelsConfig, OrdersGridAndDelaysReachTheEstimators) {
   EXPECT_EQ(d[0].arx.na, 2);
   EXPECT_EQ(d[0].arx.nb, 2);
   EXPECT_EQ(d[0].arx.max_delay_samples, 20);  // 1200 s / 60 s
+  // Every kind starts from the RLS default P0 (the daemon's id bank always did).
+  EXPECT_EQ(defaults.pipeline.online_id.rls.initial_covariance,
+            core::RlsOptions{}.initial_covariance);
+  EXPECT_EQ(d[1].fractional.rls.initial_covariance, core::RlsOptions{}.initial_covariance);
   EXPECT_EQ(d[1].fractional.alphas.size(), 8U);
   EXPECT_EQ(d[1].fractional.delay_samples, 10);  // expected_delay_s 600 s
   EXPECT_EQ(d[2].lpv.na, 1);
@@ -170,10 +174,14 @@ TEST(OnlineModelsConfig, BadValuesNameTheirKey) {
               ::testing::Contains(HasSubstr("reach[0].fractional_alphas[1]")));
   EXPECT_THAT(Issues("fractional_alphas = [0.5, \"x\"]\n"),
               ::testing::Contains(HasSubstr("reach[0].fractional_alphas[1]: expected a number")));
-  EXPECT_THAT(Issues("fractional_delay_s = -1.0\n"),
+  EXPECT_THAT(Issues("online_models = [\"frac-foptd\"]\nfractional_delay_s = -1.0\n"),
               ::testing::Contains(HasSubstr("reach[0].fractional_delay_s")));
-  EXPECT_THAT(Issues("lpv_delay_s = 1e9\n"),
+  EXPECT_THAT(Issues("online_models = [\"lpv\"]\nlpv_scheduling = \"level_up\"\n"
+                     "lpv_delay_s = 1e9\n"),
               ::testing::Contains(HasSubstr("reach[0].lpv_delay_s")));
+  // The delays of kinds the reach does not run are not held against its bank (their defaults
+  // follow expected_delay_s, which may exceed 2000 samples).
+  EXPECT_TRUE(Issues("fractional_delay_s = 1e9\nlpv_delay_s = 1e9\n").empty());
   EXPECT_THAT(Issues("actuator_position = \"level_up\"\n"),
               ::testing::Contains(HasSubstr("reach[0].actuator_position: channel \"level_up\" has "
                                             "role \"level\"")));
