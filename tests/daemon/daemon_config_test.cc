@@ -296,6 +296,7 @@ TEST(DaemonPlanTest, StepExperiment) {
                                        "samples (allowed: n * sample time 10 s, n >= 1)"));
   // A step covers [nominal, nominal + amplitude]: from just above setpoint_min (0.05) it fits,
   // where a PRBS of the same amplitude would go below the range.
+  e.hold_s = 3600.0;
   EXPECT_EQ(BuildExperimentPlan(c, e, 0.06).step_hold_samples, 360);
   e.mode = ExperimentMode::kExplicit;
   e.clock_period_s = 360.0;
