@@ -24,7 +24,19 @@ void ResumePersistedModels(const StateStore& store,
     if (reach == reaches.end()) continue;
     // Read back like any input: a file edited by hand or written by a build without these checks
     // must not come back as the reach's model.
-    const std::string problem = PersistedModelProblem(model, (*reach)->pipeline().model_bounds());
+    std::string problem = PersistedModelProblem(model, (*reach)->pipeline().model_bounds());
+    // A kind the reach no longer identifies (batch_models changed) is not its model any more.
+    const core::ReachSampleProcessorOptions& o = (*reach)->pipeline().options();
+    const bool configured =
+        model.model_kind == "id"
+            ? o.batch_id
+            : std::any_of(o.batch_process_models.begin(), o.batch_process_models.end(),
+                          [&](core::ProcessBatchKind k) {
+                            return core::ProcessBatchKindName(k) == model.model_kind;
+                          });
+    if (problem.empty() && !configured) {
+      problem = "kind " + model.model_kind + " is not in the reach's batch_models";
+    }
     if (!problem.empty()) {
       LogWarning("state: " + store.PathFor(model.reach, model.model_kind).string() + ": reach " +
                  model.reach + ": " + problem + "; ignored");

@@ -434,6 +434,19 @@ TEST(DaemonCanalsim, BatchProcessModelsArePublishedPersistedReplayedAndResumed) 
     EXPECT_EQ(JsonNumbersDiffer(json, JsonAfter(resumed, "model "), 0.0), "") << kind;
   }
   EXPECT_EQ(again->Stop(SIGTERM), 0) << again->output();
+
+  // batch_models without the process kinds: their files are no longer the reach's models.
+  auto id_only_keys = BaseKeys(canal.serve.port(), dir);
+  id_only_keys.emplace_back("online_models", "[\"id\"]\nbatch_models = [\"id\"]");
+  const std::string id_only =
+      WriteConfig(dir / "canalidd-id.toml", id_only_keys, ExplicitExperiment(0.05, 6, "manual"));
+  auto third = StartDaemon(dir, id_only, "canalidd-3.log", "run-3.lcmlog");
+  EXPECT_FALSE(
+      third->WaitForLine("kind frac-foptd is not in the reach's batch_models; ignored", 20000)
+          .empty())
+      << third->output();
+  EXPECT_EQ(third->output().find("resumed the persisted foptd"), std::string::npos);
+  EXPECT_EQ(third->Stop(SIGTERM), 0) << third->output();
 }
 
 // 2. A level band the excitation has to leave: the experiment aborts and the nominal comes back.
