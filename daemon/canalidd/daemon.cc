@@ -187,10 +187,15 @@ void Daemon::OnPoll(int index, const drivers::PollSample& s) {
 void Daemon::PublishOnlineModels(ReachRuntime& reach, const core::ReachActions& actions,
                                  double time_s) {
   const auto& models = reach.pipeline().online_models();
+  const std::int64_t sample = reach.pipeline().samples();
   for (std::size_t i = 0; i < models.size(); ++i) {
     if ((actions.online_models_updated & (std::uint32_t{1} << i)) == 0) continue;
+    std::int64_t& last = reach.published_at[i];
+    if (last >= 0 && sample - last < reach.wiring.model_publish_every) continue;
     models[i]->FillSnapshot(snapshot_);
-    if (snapshot_.valid) publisher_.PublishOnlineModel(reach.name(), snapshot_, time_s);
+    if (!snapshot_.valid) continue;
+    publisher_.PublishOnlineModel(reach.name(), snapshot_, time_s);
+    last = sample;
   }
 }
 

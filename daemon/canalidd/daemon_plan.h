@@ -1,4 +1,5 @@
 #pragma once
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <variant>
@@ -24,6 +25,9 @@ struct PlcWiring {
 struct ReachWiring {
   int plc = 0;  ///< index into DaemonPlan::plcs; all of a reach's channels are on one PLC
   core::ReachControllerOptions runner;
+  /// An online model is published on its first update and then every this many samples
+  /// (model_publish_period_s / Ts, rounded; 1: on every update).
+  std::int64_t model_publish_every = 1;
 };
 
 /// Everything the daemon runs, derived from the validated configuration.

@@ -27,7 +27,8 @@ struct PlcRuntime {
 
 /// What the daemon keeps of one running reach (owned by Daemon, used on its Asio loop).
 struct ReachRuntime {
-  explicit ReachRuntime(const ReachWiring& w) : wiring(w), runner(w.runner) {}
+  explicit ReachRuntime(const ReachWiring& w)
+      : wiring(w), runner(w.runner), published_at(runner.pipeline().online_models().size(), -1) {}
   const ReachWiring& wiring;
   core::ReachController runner;
   bool restore_pending = false;  ///< a nominal setpoint not yet confirmed by the PLC
@@ -35,6 +36,9 @@ struct ReachRuntime {
   bool guard_on_disk = false;    ///< <reach>.experiment.json exists (written, or left by a crash)
   bool keep_guard = false;       ///< a refused start-up: the guard stays for an operator to check
   double last_time_s = 0.0;
+  /// Per online model (ReachSampleProcessor::online_models()): the sample it was last published
+  /// at, -1 before its first publication (model_publish_every).
+  std::vector<std::int64_t> published_at;
   const std::string& name() const { return runner.name(); }
   core::ReachSampleProcessor& pipeline() { return runner.pipeline(); }
   const core::ReachSampleProcessor& pipeline() const { return runner.pipeline(); }

@@ -1,5 +1,7 @@
 #include "daemon/canalidd/plan_builder.h"
 
+#include <algorithm>
+#include <cmath>
 #include <memory>
 #include <stdexcept>
 
@@ -56,6 +58,8 @@ DaemonPlan BuildDaemonPlan(const config::DaemonConfig& config, const std::string
     const drivers::PollerConfig& poller = plan.plcs[static_cast<std::size_t>(wiring.plc)].poller;
     wiring.runner = config::BuildReachControllerOptions(
         shared, reach, [&](const std::string& name) { return ChannelIndex(poller, name); });
+    wiring.model_publish_every = std::max<std::int64_t>(
+        1, std::llround(reach.model_publish_period_s / config::ReachSampleTimeS(config, reach)));
     plan.reaches.push_back(std::move(wiring));
   }
   return plan;

@@ -380,6 +380,7 @@ void ReadReach(Reader& r, const toml::table& t, const std::string& at, ReachConf
           "lpv_scheduling",
           "lpv_na",
           "lpv_nb",
+          "model_publish_period_s",
           "lpv_delay_s"});
   r.String(t, at, "name", reach.name, true);
   r.String(t, at, "inflow", reach.inflow, true);
@@ -413,6 +414,7 @@ void ReadReach(Reader& r, const toml::table& t, const std::string& at, ReachConf
   r.Integer(t, at, "lpv_nb", reach.lpv_nb);
   reach.lpv_delay_s = reach.expected_delay_s;
   r.Double(t, at, "lpv_delay_s", reach.lpv_delay_s);
+  r.Double(t, at, "model_publish_period_s", reach.model_publish_period_s);
 }
 
 void ReadExperiment(Reader& r, const toml::table& t, const std::string& at, ExperimentConfig& e) {

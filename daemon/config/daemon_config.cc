@@ -408,6 +408,7 @@ void ValidateReaches(const DaemonConfig& c, Collector& out) {
               "is empty (allowed: at least one of " + AllowedNames<BatchModel>() + ")");
     }
     ValidateReachModels(c, r, level, at, out);
+    out.Range(at + "model_publish_period_s", r.model_publish_period_s, 0.0, 1e6);
     out.Range(at + "forgetting", r.forgetting, 0.0, 1.0, true);
     out.Range(at + "min_delay_s", r.min_delay_s, 0.0, 1e6);
     if (std::isfinite(r.min_delay_s) && r.min_delay_s >= 0.0) {

@@ -139,9 +139,12 @@ struct ReachConfig {
   int lpv_na = 1;                   ///< lpv: as arx_na
   int lpv_nb = 1;                   ///< lpv: as arx_nb
   double lpv_delay_s = 0.0;         ///< lpv: known delay (default expected_delay_s)
-  double min_delay_s = 0.0;         ///< smallest delay tried online, >= 0
-  double max_delay_s = 0.0;         ///< largest, >= min_delay_s, at most 2000 samples
-  double forgetting = 1.0;          ///< (0, 1]
+  /// Each online model is published at most once per this many plant s (rounded to whole
+  /// samples; 0: on every update), [0, 1e6].
+  double model_publish_period_s = 0.0;
+  double min_delay_s = 0.0;  ///< smallest delay tried online, >= 0
+  double max_delay_s = 0.0;  ///< largest, >= min_delay_s, at most 2000 samples
+  double forgetting = 1.0;   ///< (0, 1]
   RlsMethod rls_method = RlsMethod::kUdDirectional;
   /// Batch identification at the end of an experiment: "auto" decides from the data whether the
   /// outflow follows the level (three-step closed-loop method), "on"/"off" force it.

@@ -375,6 +375,36 @@ TEST(DaemonCanalsim, EveryOnlineKindIsReproducedByReplayAndIdentify) {
   }
 }
 
+// model_publish_period_s = 600 (10 samples of 60 s): each online model is published on every
+// tenth sample, not on every one.
+TEST(DaemonCanalsim, ModelPublishPeriodThinsTheOnlineModels) {
+  const fs::path dir = TestDir();
+  Canal canal(dir);
+  auto keys = BaseKeys(canal.serve.port(), dir);
+  keys.emplace_back("online_models", "[\"id\", \"arx\"]\nmodel_publish_period_s = 600.0");
+  const std::string config = WriteConfig(dir / "canalidd.toml", keys, ExplicitExperiment(0.05, 6));
+  auto daemon = StartDaemon(dir, config);
+  ASSERT_FALSE(daemon->WaitForLine("reach pool2: identified ", 60000).empty()) << daemon->output();
+  EXPECT_EQ(daemon->Stop(SIGTERM), 0) << daemon->output();
+  std::map<std::string, std::vector<std::int64_t>> updates;  // kind -> samples_used published
+  lcm::LogFile log((dir / "run.lcmlog").string(), "r");
+  while (const lcm::LogEvent* e = log.readNextEvent()) {
+    if (e->channel != "CANALID_ASCE2_MODEL_pool2") continue;
+    canalid::model_snapshot_t m;
+    if (m.decode(e->data, 0, e->datalen) == e->datalen && m.estimator == "rls-bank") {
+      updates[m.model_kind].push_back(m.samples_used);
+    }
+  }
+  for (const char* kind : {"id", "arx"}) {
+    const std::vector<std::int64_t>& u = updates[kind];
+    ASSERT_GE(u.size(), 5U) << kind;
+    for (std::size_t i = 1; i < u.size(); ++i) {
+      // Every sample updates the estimators here: ten updates between two publications.
+      EXPECT_EQ(u[i] - u[i - 1], 10) << kind << " message " << i;
+    }
+  }
+}
+
 // batch_models = ["id", "foptd", "frac-foptd"] on pool 2, live: at the end of the experiment each
 // process model is logged, published on MODEL_pool2 with estimator "batch" and persisted when
 // inside its bounds; `canalid replay` of the log gives the same models (the same fits on the same
