@@ -238,19 +238,27 @@ TEST(DaemonCanalsim, DesignedExperimentIdentifiesRestoresReplaysAndResumes) {
   EXPECT_EQ(again->Stop(SIGTERM), 0) << again->output();
 }
 
-// The last online snapshot the daemon published per model kind (MODEL_<reach> messages of its
-// LCM log, estimator not "batch"/"persisted").
-std::map<std::string, canalid::model_snapshot_t> LastOnlineModels(const fs::path& log_path,
-                                                                  const std::string& channel) {
-  std::map<std::string, canalid::model_snapshot_t> last;
-  lcm::LogFile log(log_path.string(), "r");
-  if (!log.good()) return last;
+// Every model message on `channel` of the run's LCM log, in order.
+std::vector<canalid::model_snapshot_t> ModelMessages(const fs::path& dir,
+                                                     const std::string& channel) {
+  std::vector<canalid::model_snapshot_t> messages;
+  lcm::LogFile log((dir / "run.lcmlog").string(), "r");
+  if (!log.good()) return messages;
   while (const lcm::LogEvent* e = log.readNextEvent()) {
     if (e->channel != channel) continue;
     canalid::model_snapshot_t m;
-    if (m.decode(e->data, 0, e->datalen) != e->datalen) continue;
-    if (m.estimator == "batch" || m.estimator == "persisted") continue;
-    last[m.model_kind] = m;
+    if (m.decode(e->data, 0, e->datalen) == e->datalen) messages.push_back(m);
+  }
+  return messages;
+}
+
+// The last online snapshot the daemon published per model kind (MODEL_<reach> messages of its
+// LCM log, estimator not "batch"/"persisted").
+std::map<std::string, canalid::model_snapshot_t> LastOnlineModels(const fs::path& dir,
+                                                                  const std::string& channel) {
+  std::map<std::string, canalid::model_snapshot_t> last;
+  for (const canalid::model_snapshot_t& m : ModelMessages(dir, channel)) {
+    if (m.estimator != "batch" && m.estimator != "persisted") last[m.model_kind] = m;
   }
   return last;
 }
@@ -309,7 +317,7 @@ TEST(DaemonCanalsim, EveryOnlineKindIsReproducedByReplayAndIdentify) {
   ASSERT_FALSE(daemon->WaitForLine("reach pool2: identified ", 60000).empty()) << daemon->output();
   EXPECT_EQ(daemon->Stop(SIGTERM), 0) << daemon->output();
 
-  const auto live = LastOnlineModels(dir / "run.lcmlog", "CANALID_ASCE2_MODEL_pool2");
+  const auto live = LastOnlineModels(dir, "CANALID_ASCE2_MODEL_pool2");
   ASSERT_EQ(live.size(), 3U);
   for (const char* kind : {"id", "arx", "frac-foptd"}) {
     ASSERT_EQ(live.count(kind), 1U) << kind;
@@ -387,13 +395,8 @@ TEST(DaemonCanalsim, ModelPublishPeriodThinsTheOnlineModels) {
   ASSERT_FALSE(daemon->WaitForLine("reach pool2: identified ", 60000).empty()) << daemon->output();
   EXPECT_EQ(daemon->Stop(SIGTERM), 0) << daemon->output();
   std::map<std::string, std::vector<std::int64_t>> updates;  // kind -> samples_used published
-  lcm::LogFile log((dir / "run.lcmlog").string(), "r");
-  while (const lcm::LogEvent* e = log.readNextEvent()) {
-    if (e->channel != "CANALID_ASCE2_MODEL_pool2") continue;
-    canalid::model_snapshot_t m;
-    if (m.decode(e->data, 0, e->datalen) == e->datalen && m.estimator == "rls-bank") {
-      updates[m.model_kind].push_back(m.samples_used);
-    }
+  for (const canalid::model_snapshot_t& m : ModelMessages(dir, "CANALID_ASCE2_MODEL_pool2")) {
+    if (m.estimator == "rls-bank") updates[m.model_kind].push_back(m.samples_used);
   }
   for (const char* kind : {"id", "arx"}) {
     const std::vector<std::int64_t>& u = updates[kind];
@@ -433,13 +436,8 @@ TEST(DaemonCanalsim, BatchProcessModelsArePublishedPersistedReplayedAndResumed) 
 
   // Published with estimator "batch", one message per kind.
   std::map<std::string, canalid::model_snapshot_t> published;
-  lcm::LogFile log((dir / "run.lcmlog").string(), "r");
-  while (const lcm::LogEvent* e = log.readNextEvent()) {
-    if (e->channel != "CANALID_ASCE2_MODEL_pool2") continue;
-    canalid::model_snapshot_t m;
-    if (m.decode(e->data, 0, e->datalen) == e->datalen && m.estimator == "batch") {
-      published[m.model_kind] = m;
-    }
+  for (const canalid::model_snapshot_t& m : ModelMessages(dir, "CANALID_ASCE2_MODEL_pool2")) {
+    if (m.estimator == "batch") published[m.model_kind] = m;
   }
   for (const auto& [kind, json] : live) {
     ASSERT_EQ(published.count(kind), 1U) << kind;
