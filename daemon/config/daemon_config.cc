@@ -26,8 +26,6 @@ constexpr std::array kTables{RegisterTable::kInput, RegisterTable::kHolding};
 constexpr std::array kTypes{RegisterType::kU16, RegisterType::kI16, RegisterType::kU32,
                             RegisterType::kI32, RegisterType::kF32};
 constexpr std::array kWordOrders{WordOrder::kHighWordFirst, WordOrder::kLowWordFirst};
-constexpr std::array kModels{OnlineModel::kId, OnlineModel::kArx, OnlineModel::kFracFoptd,
-                             OnlineModel::kLpv};
 constexpr std::array kBatchModels{BatchModel::kId, BatchModel::kFoptd, BatchModel::kFracFoptd};
 constexpr std::array kClosedLoopModes{ClosedLoopMode::kAuto, ClosedLoopMode::kOn,
                                       ClosedLoopMode::kOff};
@@ -311,8 +309,8 @@ void ValidateReachModels(const DaemonConfig& c, const ReachConfig& r, const Chan
     extra_channel("actuator_position", r.actuator_position,
                   {ChannelRole::kGate, ChannelRole::kPump});
   }
-  const bool lpv = std::find(r.online_models.begin(), r.online_models.end(), OnlineModel::kLpv) !=
-                   r.online_models.end();
+  const bool lpv = std::find(r.online_models.begin(), r.online_models.end(),
+                             OnlineModel::kLpvArx) != r.online_models.end();
   if (!r.lpv_scheduling.empty()) {
     extra_channel("lpv_scheduling", r.lpv_scheduling,
                   {ChannelRole::kLevel, ChannelRole::kFlow, ChannelRole::kGate, ChannelRole::kPump,
@@ -348,7 +346,7 @@ void ValidateReachModels(const DaemonConfig& c, const ReachConfig& r, const Chan
   const auto runs = [&](OnlineModel m) {
     return std::find(r.online_models.begin(), r.online_models.end(), m) != r.online_models.end();
   };
-  if (runs(OnlineModel::kFracFoptd)) {
+  if (runs(OnlineModel::kFractionalFoptd)) {
     out.Range(at + "fractional_delay_s", r.fractional_delay_s, 0.0, hi);
   }
   if (lpv) out.Range(at + "lpv_delay_s", r.lpv_delay_s, 0.0, hi);
@@ -612,9 +610,8 @@ const char* EnumName(WordOrder v) { return NameIn(v, kWordOrders, {"high_first",
 const char* EnumName(BatchModel v) {
   return NameIn(v, kBatchModels, {"id", "foptd", "frac-foptd"});
 }
-const char* EnumName(OnlineModel v) {
-  return NameIn(v, kModels, {"id", "arx", "frac-foptd", "lpv"});
-}
+// A string_view of a literal: null-terminated.
+const char* EnumName(OnlineModel v) { return core::OnlineModelKindName(v).data(); }
 const char* EnumName(RlsMethod v) {
   return NameIn(v, kRlsMethods,
                 {"ud_directional", "ud_exponential", "exponential", "directional", "constant_trace",
@@ -656,7 +653,7 @@ std::span<const WordOrder> AllValues<WordOrder>() {
 }
 template <>
 std::span<const OnlineModel> AllValues<OnlineModel>() {
-  return kModels;
+  return core::kOnlineModelKinds;
 }
 template <>
 std::span<const BatchModel> AllValues<BatchModel>() {

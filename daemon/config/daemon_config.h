@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/integrator_delay/integrator_delay_model.h"
+#include "core/online/online_model.h"
 #include "core/online/rls_options.h"
 #include "drivers/auth/command_auth.h"
 #include "drivers/modbus/channel_scaling.h"
@@ -32,7 +33,8 @@ enum class PlcTransport { kTcp, kRtu };
 enum class ChannelRole { kLevel, kFlow, kGate, kPump, kHeartbeat, kOther };
 /// Modbus table of a channel (function 4 input registers, function 3 holding registers).
 enum class RegisterTable { kInput, kHolding };
-enum class OnlineModel { kId, kArx, kFracFoptd, kLpv };
+/// The online model kinds are core's registry's (the names of core::OnlineModelKindName).
+using OnlineModel = core::OnlineModelKind;
 /// The models identified at the end of an experiment.
 enum class BatchModel { kId, kFoptd, kFracFoptd };
 enum class ExperimentMode { kDesign, kExplicit, kStep };
@@ -123,7 +125,7 @@ struct ReachConfig {
   double expected_delay_s = 0.0;    ///< > 0, plant seconds
   double level_min_m = 0.0;         ///< safety band, finite, < level_max_m
   double level_max_m = 0.0;
-  std::vector<OnlineModel> online_models{OnlineModel::kId};  ///< no duplicates
+  std::vector<OnlineModel> online_models{OnlineModel::kIntegratorDelay};  ///< no duplicates
   /// Identified at the end of each experiment, published with estimator "batch" and persisted;
   /// at least one, no duplicates.
   std::vector<BatchModel> batch_models{BatchModel::kId};

@@ -129,23 +129,11 @@ ReachControllerOptions BuildReachControllerOptions(
     options.channels.scheduling = channel_index(reach.lpv_scheduling);
   const core::OnlineModelSettings settings = BuildOnlineModelSettings(*config, reach);
   pipeline.online_id_enabled = false;
-  for (const OnlineModel model : reach.online_models) {
-    switch (model) {
-      case OnlineModel::kId:
-        pipeline.online_id_enabled = true;
-        break;
-      case OnlineModel::kArx:
-        pipeline.process_models.push_back(
-            core::OnlineModelOptionsFor(core::OnlineModelKind::kArx, settings));
-        break;
-      case OnlineModel::kFracFoptd:
-        pipeline.process_models.push_back(
-            core::OnlineModelOptionsFor(core::OnlineModelKind::kFractionalFoptd, settings));
-        break;
-      case OnlineModel::kLpv:
-        pipeline.process_models.push_back(
-            core::OnlineModelOptionsFor(core::OnlineModelKind::kLpvArx, settings));
-        break;
+  for (const OnlineModel kind : reach.online_models) {
+    if (kind == OnlineModel::kIntegratorDelay) {
+      pipeline.online_id_enabled = true;
+    } else {
+      pipeline.process_models.push_back(core::OnlineModelOptionsFor(kind, settings));
     }
   }
   pipeline.online_id =
