@@ -2,12 +2,13 @@
 #include <string>
 #include <vector>
 
+#include "core/hydraulics/trapezoid_section.h"
 #include "sim/level_pid.h"
 
 namespace canalid::sim {
 
-/// Gravity acceleration (m/s^2) used by every hydraulic formula of the simulator.
-inline constexpr double kGravity = 9.81;
+/// Gravity acceleration (m/s^2) used by every hydraulic formula of the simulator: core's.
+using core::kGravity;
 
 /// The structure at the downstream end of a pool.  Levels are measured from its sill, which is the
 /// bed at the downstream end of the pool it closes; `drop_m` is the bed drop from that sill to the

@@ -29,45 +29,6 @@ double WeirOneWay(double coefficient, double width_m, double crest_m, double hig
 
 }  // namespace
 
-TrapezoidSection::TrapezoidSection(double bottom_width_m, double side_slope, double manning_n)
-    : b_(bottom_width_m),
-      m_(side_slope),
-      n2_(manning_n * manning_n),
-      side_(std::sqrt(1.0 + side_slope * side_slope)) {
-  if (!(bottom_width_m >= 0.0) || !(side_slope >= 0.0) || bottom_width_m + side_slope <= 0.0) {
-    std::ostringstream os;
-    os << "TrapezoidSection: bottom_width_m " << bottom_width_m << " and side_slope " << side_slope
-       << " must be >= 0 and not both 0";
-    throw std::invalid_argument(os.str());
-  }
-  if (!(manning_n > 0.0)) {
-    throw std::invalid_argument("TrapezoidSection: manning_n " + std::to_string(manning_n) +
-                                " must be > 0");
-  }
-}
-
-void TrapezoidSection::Friction(double depth_m, double flow_m3s, double* g, double* dg_dh,
-                                double* dg_dq) const {
-  const double a = Area(depth_m);
-  const double p = Perimeter(depth_m);
-  const double t = TopWidth(depth_m);
-  const double p43 = std::cbrt(p * p * p * p);
-  const double a73 = std::cbrt(a * a * a * a * a * a * a);
-  const double k = n2_ * p43 / a73;  // G = k Q|Q|
-  const double qq = flow_m3s * std::abs(flow_m3s);
-  *g = k * qq;
-  // d ln k / dh = 4/3 P'/P - 7/3 T/A, with P' = 2 sqrt(1 + m^2).
-  const double dlnk = (4.0 / 3.0) * 2.0 * side_ / p - (7.0 / 3.0) * t / a;
-  *dg_dh = *g * dlnk;
-  *dg_dq = 2.0 * k * std::abs(flow_m3s);
-}
-
-double TrapezoidSection::FrictionSlope(double depth_m, double flow_m3s) const {
-  double g = 0.0, dh = 0.0, dq = 0.0;
-  Friction(depth_m, flow_m3s, &g, &dh, &dq);
-  return g / Area(depth_m);
-}
-
 double StructureFlow(const Structure& s, double setting, double upstream_m, double downstream_m) {
   switch (s.type) {
     case Structure::Type::kPump:
@@ -106,6 +67,23 @@ double OfftakeFlow(const Offtake& offtake, double setting, double depth_m) {
     }
   }
   return 0.0;
+}
+
+std::vector<double> SteadyPoolFlows(const Canal& canal) {
+  std::vector<double> pool_flow;
+  pool_flow.reserve(canal.pools.size());
+  double flow = canal.upstream.flow_m3s;
+  for (const Pool& pool : canal.pools) {
+    pool_flow.push_back(flow);
+    flow -= OfftakeFlow(pool.offtake, pool.offtake.setting, pool.target_depth_m);
+    if (flow < 0.0) {
+      std::ostringstream os;
+      os << "pool " << pool.name << ": offtakes take more than the inflow "
+         << canal.upstream.flow_m3s << " m3/s at the steady state";
+      throw std::invalid_argument(os.str());
+    }
+  }
+  return pool_flow;
 }
 
 double SteadyStructureSetting(const Structure& s, double flow_m3s, double upstream_m,

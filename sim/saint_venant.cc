@@ -76,20 +76,7 @@ double SaintVenantCanal::TailLevel(int pool) const {
 
 void SaintVenantCanal::BuildSteadyState() {
   const int pools = num_pools();
-  double flow = canal_.upstream.flow_m3s;
-  std::vector<double> pool_flow(static_cast<std::size_t>(pools));
-  for (int p = 0; p < pools; ++p) {
-    pool_flow[static_cast<std::size_t>(p)] = flow;
-    const Pool& pool = canal_.pools[static_cast<std::size_t>(p)];
-    flow -= sim::OfftakeFlow(pool.offtake, offtake_setting_[static_cast<std::size_t>(p)],
-                             pool.target_depth_m);
-    if (flow < 0.0) {
-      std::ostringstream os;
-      os << "pool " << pool.name << ": offtakes take more than the inflow "
-         << canal_.upstream.flow_m3s << " m3/s at the steady state";
-      throw std::invalid_argument(os.str());
-    }
-  }
+  const std::vector<double> pool_flow = SteadyPoolFlows(canal_);
   for (int p = 0; p < pools; ++p) {
     std::vector<double> depth;
     try {

@@ -15,6 +15,7 @@
 #include "daemon/canalid/replay_command.h"
 #include "daemon/canalid/report_command.h"
 #include "daemon/canalid/simulate_command.h"
+#include "daemon/canalid/theory_command.h"
 
 namespace canalid::cli {
 
@@ -62,6 +63,8 @@ int Run(int argc, char** argv) {
   AddExportCommand(app, export_options, exit_code);
   ReportOptions report;
   AddReportCommand(app, report, exit_code);
+  TheoryOptions theory;
+  AddTheoryCommand(app, theory, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,149 @@
+#include "core/hydraulics/idz_theory.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+#include "core/hydraulics/trapezoid_section.h"
+
+namespace canalid::core {
+namespace {
+
+// One part of the pool with constant coefficients (uniform, or the linear backwater part).
+struct PartModel {
+  double tau_d = 0.0;
+  double tau_u = 0.0;
+  double ad = 0.0;
+  double au = 0.0;
+  double p11 = 0.0;
+  double p12 = 0.0;
+  double p21 = 0.0;
+  double p22 = 0.0;
+};
+
+// log(1 + e^z) without overflow.
+double Softplus(double z) { return std::max(z, 0.0) + std::log1p(std::exp(-std::abs(z))); }
+
+// e^z / (1 + e^z) without overflow.
+double Logistic(double z) {
+  return z >= 0.0 ? 1.0 / (1.0 + std::exp(-z)) : std::exp(z) / (1.0 + std::exp(z));
+}
+
+PartModel Part(const TrapezoidSection& section, double flow, double depth, double bed_slope,
+               double depth_slope, double length) {
+  PartModel part;
+  if (length <= 0.0) return part;
+  const double a = section.Area(depth);
+  const double t = section.TopWidth(depth);
+  const double p = section.Perimeter(depth);
+  const double dt = section.TopWidthPerDepth();
+  const double c = std::sqrt(kGravity * a / t);
+  const double v = flow / a;
+  const double f = v / c;
+  const double f2 = f * f;
+  if (!(f < 1.0)) {
+    std::ostringstream os;
+    os << "flow is not subcritical at depth " << depth << " m (Froude " << f << ")";
+    throw std::invalid_argument(os.str());
+  }
+  const double kappa = 7.0 / 3.0 - 4.0 * a * section.PerimeterPerDepth() / (3.0 * t * p);
+  const double w = t * (c * c - v * v);
+  const double delta =
+      kGravity * t * ((1.0 + kappa) * bed_slope - (1.0 + kappa - f2 * (kappa - 2.0)) * depth_slope);
+  const double delta_hf = delta + v * v * dt * depth_slope;
+  const double alpha =
+      t / (a * f * (1.0 - f2)) *
+      ((2.0 + (kappa - 1.0) * f2) * bed_slope -
+       (2.0 + (kappa - 1.0) * f2 - (a * dt / (t * t) + kappa - 2.0) * f2 * f2) * depth_slope);
+  part.tau_d = length / (c + v);
+  part.tau_u = length / (c - v);
+  const double z = delta * length / w;
+  if (std::abs(z) < 1e-12) {
+    part.ad = part.au = t * length;
+  } else {
+    part.ad = -t * w / delta * std::expm1(-z);
+    part.au = t * w / delta * std::expm1(z);
+  }
+  const double ax = alpha * length;
+  const double share = Logistic(ax);  // e^{ax} / (1 + e^{ax})
+  const double up = (1.0 - f) / (1.0 + f);
+  part.p11 = 1.0 / (t * c * (1.0 - f)) * std::sqrt(1.0 - share + up * up * share);
+  part.p22 = 1.0 / (t * c * (1.0 + f)) * std::sqrt(1.0 - share + share / (up * up));
+  const double half_softplus = 0.5 * Softplus(ax);
+  const double cross = 2.0 / (t * c * (1.0 - f2));
+  const double decay = delta_hf * length / (2.0 * w);
+  part.p12 = cross * std::exp(-decay - half_softplus);
+  part.p21 = cross * std::exp(decay - half_softplus);
+  return part;
+}
+
+void CheckPositive(const char* name, double value) {
+  if (!std::isfinite(value) || !(value > 0.0)) {
+    std::ostringstream os;
+    os << name << " " << value << " must be a finite number > 0";
+    throw std::invalid_argument(os.str());
+  }
+}
+
+}  // namespace
+
+IdzTheory IdzFromGeometry(const PoolGeometry& pool, double flow_m3s) {
+  CheckPositive("length_m", pool.length_m);
+  CheckPositive("downstream depth", pool.downstream_depth_m);
+  CheckPositive("flow", flow_m3s);
+  CheckPositive("manning_n", pool.manning_n);
+  if (!std::isfinite(pool.bed_slope)) throw std::invalid_argument("bed_slope must be finite");
+  const TrapezoidSection section(pool.bottom_width_m, pool.side_slope, pool.manning_n);
+  const double y_l = pool.downstream_depth_m;
+  const double f2_l = section.FroudeSquared(y_l, flow_m3s);
+  if (!(f2_l < 1.0)) {
+    std::ostringstream os;
+    os << "flow " << flow_m3s << " m3/s is not subcritical at the downstream depth " << y_l
+       << " m (Froude " << std::sqrt(f2_l) << ")";
+    throw std::invalid_argument(os.str());
+  }
+  IdzTheory theory;
+  theory.depth_slope = (pool.bed_slope - section.FrictionSlope(y_l, flow_m3s)) / (1.0 - f2_l);
+  const double length = pool.length_m;
+  double uniform = 0.0;
+  if (pool.bed_slope > 0.0) {
+    theory.normal_depth_m = section.NormalDepth(flow_m3s, pool.bed_slope);
+    if (theory.depth_slope != 0.0) {
+      uniform = std::max(0.0, length - (y_l - theory.normal_depth_m) / theory.depth_slope);
+    } else {
+      uniform = length;
+    }
+  }
+  theory.uniform_length_m = uniform;
+  const double backwater = length - uniform;
+  theory.upstream_depth_m =
+      uniform > 0.0 ? theory.normal_depth_m : y_l - theory.depth_slope * length;
+  const double mid_depth = y_l - 0.5 * backwater * theory.depth_slope;
+  const PartModel down =
+      Part(section, flow_m3s, mid_depth, pool.bed_slope, theory.depth_slope, backwater);
+  IdzModel& m = theory.model;
+  if (uniform <= 0.0) {
+    m = IdzModel{down.tau_d, down.ad, down.p21, down.p22, down.tau_u, down.au, down.p11, down.p12};
+    return theory;
+  }
+  const PartModel up = Part(section, flow_m3s, theory.normal_depth_m, pool.bed_slope, 0.0, uniform);
+  if (backwater <= 0.0) {
+    m = IdzModel{up.tau_d, up.ad, up.p21, up.p22, up.tau_u, up.au, up.p11, up.p12};
+    return theory;
+  }
+  // The parts share the level and the flow where they meet (see the header).
+  const double coupling = down.p11 + up.p22;
+  m.delay_s = up.tau_d + down.tau_d;
+  m.upstream_delay_s = up.tau_u + down.tau_u;
+  m.area_m2 = down.ad * (1.0 + up.ad / down.au);
+  m.upstream_area_m2 = up.au * (1.0 + down.au / up.ad);
+  m.p11_s_per_m2 = up.p11 + up.p12 * up.p21 / coupling;
+  m.p12_s_per_m2 = up.p12 * down.p12 / coupling;
+  m.p21_s_per_m2 = up.p21 * down.p21 / coupling;
+  m.p22_s_per_m2 = down.p22 + down.p12 * down.p21 / coupling;
+  return theory;
+}
+
+}  // namespace canalid::core
