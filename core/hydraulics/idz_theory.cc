@@ -1,11 +1,13 @@
 #include "core/hydraulics/idz_theory.h"
 
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 
+#include "core/hydraulics/linearised_reach.h"
 #include "core/hydraulics/trapezoid_section.h"
 
 namespace canalid::core {
@@ -31,34 +33,17 @@ double Logistic(double z) {
   return z >= 0.0 ? 1.0 / (1.0 + std::exp(-z)) : std::exp(z) / (1.0 + std::exp(z));
 }
 
-PartModel Part(const TrapezoidSection& section, double flow, double depth, double bed_slope,
-               double depth_slope, double length) {
+PartModel Part(const LinearisedReach& r, double length) {
   PartModel part;
   if (length <= 0.0) return part;
-  const double a = section.Area(depth);
-  const double t = section.TopWidth(depth);
-  const double p = section.Perimeter(depth);
-  const double dt = section.TopWidthPerDepth();
-  const double c = std::sqrt(kGravity * a / t);
-  const double v = flow / a;
-  const double f = v / c;
-  const double f2 = f * f;
-  if (!(f < 1.0)) {
-    std::ostringstream os;
-    os << "flow is not subcritical at depth " << depth << " m (Froude " << f << ")";
-    throw std::invalid_argument(os.str());
-  }
-  const double kappa = 7.0 / 3.0 - 4.0 * a * section.PerimeterPerDepth() / (3.0 * t * p);
+  const double t = r.top_width_m;
+  const double c = r.celerity_m_s;
+  const double v = r.velocity_m_s;
+  const double f = r.froude;
   const double w = t * (c * c - v * v);
-  const double delta =
-      kGravity * t * ((1.0 + kappa) * bed_slope - (1.0 + kappa - f2 * (kappa - 2.0)) * depth_slope);
-  const double delta_hf = delta + v * v * dt * depth_slope;
-  const double alpha =
-      t / (a * f * (1.0 - f2)) *
-      ((2.0 + (kappa - 1.0) * f2) * bed_slope -
-       (2.0 + (kappa - 1.0) * f2 - (a * dt / (t * t) + kappa - 2.0) * f2 * f2) * depth_slope);
   part.tau_d = length / (c + v);
   part.tau_u = length / (c - v);
+  const double delta = r.delta_without_top_width_change;
   const double z = delta * length / w;
   if (std::abs(z) < 1e-12) {
     part.ad = part.au = t * length;
@@ -66,17 +51,40 @@ PartModel Part(const TrapezoidSection& section, double flow, double depth, doubl
     part.ad = -t * w / delta * std::expm1(-z);
     part.au = t * w / delta * std::expm1(z);
   }
-  const double ax = alpha * length;
+  const double ax = r.alpha_per_m * length;
   const double share = Logistic(ax);  // e^{ax} / (1 + e^{ax})
   const double up = (1.0 - f) / (1.0 + f);
   part.p11 = 1.0 / (t * c * (1.0 - f)) * std::sqrt(1.0 - share + up * up * share);
   part.p22 = 1.0 / (t * c * (1.0 + f)) * std::sqrt(1.0 - share + share / (up * up));
   const double half_softplus = 0.5 * Softplus(ax);
-  const double cross = 2.0 / (t * c * (1.0 - f2));
-  const double decay = delta_hf * length / (2.0 * w);
+  const double cross = 2.0 / (t * c * (1.0 - f * f));
+  const double decay = r.delta * length / (2.0 * w);
   part.p12 = cross * std::exp(-decay - half_softplus);
   part.p21 = cross * std::exp(decay - half_softplus);
   return part;
+}
+
+// p22(s) = y(L)/q(L) with q(0) = 0 over the parts in series (upstream part first).
+double OutflowResponse(const LinearisedReach& up, double up_length, const LinearisedReach& down,
+                       double down_length, double s) {
+  Eigen::Matrix2cd phi = TransferMatrix(down, s, down_length);
+  if (up_length > 0.0) phi = phi * TransferMatrix(up, s, up_length);
+  return (phi(1, 1) / phi(0, 1)).real();
+}
+
+// The constant c of p22(s) = -1/(A s) - c - e s + O(s^2) at low frequencies, from three real
+// frequencies far below 1/delay (solved exactly for 1/A, c and e).
+double LowFrequencyOutflowGain(const LinearisedReach& up, double up_length,
+                               const LinearisedReach& down, double down_length, double delay_s) {
+  const double e = 1e-4 / delay_s;
+  Eigen::Matrix3d x;
+  Eigen::Vector3d p;
+  for (int i = 0; i < 3; ++i) {
+    const double s = e * (i + 1);
+    x.row(i) << -1.0 / s, -1.0, -s;
+    p(i) = OutflowResponse(up, up_length, down, down_length, s);
+  }
+  return x.partialPivLu().solve(p)(1);
 }
 
 void CheckPositive(const char* name, double value) {
@@ -121,28 +129,34 @@ IdzTheory IdzFromGeometry(const PoolGeometry& pool, double flow_m3s) {
   theory.upstream_depth_m =
       uniform > 0.0 ? theory.normal_depth_m : y_l - theory.depth_slope * length;
   const double mid_depth = y_l - 0.5 * backwater * theory.depth_slope;
-  const PartModel down =
-      Part(section, flow_m3s, mid_depth, pool.bed_slope, theory.depth_slope, backwater);
+  const LinearisedReach down_reach =
+      Linearise(section, flow_m3s, mid_depth, pool.bed_slope, theory.depth_slope);
+  const LinearisedReach up_reach =
+      uniform > 0.0 ? Linearise(section, flow_m3s, theory.normal_depth_m, pool.bed_slope, 0.0)
+                    : down_reach;
+  const PartModel down = Part(down_reach, backwater);
   IdzModel& m = theory.model;
-  if (uniform <= 0.0) {
-    m = IdzModel{down.tau_d, down.ad, down.p21, down.p22, down.tau_u, down.au, down.p11, down.p12};
-    return theory;
+  const PartModel up = Part(up_reach, uniform);
+  if (uniform <= 0.0 || backwater <= 0.0) {
+    const PartModel& only = uniform <= 0.0 ? down : up;
+    m = IdzModel{only.tau_d, only.ad, only.p21, only.p22, only.tau_u, only.au, only.p11, only.p12};
+  } else {
+    // The parts share the level and the flow where they meet (see the header).
+    const double coupling = down.p11 + up.p22;
+    m.delay_s = up.tau_d + down.tau_d;
+    m.upstream_delay_s = up.tau_u + down.tau_u;
+    m.area_m2 = down.ad * (1.0 + up.ad / down.au);
+    m.upstream_area_m2 = up.au * (1.0 + down.au / up.ad);
+    m.p11_s_per_m2 = up.p11 + up.p12 * up.p21 / coupling;
+    m.p12_s_per_m2 = up.p12 * down.p12 / coupling;
+    m.p21_s_per_m2 = up.p21 * down.p21 / coupling;
+    m.p22_s_per_m2 = down.p22 + down.p12 * down.p21 / coupling;
   }
-  const PartModel up = Part(section, flow_m3s, theory.normal_depth_m, pool.bed_slope, 0.0, uniform);
-  if (backwater <= 0.0) {
-    m = IdzModel{up.tau_d, up.ad, up.p21, up.p22, up.tau_u, up.au, up.p11, up.p12};
-    return theory;
-  }
-  // The parts share the level and the flow where they meet (see the header).
-  const double coupling = down.p11 + up.p22;
-  m.delay_s = up.tau_d + down.tau_d;
-  m.upstream_delay_s = up.tau_u + down.tau_u;
-  m.area_m2 = down.ad * (1.0 + up.ad / down.au);
-  m.upstream_area_m2 = up.au * (1.0 + down.au / up.ad);
-  m.p11_s_per_m2 = up.p11 + up.p12 * up.p21 / coupling;
-  m.p12_s_per_m2 = up.p12 * down.p12 / coupling;
-  m.p21_s_per_m2 = up.p21 * down.p21 / coupling;
-  m.p22_s_per_m2 = down.p22 + down.p12 * down.p21 / coupling;
+  // One part (the pool's only one) or the two in series.
+  const bool two_parts = uniform > 0.0 && backwater > 0.0;
+  theory.outflow_gain_low_frequency_s_per_m2 = LowFrequencyOutflowGain(
+      up_reach, two_parts ? uniform : 0.0, backwater > 0.0 ? down_reach : up_reach,
+      backwater > 0.0 ? backwater : uniform, m.delay_s);
   return theory;
 }
 

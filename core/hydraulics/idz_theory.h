@@ -24,6 +24,12 @@ struct IdzTheory {
   double upstream_depth_m = 0.0;
   /// Slope of the water depth along the backwater part, dY/dx at the downstream end (m/m).
   double depth_slope = 0.0;
+  /// The outflow's direct gain at low frequencies (s/m^2): the constant c of
+  /// p22(s) = -(1/(A s) + c + O(s)) as s -> 0, from the linearised equations (LinearisedReach)
+  /// over the same two parts.  It differs from the high-frequency p22 of the model (ASCE canal 2
+  /// pool 2 at 10 m3/s: 0.0133 against 0.0216) and is the one that a level-driven outflow, slow
+  /// beside the delay, couples into the level: the prior of closed-loop identification.
+  double outflow_gain_low_frequency_s_per_m2 = 0.0;
 };
 
 /// The IDZ model of a pool at a steady flow, by the analytical approximation of the Saint-Venant

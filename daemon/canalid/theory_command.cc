@@ -53,6 +53,7 @@ nlohmann::json ToJson(const PoolTheory& p) {
   json["area_m2"] = m.area_m2;
   json["p21_s_per_m2"] = m.p21_s_per_m2;
   json["p22_s_per_m2"] = m.p22_s_per_m2;
+  json["p22_low_frequency_s_per_m2"] = p.theory.outflow_gain_low_frequency_s_per_m2;
   json["upstream_delay_s"] = m.upstream_delay_s;
   json["upstream_area_m2"] = m.upstream_area_m2;
   json["p11_s_per_m2"] = m.p11_s_per_m2;
