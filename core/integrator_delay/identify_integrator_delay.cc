@@ -7,17 +7,21 @@
 
 namespace canalid::core {
 
+Eigen::VectorXd LevelWithoutSpikes(const Eigen::Ref<const Eigen::VectorXd>& level, bool remove,
+                                   const HampelOptions& options, OutlierReport* report) {
+  if (!remove || !level.allFinite() || level.size() == 0) return level;
+  OutlierResult cleaned = RemoveOutliers(level, options);
+  *report = std::move(cleaned.report);
+  return std::move(cleaned.cleaned);
+}
+
 IntegratorDelayIdentification IdentifyIntegratorDelay(
     const Eigen::Ref<const Eigen::VectorXd>& q_in, const Eigen::Ref<const Eigen::VectorXd>& q_out,
     const Eigen::Ref<const Eigen::VectorXd>& level, double sample_time_s,
     const IntegratorDelayIdentificationOptions& options) {
   IntegratorDelayIdentification result;
-  Eigen::VectorXd clean_level = level;
-  if (options.remove_level_outliers && level.allFinite() && level.size() > 0) {
-    OutlierResult cleaned = RemoveOutliers(level, options.level_outliers);
-    clean_level = std::move(cleaned.cleaned);
-    result.level_outliers = std::move(cleaned.report);
-  }
+  const Eigen::VectorXd clean_level = LevelWithoutSpikes(
+      level, options.remove_level_outliers, options.level_outliers, &result.level_outliers);
   result.fit = FitIntegratorDelay(q_in, q_out, clean_level, sample_time_s, options.fit);
 
   // Cross-check of the delay.  It needs a few times the AR order of samples per lag examined.

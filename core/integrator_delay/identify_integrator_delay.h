@@ -28,6 +28,11 @@ struct IntegratorDelayIdentification {
   CorrelationDelayEstimate correlation;  ///< num_samples == 0 if the record was too short for it
 };
 
+/// Step 1 of both pipelines: the level with its spikes replaced (Hampel, `options`) when
+/// `remove` and the level is finite, else the level as given; `report` says what was replaced.
+Eigen::VectorXd LevelWithoutSpikes(const Eigen::Ref<const Eigen::VectorXd>& level, bool remove,
+                                   const HampelOptions& options, OutlierReport* report);
+
 /// @throws std::invalid_argument as FitIntegratorDelay.
 IntegratorDelayIdentification IdentifyIntegratorDelay(
     const Eigen::Ref<const Eigen::VectorXd>& q_in, const Eigen::Ref<const Eigen::VectorXd>& q_out,

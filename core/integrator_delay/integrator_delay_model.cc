@@ -182,23 +182,24 @@ Eigen::VectorXd CumulativeSum(const Eigen::VectorXd& v) {
   return s;
 }
 
-void Validate(const Eigen::Ref<const Eigen::VectorXd>& q_in,
-              const Eigen::Ref<const Eigen::VectorXd>& q_out,
-              const Eigen::Ref<const Eigen::VectorXd>& level, double ts) {
+}  // namespace
+
+void ValidatePoolRecord(const Eigen::Ref<const Eigen::VectorXd>& q_in,
+                        const Eigen::Ref<const Eigen::VectorXd>& q_out,
+                        const Eigen::Ref<const Eigen::VectorXd>& level, double ts,
+                        const std::string& what) {
   if (q_in.size() != q_out.size() || q_in.size() != level.size()) {
-    throw std::invalid_argument("ID fit: q_in, q_out and level must have the same length");
+    throw std::invalid_argument(what + ": q_in, q_out and level must have the same length");
   }
-  if (!(ts > 0.0)) throw std::invalid_argument("ID fit: sample time must be > 0");
+  if (!(ts > 0.0)) throw std::invalid_argument(what + ": sample time must be > 0");
   if (!q_in.allFinite() || !q_out.allFinite() || !level.allFinite()) {
-    throw std::invalid_argument("ID fit: data contain NaN or Inf");
+    throw std::invalid_argument(what + ": data contain NaN or Inf");
   }
   if (q_in.maxCoeff() == q_in.minCoeff()) {
     throw std::invalid_argument(
-        "ID fit: the inflow never moves, so neither delay nor area can be identified");
+        what + ": the inflow never moves, so neither delay nor area can be identified");
   }
 }
-
-}  // namespace
 
 Eigen::VectorXd IntegratedTotalFlow(const Eigen::Ref<const Eigen::VectorXd>& q_in,
                                     const Eigen::Ref<const Eigen::VectorXd>& q_out, int nk,
@@ -233,7 +234,7 @@ IntegratorDelayFit FitIntegratorDelay(const Eigen::Ref<const Eigen::VectorXd>& q
                                       const Eigen::Ref<const Eigen::VectorXd>& level,
                                       double sample_time_s,
                                       const IntegratorDelayFitOptions& options) {
-  Validate(q_in, q_out, level, sample_time_s);
+  ValidatePoolRecord(q_in, q_out, level, sample_time_s, "ID fit");
   const auto n = static_cast<int>(q_in.size());
   const int max_nk = options.max_nk >= 0 ? options.max_nk : n / 3;
   if (options.min_nk < 0 || options.min_nk > max_nk) {

@@ -75,6 +75,13 @@ IntegratorDelayFit FitIntegratorDelay(const Eigen::Ref<const Eigen::VectorXd>& q
                                       double sample_time_s,
                                       const IntegratorDelayFitOptions& options = {});
 
+/// Checks a pool record: equal lengths, Ts > 0, finite values, an inflow that moves.
+/// @throws std::invalid_argument with the message prefixed by `what`.
+void ValidatePoolRecord(const Eigen::Ref<const Eigen::VectorXd>& q_in,
+                        const Eigen::Ref<const Eigen::VectorXd>& q_out,
+                        const Eigen::Ref<const Eigen::VectorXd>& level, double sample_time_s,
+                        const std::string& what);
+
 /// Rows k = k0..N-1 of the open-loop regression [Q(k), q_in(k - nk), 1, k - k0] (see
 /// FitIntegratorDelay).
 Eigen::MatrixXd OpenLoopRegressors(const Eigen::Ref<const Eigen::VectorXd>& q_in,

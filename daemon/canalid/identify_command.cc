@@ -1,6 +1,7 @@
 #include "daemon/canalid/identify_command.h"
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <fstream>
 #include <iostream>
 #include <string>
@@ -17,6 +18,7 @@ namespace {
 int RunIdentify(const IdentifyOptions& options) {
   if (!options.compare.empty()) return RunCompare(options);
   if (options.model.empty()) throw InputError("identify: give --model KIND or --compare KINDS");
+  RequireIdzOptionsUsed(options, {options.model});
   drivers::CsvTable table;
   try {
     table = drivers::CsvTable::Read(options.input);
@@ -36,8 +38,8 @@ int RunIdentify(const IdentifyOptions& options) {
 }  // namespace
 
 const std::vector<std::string>& ModelKinds() {
-  static const std::vector<std::string> kKinds = {"id",         "arx",     "foptd", "soptd",
-                                                  "frac-foptd", "frac-ss", "lpv"};
+  static const std::vector<std::string> kKinds = {"id",    "idz",        "arx",     "foptd",
+                                                  "soptd", "frac-foptd", "frac-ss", "lpv"};
   return kKinds;
 }
 
@@ -47,6 +49,8 @@ nlohmann::json IdentifyModel(const IdentifyOptions& options, const drivers::CsvT
     model = IdentifyOnline(options, table);
   } else if (options.model == "id") {
     model = IdentifyId(options, table);
+  } else if (options.model == "idz") {
+    model = IdentifyIdz(options, table);
   } else if (options.model == "arx") {
     model = IdentifyArx(options, table);
   } else if (options.model == "frac-foptd" || options.model == "frac-ss") {
@@ -61,17 +65,27 @@ nlohmann::json IdentifyModel(const IdentifyOptions& options, const drivers::CsvT
   }
   // The columns the model was fitted on, so `canalid simulate` finds them again.
   if (!model.contains("inputs")) {
-    model["inputs"] = options.model == "id" ? std::vector<std::string>{options.qin, options.qout}
-                                            : std::vector<std::string>{options.u};
-    model["output"] = options.model == "id" ? options.level : options.y;
+    const bool pool_model = options.model == "id" || options.model == "idz";
+    model["inputs"] = pool_model ? std::vector<std::string>{options.qin, options.qout}
+                                 : std::vector<std::string>{options.u};
+    model["output"] = pool_model ? options.level : options.y;
   }
   model["input"] = {
       {"file", options.input}, {"rows", table.rows()}, {"sample_time_s", table.sample_time_s()}};
   return model;
 }
 
+void RequireIdzOptionsUsed(const IdentifyOptions& options, const std::vector<std::string>& kinds) {
+  const bool idz = std::find(kinds.begin(), kinds.end(), "idz") != kinds.end();
+  const bool held_p22 = options.online && options.model == "id";
+  if (!idz && !held_p22 && (options.p22 >= 0.0 || !options.canal.empty())) {
+    throw InputError("--p22 and --canal apply to --model idz (and --p22 to --model id --online)");
+  }
+  if (!idz && options.p22_std >= 0.0) throw InputError("--p22-std applies to --model idz");
+}
+
 void AddIdentifyModelOptions(CLI::App& cmd, IdentifyOptions& options) {
-  auto* id = cmd.add_option_group("ID model (--model id)");
+  auto* id = cmd.add_option_group("ID and IDZ models (--model id|idz)");
   id->add_option("--qin", options.qin, "Inflow column, m3/s")->capture_default_str();
   id->add_option("--qout", options.qout, "Outflow column, m3/s")->capture_default_str();
   id->add_option("--level", options.level, "Downstream level column, m")->capture_default_str();
@@ -82,11 +96,21 @@ void AddIdentifyModelOptions(CLI::App& cmd, IdentifyOptions& options) {
       ->check(FiniteIn(0.0, 1e9, true));
   AddClosedLoopOption(*id, options.closed_loop);
   id->add_option("--p22", options.p22,
-                 "--online: IDZ direct outflow gain p22, s/m2 (from the geometry, e.g. Litrico & "
-                 "Fromion's tables): fits level + p22 q_out.  With a level-driven gate b cannot be "
-                 "told from p22, so without it the area comes out as A (1 + p22 g)")
-      ->check(FiniteIn(0.0, 10.0))
-      ->capture_default_str();
+                 "IDZ direct outflow gain p22, s/m2 (canalid theory's p22_low_frequency_s_per_m2): "
+                 "idz's prior, or with --online id held (fits level + p22 q_out).  With a "
+                 "level-driven gate b cannot be told from p22, so without it the area comes out "
+                 "as A (1 + p22 g)")
+      ->check(FiniteIn(0.0, 10.0));
+  id->add_option("--p22-std", options.p22_std,
+                 "idz: standard deviation of the --p22 prior, s/m2 (default 20 % of it)")
+      ->check(FiniteIn(0.0, 10.0));
+  auto* canal = id->add_option("--canal", options.canal,
+                               "idz: canal file (canalsim's TOML) whose --pool's geometry gives "
+                               "the p22 prior at the record's mean inflow (canalid theory)")
+                    ->check(CLI::ExistingFile);
+  auto* pool = id->add_option("--pool", options.pool, "idz: the pool of --canal");
+  canal->needs(pool);
+  pool->needs(canal);
   id->add_flag("--keep-outliers", options.keep_outliers,
                "Do not replace level spikes before fitting");
   auto* io = cmd.add_option_group(
@@ -132,6 +156,8 @@ void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code)
   cmd->footer(
       "Examples:\n"
       "  canalid identify --model id --input pool2.csv --max-delay-s 3600\n"
+      "  canalid identify --model idz --input gate.csv --canal config/sim/asce-canal2.toml --pool "
+      "2\n"
       "  canalid identify --model foptd --input step.csv --u gate --y level --pretty\n"
       "  canalid identify --model arx --input F.csv --u u1,u2 --y y --na 2 --nb 2,3 --nk 1,2\n"
       "  canalid identify --model frac-foptd --input step.csv --u gate --y level\n"

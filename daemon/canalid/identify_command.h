@@ -28,7 +28,11 @@ struct IdentifyOptions {
   std::string level = "level";
   double max_delay_s = -1.0;
   std::string closed_loop = "auto";
-  double p22 = 0.0;  ///< --p22 (online): IDZ direct outflow gain, s/m2
+  /// --p22: IDZ direct outflow gain, s/m2 (--online id: held; idz: the prior); < 0: not given
+  double p22 = -1.0;
+  double p22_std = -1.0;  ///< --p22-std (idz): the prior's std; < 0: 20 % of the prior
+  std::string canal;      ///< --canal (idz): canal file whose --pool gives the p22 prior
+  std::string pool;       ///< --pool (idz)
   bool keep_outliers = false;
   // arx, foptd, soptd
   std::string u = "u";
@@ -62,13 +66,17 @@ struct IdentifyOptions {
 /// Registers `identify` on the app; `exit_code` receives the result when it runs.
 void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code);
 
-/// The kinds `--model` accepts: id, arx, foptd, soptd, frac-foptd, frac-ss, lpv.
+/// The kinds `--model` accepts: id, idz, arx, foptd, soptd, frac-foptd, frac-ss, lpv.
 const std::vector<std::string>& ModelKinds();
 
 /// Registers the options that shape one identification (columns, orders, delays, fractional and
 /// LPV settings: everything but --model, --input, --online, --compare and the output options) on
 /// a command, so that `identify` and `report` take them alike.
 void AddIdentifyModelOptions(CLI::App& cmd, IdentifyOptions& options);
+
+/// @throws InputError if --p22, --p22-std or --canal are given but none of `kinds` uses them
+/// (idz; --p22 also --model id --online).
+void RequireIdzOptionsUsed(const IdentifyOptions& options, const std::vector<std::string>& kinds);
 
 /// Identifies options.model (or the online estimator with options.online) on the table: the model
 /// JSON of `canalid identify`, with "inputs", "output" and "input" (options.input, rows, sample
@@ -78,6 +86,7 @@ nlohmann::json IdentifyModel(const IdentifyOptions& options, const drivers::CsvT
 /// One model kind each; they return the model JSON (docs/design.md keys).  @throws InputError.
 nlohmann::json IdentifyId(const IdentifyOptions& options, const drivers::CsvTable& table);
 nlohmann::json IdentifyArx(const IdentifyOptions& options, const drivers::CsvTable& table);
+nlohmann::json IdentifyIdz(const IdentifyOptions& options, const drivers::CsvTable& table);
 
 /// The ARX problem as the options describe it: orders (one nb/nk for all inputs, or one each),
 /// the output and input columns (inputs must move), optionally detrended.  @throws InputError.

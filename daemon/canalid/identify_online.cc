@@ -105,7 +105,7 @@ nlohmann::json OnlineId(const IdentifyOptions& options, const drivers::CsvTable&
   // instrumental-variable RLS, off = least squares, auto = IV and LS over the first samples, then
   // FitIntegratorDelay's closed-loop test picks one (core::OnlineIntegratorDelayOptions).
   id.closed_loop = ParseClosedLoop(options.closed_loop);
-  id.outflow_direct_gain_s_per_m2 = options.p22;
+  id.outflow_direct_gain_s_per_m2 = std::max(options.p22, 0.0);  // not given: plain ID
   // p21 >= 0 as in the batch fit: a negative wave-front gain lets Q_(nk-1) - b q_in(k-nk+1) mimic
   // Q_nk, so the delay would be ambiguous by one sample.  Not by the RLS box: a clamped theta
   // with an unconstrained P never recovers (core::OnlineIntegratorDelayOptions).

@@ -56,6 +56,7 @@ int RunReport(const ReportOptions& options, const std::string& command_line) {
   const IdentifyOptions identify_options =
       input.reach_channels ? WithReachColumns(options.identify, *input.reach_channels)
                            : options.identify;
+  RequireIdzOptionsUsed(identify_options, options.models);
   TerminalProgress progress("canalid report");
   std::vector<ModelAnalysis> models;
   const std::size_t n = options.models.size();

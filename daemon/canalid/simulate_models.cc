@@ -4,6 +4,7 @@
 #include "core/fractional/commensurate_state_space.h"
 #include "core/fractional/fractional_simulator.h"
 #include "core/fractional/lpv_model.h"
+#include "core/integrator_delay/idz_fit.h"
 #include "core/integrator_delay/integrator_delay_model.h"
 #include "core/linear/arx.h"
 #include "core/linear/process_models.h"
@@ -67,6 +68,27 @@ SimulatedOutput SimulateId(const nlohmann::json& model, const std::string& sourc
         "closed-loop model: simulated with the open-loop level equation and the measured q_out "
         "(the fit's own metrics used the three-step flow model)");
   }
+  return out;
+}
+
+SimulatedOutput SimulateIdz(const nlohmann::json& model, const std::string& source,
+                            const drivers::CsvTable& table, const SimulateOptions& options) {
+  drivers::IdzModelRecord r = drivers::IdzModelFromJson(model, source);
+  const double ts = r.sample_time_s > 0.0 ? r.sample_time_s : table.sample_time_s();
+  if (r.sample_time_s > 0.0) RequireSampleTime(table, r.sample_time_s, source);
+  r.model.drift_m_per_sample = r.drift_m_per_s * ts;
+  const auto names = InputNames(model, source, options, {"q_in", "q_out"});
+  const Eigen::VectorXd q_in = RequireColumn(table, names[0]);
+  const Eigen::VectorXd q_out = RequireColumn(table, names[1]);
+  const int k0 = r.fit_from_sample;
+  if (table.rows() < k0 + 2) {
+    throw InputError(table.source() + ": " + std::to_string(table.rows()) +
+                     " rows; the model starts at row " + std::to_string(k0) +
+                     " (fit_from_sample), needs at least 2 more");
+  }
+  SimulatedOutput out;
+  out.first_row = k0;
+  out.y = core::IdzLevel(q_in, q_out, r.model, k0);
   return out;
 }
 
@@ -187,6 +209,8 @@ SimulatedOutput SimulateModel(const nlohmann::json& model, const std::string& so
     SimulatedOutput out;
     if (kind == "id") {
       out = SimulateId(model, source, table, options);
+    } else if (kind == "idz") {
+      out = SimulateIdz(model, source, table, options);
     } else if (kind == "arx") {
       out = SimulateArxModel(model, source, table, options);
     } else if (kind == "foptd" || kind == "soptd" || kind == "frac-foptd") {
@@ -197,7 +221,7 @@ SimulatedOutput SimulateModel(const nlohmann::json& model, const std::string& so
       out = SimulateLpv(model, source, table, options);
     } else {
       throw InputError(source + ": key 'model': unknown kind '" + kind +
-                       "' (id, arx, foptd, soptd, frac-foptd, frac-ss, lpv)");
+                       "' (id, idz, arx, foptd, soptd, frac-foptd, frac-ss, lpv)");
     }
     RequireFiniteOutput(out.y, out.first_row, table, source + " (model '" + kind + "')");
     return out;

@@ -52,6 +52,33 @@ nlohmann::json ToJson(const core::IntegratorDelayIdentification& result) {
   return json;
 }
 
+nlohmann::json ToJson(const core::IdzIdentification& result) {
+  const core::IdzFit& fit = result.fit;
+  const double ts = fit.sample_time_s;
+  return {{"model", "idz"},
+          {"delay_s", fit.delay_s()},
+          {"nk", fit.nk},
+          {"sample_time_s", ts},
+          {"b", ts / fit.area_m2},
+          {"area_m2", fit.area_m2},
+          {"area_std_m2", fit.area_std_m2},
+          {"p21_s_per_m2", fit.p21_s_per_m2},
+          {"p21_std_s_per_m2", fit.p21_std_s_per_m2},
+          {"p22_s_per_m2", fit.p22_s_per_m2},
+          {"p22_std_s_per_m2", fit.p22_std_s_per_m2},
+          {"p22_source", core::OutflowGainSourceName(fit.p22_source)},
+          {"p22_reason", fit.p22_reason},
+          {"outflow_moves", fit.outflow_moves},
+          {"outflow_follows_level", fit.outflow_follows_level},
+          {"outflow_level_correlation", fit.outflow_level_correlation},
+          {"offset_m", fit.offset_m},
+          {"drift_m_per_s", fit.drift_m_per_sample / ts},
+          {"fit_from_sample", fit.first_sample},
+          {"preprocessing", {{"level_outliers_replaced", result.level_outliers.count}}},
+          {"metrics", ToJson(fit.metrics)},
+          {"warnings", fit.warnings}};
+}
+
 nlohmann::json ToJson(const core::ArxModel& model) {
   nlohmann::json b = nlohmann::json::array();
   for (const auto& coefficients : model.b) {

@@ -7,6 +7,7 @@
 #include "core/fractional/fractional_foptd_fit.h"
 #include "core/fractional/fractional_simulator.h"
 #include "core/fractional/lpv_model.h"
+#include "core/integrator_delay/identify_idz.h"
 #include "core/integrator_delay/identify_integrator_delay.h"
 #include "core/integrator_delay/integrator_delay_model.h"
 #include "core/linear/arx.h"
@@ -25,6 +26,8 @@ nlohmann::json ToJson(const core::FitMetrics& metrics);
 nlohmann::json ToJson(const core::IntegratorDelayFit& fit);
 /// The ID model plus "preprocessing" (replaced level samples) and the correlation cross-check.
 nlohmann::json ToJson(const core::IntegratorDelayIdentification& result);
+/// "model": "idz": the IDZ fit with standard deviations and where p22 came from.
+nlohmann::json ToJson(const core::IdzIdentification& result);
 /// "model": "arx" with a, b_coeffs (one list per input), na, nb, nk, parameter_std, loss, aic, fpe.
 nlohmann::json ToJson(const core::ArxModel& model);
 /// The experiment design (amplitude, clock, order, periods, duration and the explanation).

@@ -155,6 +155,25 @@ IntegratorDelayModelRecord IntegratorDelayModelFromJson(const json& j, const std
   return r;
 }
 
+IdzModelRecord IdzModelFromJson(const json& j, const std::string& source) {
+  ExpectKind(j, "idz", source);
+  IdzModelRecord r;
+  r.model.b = Number(j, "b", source);
+  r.model.nk = Integer(j, "nk", source, 0);
+  r.sample_time_s = SampleTimeOrZero(j, source);
+  r.model.p21_s_per_m2 = NumberOr(j, "p21_s_per_m2", source, 0.0);
+  r.model.p22_s_per_m2 = NumberOr(j, "p22_s_per_m2", source, 0.0);
+  r.model.offset_m = NumberOr(j, "offset_m", source, 0.0);
+  r.drift_m_per_s = NumberOr(j, "drift_m_per_s", source, 0.0);
+  r.fit_from_sample =
+      j.contains("fit_from_sample") ? Integer(j, "fit_from_sample", source, 0) : r.model.nk + 1;
+  if (r.fit_from_sample < r.model.nk + 1) {
+    Fail(source, "fit_from_sample",
+         std::to_string(r.fit_from_sample) + " must be > nk = " + std::to_string(r.model.nk));
+  }
+  return r;
+}
+
 core::ArxModel ArxModelFromJson(const json& j, const std::string& source) {
   ExpectKind(j, "arx", source);
   core::ArxModel m;

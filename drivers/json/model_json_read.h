@@ -9,6 +9,7 @@
 #include "core/fractional/fractional_foptd.h"
 #include "core/fractional/fractional_simulator.h"
 #include "core/fractional/lpv_model.h"
+#include "core/integrator_delay/idz_fit.h"
 #include "core/integrator_delay/integrator_delay_model.h"
 #include "core/linear/arx.h"
 #include "core/linear/process_models.h"
@@ -48,6 +49,16 @@ struct IntegratorDelayModelRecord {
 };
 IntegratorDelayModelRecord IntegratorDelayModelFromJson(const nlohmann::json& json,
                                                         const std::string& source);
+
+/// "idz": the level equation of core::IdzLevel.  Required b, nk; sample_time_s 0 when absent (use
+/// the record's); p21, p22, offset and drift default to 0, fit_from_sample to nk + 1.
+struct IdzModelRecord {
+  core::IdzLevelModel model;
+  double sample_time_s = 0.0;
+  double drift_m_per_s = 0.0;
+  int fit_from_sample = 0;  ///< k0
+};
+IdzModelRecord IdzModelFromJson(const nlohmann::json& json, const std::string& source);
 
 /// "arx": orders, a and b_coeffs (parameters and statistics are not restored); first_sample from
 /// "fit_from_sample", by default orders.min_first_sample() (the fit's own default).

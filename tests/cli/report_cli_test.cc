@@ -324,9 +324,9 @@ TEST_F(ReportCli, MissingOrUnknownModelKindIsExit2) {
   ProgramRun run = RunProgram(base, dir_);
   EXPECT_EQ(run.exit_code, 2);
   EXPECT_NE(run.err.find("no model kind: give --model KIND"), std::string::npos) << run.err;
-  run = RunProgram(base + " --model id,idz", dir_);
+  run = RunProgram(base + " --model id,idw", dir_);
   EXPECT_EQ(run.exit_code, 2);
-  EXPECT_NE(run.err.find("idz not in {id,arx,foptd,soptd,frac-foptd,frac-ss,lpv}"),
+  EXPECT_NE(run.err.find("idw not in {id,idz,arx,foptd,soptd,frac-foptd,frac-ss,lpv}"),
             std::string::npos)
       << run.err;
   // A kind whose columns are not in the record names the kind and the columns there are.

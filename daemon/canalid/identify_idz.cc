@@ -1,0 +1,100 @@
+#include <sstream>
+#include <stdexcept>
+
+#include "core/hydraulics/idz_theory.h"
+#include "core/integrator_delay/identify_idz.h"
+#include "daemon/canalid/identify_command.h"
+#include "daemon/canalid/input_error.h"
+#include "daemon/canalid/table_columns.h"
+#include "drivers/json/model_json.h"
+#include "sim/canal_config.h"
+
+namespace canalid::cli {
+namespace {
+
+// The prior's standard deviation when none is given: the theory's two-part profile was within
+// 12.6 % of the linearised equations on the true profile for the 16 ASCE pools
+// (idz_theory_profile_test); 20 % leaves room for the roughness and the gate's own response.
+constexpr double kDefaultPriorRelativeStd = 0.2;
+
+struct Prior {
+  double p22 = -1.0;
+  double std = 0.0;
+  nlohmann::json json;
+};
+
+Prior TheoryPrior(const IdentifyOptions& options, double flow_m3s) {
+  sim::Canal canal;
+  try {
+    canal = sim::LoadCanal(options.canal);
+  } catch (const std::exception& e) {
+    throw InputError(e.what());
+  }
+  for (const sim::Pool& pool : canal.pools) {
+    if (pool.name != options.pool) continue;
+    const core::PoolGeometry geometry{pool.length_m,  pool.bottom_width_m, pool.side_slope,
+                                      pool.bed_slope, pool.manning_n,      pool.target_depth_m};
+    core::IdzTheory theory;
+    try {
+      theory = core::IdzFromGeometry(geometry, flow_m3s);
+    } catch (const std::invalid_argument& e) {
+      std::ostringstream os;
+      os << options.canal << ": pool " << pool.name << " at the record's mean inflow " << flow_m3s
+         << " m3/s: " << e.what();
+      throw InputError(os.str());
+    }
+    Prior prior;
+    prior.p22 = theory.outflow_gain_low_frequency_s_per_m2;
+    prior.json = {{"from", "theory"},
+                  {"canal", options.canal},
+                  {"pool", pool.name},
+                  {"flow_m3s", flow_m3s},
+                  {"theory_area_m2", theory.model.area_m2},
+                  {"theory_delay_s", theory.model.delay_s}};
+    return prior;
+  }
+  throw InputError("--pool '" + options.pool + "' is not a pool of " + options.canal);
+}
+
+}  // namespace
+
+nlohmann::json IdentifyIdz(const IdentifyOptions& options, const drivers::CsvTable& table) {
+  if (options.p22 >= 0.0 && !options.canal.empty()) {
+    throw InputError("--p22 and --canal both give the p22 prior: give one");
+  }
+  const Eigen::VectorXd q_in = RequireMovingColumn(table, options.qin);
+  const Eigen::VectorXd q_out = RequireColumn(table, options.qout);
+  const Eigen::VectorXd level = RequireColumn(table, options.level);
+  const double ts = table.sample_time_s();
+  Prior prior;
+  if (!options.canal.empty()) {
+    prior = TheoryPrior(options, q_in.mean());
+  } else if (options.p22 >= 0.0) {
+    prior.p22 = options.p22;
+    prior.json = {{"from", "--p22"}};
+  } else if (options.p22_std >= 0.0) {
+    throw InputError("--p22-std needs a prior: --p22 or --canal with --pool");
+  }
+  core::IdzIdentificationOptions pipeline;
+  pipeline.remove_level_outliers = !options.keep_outliers;
+  if (options.max_delay_s > 0.0) {
+    pipeline.fit.max_nk = OptionSamples(options.max_delay_s, table, "--max-delay-s", false);
+  }
+  if (prior.p22 >= 0.0) {
+    prior.std = options.p22_std >= 0.0 ? options.p22_std : kDefaultPriorRelativeStd * prior.p22;
+    pipeline.fit.p22_prior_s_per_m2 = prior.p22;
+    pipeline.fit.p22_prior_std_s_per_m2 = prior.std;
+    prior.json["p22_s_per_m2"] = prior.p22;
+    prior.json["p22_std_s_per_m2"] = prior.std;
+  }
+  nlohmann::json json;
+  try {
+    json = drivers::ToJson(core::IdentifyIdz(q_in, q_out, level, ts, pipeline));
+  } catch (const std::invalid_argument& e) {
+    throw InputError(table.source() + ": " + e.what());
+  }
+  json["p22_prior"] = prior.p22 >= 0.0 ? prior.json : nlohmann::json();
+  return json;
+}
+
+}  // namespace canalid::cli
