@@ -158,6 +158,21 @@ std::optional<IntegratorDelayIdentification> ReachSampleProcessor::IdentifyRecor
       identification_problem_ = e.what();
     }
   }
+  idz_result_.reset();
+  idz_problem_.clear();
+  if (options_.batch_idz) {
+    try {
+      idz_result_ =
+          IdentifyIdz(record_q_in_.head(recorded_), record_q_out_.head(recorded_),
+                      record_level_.head(recorded_), options_.sample_time_s, *options_.batch_idz);
+      const IdzFit& fit = idz_result_->fit;
+      idz_problem_ = IntegratorDelayBoundsProblem(fit.area_m2, fit.nk, options_.online_id);
+      if (!std::isfinite(fit.area_m2)) idz_problem_ = "the area is not finite";
+    } catch (const std::invalid_argument& e) {
+      idz_result_.reset();
+      idz_problem_ = e.what();
+    }
+  }
   process_results_.clear();
   const double max_delay_s = options_.online_id.max_delay_samples * options_.sample_time_s;
   bool process_ok = false;
@@ -180,9 +195,11 @@ std::optional<IntegratorDelayIdentification> ReachSampleProcessor::IdentifyRecor
         FitProcessBatch(kind, input, level, options_.sample_time_s, max_delay_s));
     process_ok = process_ok || process_results_.back().ok();
   }
-  if (!options_.batch_id && !process_ok) {
-    identification_problem_ = process_results_.empty() ? "no batch model is configured"
-                                                       : process_results_.front().problem;
+  const bool idz_ok = idz_result_.has_value() && idz_problem_.empty();
+  if (!options_.batch_id && !process_ok && !idz_ok) {
+    identification_problem_ = options_.batch_idz         ? "idz: " + idz_problem_
+                              : process_results_.empty() ? "no batch model is configured"
+                                                         : process_results_.front().problem;
   }
   event.kind = identification_problem_.empty() ? ExperimentEventKind::kIdentificationSucceeded
                                                : ExperimentEventKind::kIdentificationFailed;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/experiment/experiment.h"
+#include "core/integrator_delay/identify_idz.h"
 #include "core/integrator_delay/identify_integrator_delay.h"
 #include "core/online/online_integrator_delay.h"
 #include "core/online/online_model.h"
@@ -44,6 +45,9 @@ struct ReachSampleProcessorOptions {
   std::optional<ExperimentPlan> experiment;    ///< none: this reach never excites its actuator
   IntegratorDelayIdentificationOptions batch;  ///< identification at the end of each experiment
   bool batch_id = true;  ///< the integrator-delay model is identified at the end of experiments
+  /// The IDZ model identified at the end of experiments too (from the same record as the ID
+  /// model, with its own p22 prior), when set; its delay range is the ID bank's.
+  std::optional<IdzIdentificationOptions> batch_idz;
   /// The process models identified at the end of experiments too, from the recorded input (the
   /// actuator, as the process models' online input) and level, delays up to the bank's largest.
   std::vector<ProcessBatchKind> batch_process_models;
@@ -91,15 +95,20 @@ class ReachSampleProcessor final {
   void ResetOnlineEstimator();
 
   /// Batch identification of the completed record: the ID model pipeline (when batch_id; else
-  /// no result) and every batch process model (process_batch_results()).  Then the experiment
-  /// ends done or aborted (kIdentificationFailed): with batch_id by the ID model (inside the
-  /// bounds of the reach's delay bank, IntegratorDelayBoundsProblem; the result, if any, is still
-  /// returned for the operator to see, and identification_problem() says why it is not the
-  /// reach's model), else done when some process model fitted.
+  /// no result), the IDZ model (when batch_idz, idz_result()) and every batch process model
+  /// (process_batch_results()).  Then the experiment ends done or aborted
+  /// (kIdentificationFailed): with batch_id by the ID model (inside the bounds of the reach's
+  /// delay bank, IntegratorDelayBoundsProblem; the result, if any, is still returned for the
+  /// operator to see, and identification_problem() says why it is not the reach's model), else
+  /// done when the IDZ model (within the same bounds) or some process model fitted.
   /// @pre a record is complete.
   std::optional<IntegratorDelayIdentification> IdentifyRecord(ReachActions* actions);
   /// Why the last IdentifyRecord gave no usable model (empty when it did).
   const std::string& identification_problem() const { return identification_problem_; }
+  /// The IDZ model of the last IdentifyRecord (none when batch_idz is unset or the fit failed,
+  /// idz_problem() then says why), and why it is not the reach's model (empty when it is).
+  const std::optional<IdzIdentification>& idz_result() const { return idz_result_; }
+  const std::string& idz_problem() const { return idz_problem_; }
   /// The process models of the last IdentifyRecord, in batch_process_models' order.
   const std::vector<ProcessBatchResult>& process_batch_results() const { return process_results_; }
   /// The bounds a model of this reach must satisfy (the online bank's delay range and Ts).
@@ -124,6 +133,8 @@ class ReachSampleProcessor final {
   ExperimentState experiment_state_;
   Eigen::VectorXd record_q_in_, record_q_out_, record_level_, record_input_;
   std::vector<ProcessBatchResult> process_results_;
+  std::optional<IdzIdentification> idz_result_;
+  std::string idz_problem_;
   // The last valid input and level, and those of the sample before the record (its rest point).
   double previous_input_ = std::numeric_limits<double>::quiet_NaN();
   double previous_level_ = std::numeric_limits<double>::quiet_NaN();

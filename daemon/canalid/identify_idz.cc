@@ -12,11 +12,6 @@
 namespace canalid::cli {
 namespace {
 
-// The prior's standard deviation when none is given: the theory's two-part profile was within
-// 12.6 % of the linearised equations on the true profile for the 16 ASCE pools
-// (idz_theory_profile_test); 20 % leaves room for the roughness and the gate's own response.
-constexpr double kDefaultPriorRelativeStd = 0.2;
-
 struct Prior {
   double p22 = -1.0;
   double std = 0.0;
@@ -81,7 +76,7 @@ nlohmann::json IdentifyIdz(const IdentifyOptions& options, const drivers::CsvTab
     pipeline.fit.max_nk = OptionSamples(options.max_delay_s, table, "--max-delay-s", false);
   }
   if (prior.p22 >= 0.0) {
-    prior.std = options.p22_std >= 0.0 ? options.p22_std : kDefaultPriorRelativeStd * prior.p22;
+    prior.std = options.p22_std >= 0.0 ? options.p22_std : core::kIdzPriorRelativeStd * prior.p22;
     pipeline.fit.p22_prior_s_per_m2 = prior.p22;
     pipeline.fit.p22_prior_std_s_per_m2 = prior.std;
     prior.json["p22_s_per_m2"] = prior.p22;

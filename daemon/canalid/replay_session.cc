@@ -34,7 +34,7 @@ struct ReplaySession::Reach {
   config::ReachConfig config;
   std::optional<core::ReachController> runner;  // built at the first sample of its PLC in a run
   std::optional<ReplayModel> last_batch;
-  std::map<std::string, ReplayModel> last_process_batch;  // by kind
+  std::map<std::string, ReplayModel> last_process_batch;  // idz and process models, by kind
   double last_time_s = 0.0;
 };
 
@@ -150,20 +150,24 @@ void ReplaySession::Step(Reach& reach, const core::ReachActions& actions, double
   const core::ReachSampleProcessor& pipeline = reach.runner->pipeline();
   const std::optional<core::IntegratorDelayIdentification> result =
       reach.runner->pipeline().IdentifyRecord(&after);
-  for (const core::ProcessBatchResult& process : pipeline.process_batch_results()) {
-    std::optional<nlohmann::json> json =
-        drivers::ProcessBatchJson(process, pipeline.options().sample_time_s);
-    if (!json) continue;
-    (*json)["reach"] = reach.config.name;
+  // The other batch kinds (idz, the process models), as the daemon publishes them.
+  auto other_batch = [&](std::string kind, nlohmann::json json) {
+    json["reach"] = reach.config.name;
     ReplayModel model;
     model.reach = reach.config.name;
     model.log_time_s = log_time_s;
     model.batch = true;
-    model.kind = core::ProcessBatchKindName(process.kind);
+    model.kind = std::move(kind);
     model.estimator = "batch";
-    model.json = std::move(*json);
+    model.json = std::move(json);
     reach.last_process_batch[model.kind] = model;
     on_model_(model);
+  };
+  if (pipeline.idz_result()) other_batch("idz", drivers::ToJson(*pipeline.idz_result()));
+  for (const core::ProcessBatchResult& process : pipeline.process_batch_results()) {
+    std::optional<nlohmann::json> json =
+        drivers::ProcessBatchJson(process, pipeline.options().sample_time_s);
+    if (json) other_batch(std::string(core::ProcessBatchKindName(process.kind)), std::move(*json));
   }
   if (!result) {
     if (pipeline.options().batch_id) {

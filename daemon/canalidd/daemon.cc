@@ -280,8 +280,45 @@ void Daemon::Handle(ReachRuntime& reach, const core::ReachActions& actions, doub
     } else if (reach.pipeline().options().batch_id) {
       LogWarning("reach " + name + ": the experiment record could not be identified");
     }
+    ReportIdzModel(reach, time_s);
     ReportProcessModels(reach, time_s);
     Handle(reach, after, time_s);
+  }
+}
+
+void Daemon::ReportIdzModel(const ReachRuntime& reach, double time_s) {
+  const std::string& name = reach.name();
+  const std::optional<core::IdzIdentification>& result = reach.pipeline().idz_result();
+  const std::string& problem = reach.pipeline().idz_problem();
+  if (!reach.pipeline().options().batch_idz) return;
+  if (!result) {
+    LogWarning("reach " + name + ": no idz model: " + problem);
+    return;
+  }
+  nlohmann::json json = drivers::ToJson(*result);
+  json["reach"] = name;
+  PublishBatchModel(reach, "idz", json, problem, time_s);
+}
+
+void Daemon::PublishBatchModel(const ReachRuntime& reach, const std::string& kind,
+                               const nlohmann::json& json, const std::string& problem,
+                               double time_s) {
+  const std::string& name = reach.name();
+  publisher_.PublishModelJson(name, json, time_s, "batch", reach.pipeline().recorded_samples(),
+                              problem.empty() ? 0 : core::kFlagOutOfBounds);
+  if (!problem.empty()) {
+    LogWarning("reach " + name + ": identified a " + kind + " model outside the bounds (" +
+               problem + "); not persisted: " + json.dump());
+    return;
+  }
+  LogInfo("reach " + name + ": identified " + kind + " " + json.dump());
+  if (model_saver_) {
+    PersistedModel model;
+    model.reach = name;
+    model.model_kind = kind;
+    model.saved_utime_us = ToUtime(WallNowS());
+    model.model = json;
+    model_saver_->Submit(std::move(model));
   }
 }
 
@@ -296,22 +333,7 @@ void Daemon::ReportProcessModels(const ReachRuntime& reach, double time_s) {
       continue;
     }
     (*json)["reach"] = name;
-    publisher_.PublishModelJson(name, *json, time_s, "batch", reach.pipeline().recorded_samples(),
-                                process.ok() ? 0 : core::kFlagOutOfBounds);
-    if (!process.ok()) {
-      LogWarning("reach " + name + ": identified a " + kind + " model outside the bounds (" +
-                 process.problem + "); not persisted: " + json->dump());
-      continue;
-    }
-    LogInfo("reach " + name + ": identified " + kind + " " + json->dump());
-    if (model_saver_) {
-      PersistedModel model;
-      model.reach = name;
-      model.model_kind = kind;
-      model.saved_utime_us = ToUtime(WallNowS());
-      model.model = *json;
-      model_saver_->Submit(std::move(model));
-    }
+    PublishBatchModel(reach, kind, *json, process.ok() ? std::string() : process.problem, time_s);
   }
 }
 

@@ -74,6 +74,13 @@ class Daemon final {
   void OnWriteResult(int plc, const drivers::WriteResult& result);
   void Handle(ReachRuntime& reach, const core::ReachActions& actions, double time_s);
   /// Publishes, logs and persists the process models of the reach's last identification.
+  /// The reach's IDZ model of the last IdentifyRecord: logged, published (flagged when out of
+  /// bounds) and persisted like the process models.
+  void ReportIdzModel(const ReachRuntime& reach, double time_s);
+  /// One end-of-experiment model other than id: published with estimator "batch", logged, and
+  /// persisted unless `problem` says why it is not the reach's model.
+  void PublishBatchModel(const ReachRuntime& reach, const std::string& kind,
+                         const nlohmann::json& json, const std::string& problem, double time_s);
   void ReportProcessModels(const ReachRuntime& reach, double time_s);
   /// Publishes the snapshot of every online model the sample moved.
   void PublishOnlineModels(ReachRuntime& reach, const core::ReachActions& actions, double time_s);

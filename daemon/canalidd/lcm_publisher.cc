@@ -151,17 +151,30 @@ void LcmPublisher::PublishModelJson(const std::string& reach, const nlohmann::js
   model_.model_kind = model.value("model", std::string("unknown"));
   model_.estimator = estimator;
   model_.samples_used = samples;
-  static constexpr std::array kKeys{
-      "delay_s", "area_m2", "b", "p21_s_per_m2", "offset_m", "gain", "time_constant_s", "alpha"};
+  // The parameters a batch or persisted model JSON may carry, each with the key of its standard
+  // deviation where the fit gives one (idz).
+  static constexpr std::array<std::array<const char*, 2>, 9> kKeys{
+      {{"delay_s", nullptr},
+       {"area_m2", "area_std_m2"},
+       {"b", nullptr},
+       {"p21_s_per_m2", "p21_std_s_per_m2"},
+       {"p22_s_per_m2", "p22_std_s_per_m2"},
+       {"offset_m", nullptr},
+       {"gain", nullptr},
+       {"time_constant_s", nullptr},
+       {"alpha", nullptr}}};
+  auto number = [&](const char* key) {
+    return key != nullptr && model.contains(key) && model[key].is_number();
+  };
   std::size_t n = 0;
-  for (const char* key : kKeys) n += model.contains(key) && model[key].is_number() ? 1U : 0U;
+  for (const auto& [key, std_key] : kKeys) n += number(key) ? 1U : 0U;
   SetParamCount(model_, n);
   std::size_t i = 0;
-  for (const char* key : kKeys) {
-    if (!model.contains(key) || !model[key].is_number()) continue;
+  for (const auto& [key, std_key] : kKeys) {
+    if (!number(key)) continue;
     model_.param_names[i] = key;
     model_.param_values[i] = model[key].get<double>();
-    model_.param_std_devs[i++] = kNan;
+    model_.param_std_devs[i++] = number(std_key) ? model[std_key].get<double>() : kNan;
   }
   model_.trace_p = kNan;
   model_.condition_number = kNan;

@@ -28,8 +28,9 @@ void ResumePersistedModels(const StateStore& store,
     // A kind the reach no longer identifies (batch_models changed) is not its model any more.
     const core::ReachSampleProcessorOptions& o = (*reach)->pipeline().options();
     const bool configured =
-        model.model_kind == "id"
-            ? o.batch_id
+        model.model_kind == "id" ? o.batch_id
+        : model.model_kind == "idz"
+            ? o.batch_idz.has_value()
             : std::any_of(o.batch_process_models.begin(), o.batch_process_models.end(),
                           [&](core::ProcessBatchKind k) {
                             return core::ProcessBatchKindName(k) == model.model_kind;
@@ -71,7 +72,7 @@ std::size_t BatchModelCount(const std::vector<std::unique_ptr<ReachRuntime>>& re
   std::size_t count = 0;
   for (const auto& reach : reaches) {
     const core::ReachSampleProcessorOptions& o = reach->pipeline().options();
-    count += (o.batch_id ? 1U : 0U) + o.batch_process_models.size();
+    count += (o.batch_id ? 1U : 0U) + (o.batch_idz ? 1U : 0U) + o.batch_process_models.size();
   }
   return count;
 }

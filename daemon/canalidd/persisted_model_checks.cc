@@ -15,32 +15,43 @@ bool Differs(double a, double b) { return !(std::abs(a - b) <= 1e-6 * std::abs(b
 std::string PersistedIntegratorDelayProblem(const PersistedModel& persisted,
                                             const core::OnlineIntegratorDelayOptions& bank) {
   const nlohmann::json& j = persisted.model;
-  if (persisted.model_kind != "id") {
-    return "model kind '" + persisted.model_kind + "' is not an integrator-delay model (id)";
-  }
-  drivers::IntegratorDelayModelRecord record;
+  // Both pool models carry b, nk and the sample time; idz adds direct gains the checks need not.
+  double b = 0.0, model_ts = 0.0;
+  int nk = 0;
   try {
-    record = drivers::IntegratorDelayModelFromJson(j, "model");
+    if (persisted.model_kind == "id") {
+      const drivers::IntegratorDelayModelRecord record =
+          drivers::IntegratorDelayModelFromJson(j, "model");
+      b = record.model.b;
+      nk = record.model.nk;
+      model_ts = record.model.sample_time_s;
+    } else if (persisted.model_kind == "idz") {
+      const drivers::IdzModelRecord record = drivers::IdzModelFromJson(j, "model");
+      b = record.model.b;
+      nk = record.model.nk;
+      model_ts = record.sample_time_s;
+    } else {
+      return "model kind '" + persisted.model_kind + "' is not an integrator-delay model (id, idz)";
+    }
   } catch (const std::exception& e) {
     return e.what();
   }
-  const core::IntegratorDelayModel& m = record.model;
   const double ts = bank.sample_time_s;
   std::ostringstream why;
-  if (!std::isfinite(m.b)) {
-    why << "b " << m.b << " is not finite";
-  } else if (!j.contains("sample_time_s") || Differs(m.sample_time_s, ts)) {
+  if (!std::isfinite(b)) {
+    why << "b " << b << " is not finite";
+  } else if (!j.contains("sample_time_s") || Differs(model_ts, ts)) {
     why << "sample_time_s " << (j.contains("sample_time_s") ? j.at("sample_time_s").dump() : "none")
         << " is not the reach's " << ts << " s";
   } else if (j.contains("delay_s") &&
-             (!j.at("delay_s").is_number() || Differs(j.at("delay_s").get<double>(), m.nk * ts))) {
-    why << "delay_s " << j.at("delay_s").dump() << " is not nk x sample_time_s = " << m.nk * ts;
-  } else if (std::string bounds = core::IntegratorDelayBoundsProblem(ts / m.b, m.nk, bank);
+             (!j.at("delay_s").is_number() || Differs(j.at("delay_s").get<double>(), nk * ts))) {
+    why << "delay_s " << j.at("delay_s").dump() << " is not nk x sample_time_s = " << nk * ts;
+  } else if (std::string bounds = core::IntegratorDelayBoundsProblem(ts / b, nk, bank);
              !bounds.empty()) {
     return bounds;
   } else if (j.contains("area_m2") &&
-             (!j.at("area_m2").is_number() || Differs(j.at("area_m2").get<double>(), ts / m.b))) {
-    why << "area_m2 " << j.at("area_m2").dump() << " is not sample_time_s / b = " << ts / m.b;
+             (!j.at("area_m2").is_number() || Differs(j.at("area_m2").get<double>(), ts / b))) {
+    why << "area_m2 " << j.at("area_m2").dump() << " is not sample_time_s / b = " << ts / b;
   }
   return why.str();
 }
@@ -79,7 +90,9 @@ std::string PersistedProcessModelProblem(const PersistedModel& persisted, double
 
 std::string PersistedModelProblem(const PersistedModel& model,
                                   const core::OnlineIntegratorDelayOptions& bank) {
-  if (model.model_kind == "id") return PersistedIntegratorDelayProblem(model, bank);
+  if (model.model_kind == "id" || model.model_kind == "idz") {
+    return PersistedIntegratorDelayProblem(model, bank);
+  }
   return PersistedProcessModelProblem(model, bank.sample_time_s,
                                       bank.max_delay_samples * bank.sample_time_s);
 }

@@ -7,10 +7,10 @@
 namespace canalid::daemon {
 
 /// Why a persisted integrator-delay model cannot be resumed as the model of a reach whose online
-/// bank has these options (empty when it can), checked like any input: kind "id", readable by
-/// drivers::IntegratorDelayModelFromJson (b finite, nk an integer >= 0, ...), sample_time_s
-/// present and equal to the bank's Ts, delay_s (when present) finite and equal to nk Ts and
-/// area_m2 (when present) equal to Ts / b (both to 1e-6), and inside
+/// bank has these options (empty when it can), checked like any input: kind "id" or "idz",
+/// readable by drivers::IntegratorDelayModelFromJson or IdzModelFromJson (b finite, nk an integer
+/// >= 0, ...), sample_time_s present and equal to the bank's Ts, delay_s (when present) finite and
+/// equal to nk Ts and area_m2 (when present) equal to Ts / b (both to 1e-6), and inside
 /// core::IntegratorDelayBoundsProblem (A > 0, nk within the bank and not at its edge).  Pure.
 std::string PersistedIntegratorDelayProblem(const PersistedModel& model,
                                             const core::OnlineIntegratorDelayOptions& bank);

@@ -372,6 +372,8 @@ void ReadReach(Reader& r, const toml::table& t, const std::string& at, ReachConf
           "rls_method",
           "closed_loop",
           "batch_models",
+          "idz_p22_s_per_m2",
+          "idz_p22_std_s_per_m2",
           "actuator_position",
           "arx_na",
           "arx_nb",
@@ -402,6 +404,8 @@ void ReadReach(Reader& r, const toml::table& t, const std::string& at, ReachConf
   r.Enum(t, at, "rls_method", reach.rls_method);
   r.Enum(t, at, "closed_loop", reach.closed_loop);
   r.EnumList(t, at, "batch_models", reach.batch_models);
+  r.OptionalDouble(t, at, "idz_p22_s_per_m2", reach.idz_p22_s_per_m2);
+  r.OptionalDouble(t, at, "idz_p22_std_s_per_m2", reach.idz_p22_std_s_per_m2);
   r.String(t, at, "actuator_position", reach.actuator_position);
   r.Integer(t, at, "arx_na", reach.arx_na);
   r.Integer(t, at, "arx_nb", reach.arx_nb);

@@ -153,6 +153,8 @@ std::string RenderDaemonConfig(const config::DaemonConfig& c) {
     w.Key("rls_method", config::EnumName(r.rls_method));
     w.Key("closed_loop", config::EnumName(r.closed_loop));
     w.List("batch_models", r.batch_models);
+    if (r.idz_p22_s_per_m2) w.Key("idz_p22_s_per_m2", *r.idz_p22_s_per_m2);
+    if (r.idz_p22_std_s_per_m2) w.Key("idz_p22_std_s_per_m2", *r.idz_p22_std_s_per_m2);
     if (!r.actuator_position.empty()) w.Str("actuator_position", r.actuator_position);
     w.Int("arx_na", r.arx_na);
     w.Int("arx_nb", r.arx_nb);

@@ -26,7 +26,8 @@ constexpr std::array kTables{RegisterTable::kInput, RegisterTable::kHolding};
 constexpr std::array kTypes{RegisterType::kU16, RegisterType::kI16, RegisterType::kU32,
                             RegisterType::kI32, RegisterType::kF32};
 constexpr std::array kWordOrders{WordOrder::kHighWordFirst, WordOrder::kLowWordFirst};
-constexpr std::array kBatchModels{BatchModel::kId, BatchModel::kFoptd, BatchModel::kFracFoptd};
+constexpr std::array kBatchModels{BatchModel::kId, BatchModel::kIdz, BatchModel::kFoptd,
+                                  BatchModel::kFracFoptd};
 constexpr std::array kClosedLoopModes{ClosedLoopMode::kAuto, ClosedLoopMode::kOn,
                                       ClosedLoopMode::kOff};
 constexpr std::array kRlsMethods{RlsMethod::kUdDirectional, RlsMethod::kUdExponential,
@@ -311,6 +312,18 @@ void ValidateReachModels(const DaemonConfig& c, const ReachConfig& r, const Chan
   }
   const bool lpv = std::find(r.online_models.begin(), r.online_models.end(),
                              OnlineModel::kLpvArx) != r.online_models.end();
+  const bool idz = std::find(r.batch_models.begin(), r.batch_models.end(), BatchModel::kIdz) !=
+                   r.batch_models.end();
+  if (r.idz_p22_s_per_m2) {
+    if (!idz) out.Add(at + "idz_p22_s_per_m2", "has no effect: batch_models has no \"idz\"");
+    out.Range(at + "idz_p22_s_per_m2", *r.idz_p22_s_per_m2, 0.0, 10.0);
+  }
+  if (r.idz_p22_std_s_per_m2) {
+    if (!r.idz_p22_s_per_m2) {
+      out.Add(at + "idz_p22_std_s_per_m2", "has no effect without idz_p22_s_per_m2");
+    }
+    out.Range(at + "idz_p22_std_s_per_m2", *r.idz_p22_std_s_per_m2, 0.0, 10.0);
+  }
   if (!r.lpv_scheduling.empty()) {
     extra_channel("lpv_scheduling", r.lpv_scheduling,
                   {ChannelRole::kLevel, ChannelRole::kFlow, ChannelRole::kGate, ChannelRole::kPump,
@@ -608,7 +621,7 @@ const char* EnumName(RegisterType v) {
 }
 const char* EnumName(WordOrder v) { return NameIn(v, kWordOrders, {"high_first", "low_first"}); }
 const char* EnumName(BatchModel v) {
-  return NameIn(v, kBatchModels, {"id", "foptd", "frac-foptd"});
+  return NameIn(v, kBatchModels, {"id", "idz", "foptd", "frac-foptd"});
 }
 // A string_view of a literal: null-terminated.
 const char* EnumName(OnlineModel v) { return core::OnlineModelKindName(v).data(); }

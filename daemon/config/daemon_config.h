@@ -36,7 +36,7 @@ enum class RegisterTable { kInput, kHolding };
 /// The online model kinds are core's registry's (the names of core::OnlineModelKindName).
 using OnlineModel = core::OnlineModelKind;
 /// The models identified at the end of an experiment.
-enum class BatchModel { kId, kFoptd, kFracFoptd };
+enum class BatchModel { kId, kIdz, kFoptd, kFracFoptd };
 enum class ExperimentMode { kDesign, kExplicit, kStep };
 enum class ExperimentStart { kManual, kOnStart };
 
@@ -129,6 +129,11 @@ struct ReachConfig {
   /// Identified at the end of each experiment, published with estimator "batch" and persisted;
   /// at least one, no duplicates.
   std::vector<BatchModel> batch_models{BatchModel::kId};
+  /// idz: the prior of the outflow's direct gain p22 (s/m2, [0, 10]; `canalid theory`'s
+  /// p22_low_frequency_s_per_m2 at the nominal inflow) and its standard deviation (default 20 %
+  /// of it).  Absent: p22 comes from the data when the outflow moves on its own, else is 0.
+  std::optional<double> idz_p22_s_per_m2;
+  std::optional<double> idz_p22_std_s_per_m2;
   /// The actuator's measured position (role gate or pump; empty: none): the process models'
   /// input when given, else the actuator's own reading (its setpoint).
   std::string actuator_position;

@@ -144,6 +144,16 @@ ReachControllerOptions BuildReachControllerOptions(
       case BatchModel::kId:
         pipeline.batch_id = true;
         break;
+      case BatchModel::kIdz: {
+        core::IdzIdentificationOptions idz;
+        if (reach.idz_p22_s_per_m2) {
+          idz.fit.p22_prior_s_per_m2 = *reach.idz_p22_s_per_m2;
+          idz.fit.p22_prior_std_s_per_m2 = reach.idz_p22_std_s_per_m2.value_or(
+              core::kIdzPriorRelativeStd * *reach.idz_p22_s_per_m2);
+        }
+        pipeline.batch_idz = idz;
+        break;
+      }
       case BatchModel::kFoptd:
         pipeline.batch_process_models.push_back(core::ProcessBatchKind::kFoptd);
         break;
@@ -155,6 +165,10 @@ ReachControllerOptions BuildReachControllerOptions(
   pipeline.batch.fit.min_nk = pipeline.online_id.min_delay_samples;
   pipeline.batch.fit.max_nk = pipeline.online_id.max_delay_samples;
   pipeline.batch.fit.closed_loop = reach.closed_loop;
+  if (pipeline.batch_idz) {
+    pipeline.batch_idz->fit.min_nk = pipeline.batch.fit.min_nk;
+    pipeline.batch_idz->fit.max_nk = pipeline.batch.fit.max_nk;
+  }
   options.nominal_setpoint = reach.nominal_setpoint;
   for (const ExperimentConfig& experiment : config->experiments) {
     if (experiment.reach != reach.name) continue;

@@ -73,6 +73,34 @@ TEST(ReachSampleProcessor, AnExperimentOnAnIdPoolIdentifiesItsDelayAndArea) {
   EXPECT_NEAR(online.area_m2, 34113.0, 0.01 * 34113.0);
 }
 
+// batch_models = ["idz"] alone: the IDZ fit of the same record decides the experiment.
+TEST(ReachSampleProcessor, AnIdzOnlyReachIdentifiesTheIdzModelAtTheEnd) {
+  ReachSampleProcessorOptions options = Options();
+  options.batch_id = false;
+  options.batch_idz = IdzIdentificationOptions{};
+  options.batch_idz->fit.max_nk = 30;
+  ReachSampleProcessor pipeline(options);
+  IdPool pool;
+  double setpoint = 0.5;
+  ReachActions a = pipeline.StartExperiment();
+  setpoint = *a.write_setpoint;
+  for (int k = 0; k < 700 && !a.experiment_record_complete; ++k) {
+    const double level = pool.Step(setpoint);
+    a = pipeline.OnSample({pool.inflow(), 10.0, level, true, true, true, true});
+    if (a.write_setpoint) setpoint = *a.write_setpoint;
+  }
+  ASSERT_TRUE(a.experiment_record_complete);
+  ReachActions done;
+  EXPECT_FALSE(pipeline.IdentifyRecord(&done).has_value());  // no id model asked
+  ASSERT_TRUE(pipeline.idz_result().has_value()) << pipeline.idz_problem();
+  EXPECT_EQ(pipeline.idz_problem(), "");
+  EXPECT_EQ(pipeline.experiment_state().phase, ExperimentPhase::kDone);
+  const IdzFit& fit = pipeline.idz_result()->fit;
+  EXPECT_EQ(fit.nk, 11);
+  EXPECT_NEAR(fit.area_m2, 34113.0, 1e-6 * 34113.0);
+  EXPECT_EQ(fit.p22_source, OutflowGainSource::kNone);  // the outflow was held
+}
+
 TEST(ReachSampleProcessor, ALevelOutOfBandAbortsAndRestoresNominalOnTheSameSample) {
   ReachSampleProcessor pipeline(Options());
   pipeline.StartExperiment();

@@ -190,9 +190,10 @@ std::size_t Position(const ChildProcess& p, const std::string& line) {
   return p.output().find(line);
 }
 
-// 1. The demo's designed experiment: identified model near the IDZ reference, nominal restored on
-// SIGTERM, `canalid replay` of the run's LCM log (file://) ends on the model identified live, the
-// model resumed by the next daemon.
+// 1. The demo's designed experiment: the IDZ model it prints near the IDZ reference (pool 2 ends at
+// a fixed gate; the default closed-loop setting), nominal restored on SIGTERM, `canalid replay`
+// of the run's LCM log (file://) ends on the model identified live, the models resumed by the
+// next daemon.
 TEST(DaemonCanalsim, DesignedExperimentIdentifiesRestoresReplaysAndResumes) {
   const fs::path dir = TestDir();
   Canal canal(dir);
@@ -200,18 +201,23 @@ TEST(DaemonCanalsim, DesignedExperimentIdentifiesRestoresReplaysAndResumes) {
   const std::string config = WriteConfig(dir / "canalidd.toml", BaseKeys(canal.serve.port(), dir));
   auto daemon = StartDaemon(dir, config);
   // 378 samples of excitation at 10 samples per wall second plus settling: about 40 s.
-  const std::string line = daemon->WaitForLine("reach pool2: identified ", 120000);
+  const std::string line = daemon->WaitForLine("reach pool2: identified {", 120000);
   ASSERT_FALSE(line.empty()) << daemon->output();
   const nlohmann::json model = JsonAfter(line, "identified ");
   ASSERT_TRUE(model.is_object()) << line;
   const double area = model.at("area_m2").get<double>();
-  const double delay = model.at("delay_s").get<double>();
-  // Tolerances: the IDZ reference is a linearisation of the Saint-Venant plant canalsim runs, and
-  // the delay is quantised to Ts = 60 s; 20 % on the area and 0.5-1.2 x on the delay are the
-  // ranges the integrator-delay fit is expected to meet on this pool (domain/README.md).
-  EXPECT_NEAR(area, 34113.0, 0.2 * 34113.0) << line;
-  EXPECT_GE(delay, 0.5 * 682.0) << line;
-  EXPECT_LE(delay, 1.2 * 682.0) << line;
+  const std::string idz_line = daemon->WaitForLine("reach pool2: identified idz ", 20000);
+  ASSERT_FALSE(idz_line.empty()) << daemon->output();
+  const nlohmann::json idz = JsonAfter(idz_line, "identified idz ");
+  ASSERT_TRUE(idz.is_object()) << idz_line;
+  // The bounds for the demo's printed model: the IDZ reference is a linearisation of the
+  // Saint-Venant plant canalsim runs, and the delay is quantised to Ts = 60 s (measured: 32994
+  // m2, -3.3 %, and 660 s). The ID model's three-step estimate (22926 m2) is not asserted: on a
+  // gate-ended pool the ID structure lacks the outflow's direct term (docs/closed-loop.md).
+  EXPECT_EQ(idz.value("p22_source", ""), "prior") << idz_line;
+  EXPECT_NEAR(idz.at("area_m2").get<double>(), 34113.0, 0.1 * 34113.0) << idz_line;
+  EXPECT_GE(idz.at("delay_s").get<double>(), 0.8 * 682.0) << idz_line;
+  EXPECT_LE(idz.at("delay_s").get<double>(), 1.2 * 682.0) << idz_line;
 
   EXPECT_EQ(daemon->Stop(SIGTERM), 0) << daemon->output();
   // Read at once: the PLC's own watchdog would also put the gate back, but only after 0.5 s.
@@ -235,6 +241,9 @@ TEST(DaemonCanalsim, DesignedExperimentIdentifiesRestoresReplaysAndResumes) {
   const nlohmann::json persisted = JsonAfter(resumed, "model ");
   ASSERT_TRUE(persisted.is_object()) << resumed;
   EXPECT_DOUBLE_EQ(persisted.at("area_m2").get<double>(), area);
+  const std::string resumed_idz = again->WaitForLine("resumed the persisted idz model", 20000);
+  ASSERT_FALSE(resumed_idz.empty()) << again->output();
+  EXPECT_EQ(JsonNumbersDiffer(idz, JsonAfter(resumed_idz, "model "), 0.0), "");
   EXPECT_EQ(again->Stop(SIGTERM), 0) << again->output();
 }
 
@@ -408,29 +417,34 @@ TEST(DaemonCanalsim, ModelPublishPeriodThinsTheOnlineModels) {
   }
 }
 
-// batch_models = ["id", "foptd", "frac-foptd"] on pool 2, live: at the end of the experiment each
-// process model is logged, published on MODEL_pool2 with estimator "batch" and persisted when
-// inside its bounds; `canalid replay` of the log gives the same models (the same fits on the same
-// record); the next daemon resumes the persisted ones from the state directory.
+// batch_models = ["id", "idz", "foptd", "frac-foptd"] on pool 2, live: at the end of the
+// experiment the idz model and each process model are logged, published on MODEL_pool2 with
+// estimator "batch" and persisted when inside their bounds; `canalid replay` of the log gives the
+// same models (the same fits on the same record); the next daemon resumes the persisted ones from
+// the state directory.
 TEST(DaemonCanalsim, BatchProcessModelsArePublishedPersistedReplayedAndResumed) {
   const fs::path dir = TestDir();
   Canal canal(dir);
   auto keys = BaseKeys(canal.serve.port(), dir);
-  // The line after online_models: the demo's file has no batch_models key.
-  keys.emplace_back("online_models",
-                    "[\"id\"]\nbatch_models = [\"id\", \"foptd\", \"frac-foptd\"]");
+  keys.emplace_back("batch_models", "[\"id\", \"idz\", \"foptd\", \"frac-foptd\"]");
   const std::string config = WriteConfig(dir / "canalidd.toml", keys, ExplicitExperiment(0.05, 6));
   auto daemon = StartDaemon(dir, config);
   ASSERT_FALSE(daemon->WaitForLine("reach pool2: identified ", 60000).empty()) << daemon->output();
   std::map<std::string, nlohmann::json> live;  // kind -> the JSON logged
-  for (const char* kind : {"foptd", "frac-foptd"}) {
+  for (const char* kind : {"idz", "foptd", "frac-foptd"}) {
     const std::string line =
         daemon->WaitForLine("reach pool2: identified " + std::string(kind) + " ", 20000);
     ASSERT_FALSE(line.empty()) << kind << "\n" << daemon->output();
     live[kind] = JsonAfter(line, "identified " + std::string(kind) + " ");
     ASSERT_TRUE(live[kind].is_object()) << line;
     EXPECT_EQ(live[kind].value("model", ""), kind);
-    EXPECT_GT(live[kind].at("gain").get<double>(), 0.0) << line;  // the gate raises the level
+    if (std::string(kind) == "idz") {
+      // Pool 2 ends at a fixed gate: p22 is the configured prior, the area that of the pool.
+      EXPECT_EQ(live[kind].value("p22_source", ""), "prior") << line;
+      EXPECT_GT(live[kind].at("area_m2").get<double>(), 0.0) << line;
+    } else {
+      EXPECT_GT(live[kind].at("gain").get<double>(), 0.0) << line;  // the gate raises the level
+    }
   }
   EXPECT_EQ(daemon->Stop(SIGTERM), 0) << daemon->output();
 
@@ -463,9 +477,10 @@ TEST(DaemonCanalsim, BatchProcessModelsArePublishedPersistedReplayedAndResumed) 
   }
   EXPECT_EQ(again->Stop(SIGTERM), 0) << again->output();
 
-  // batch_models without the process kinds: their files are no longer the reach's models.
+  // batch_models without the process kinds: their files are no longer the reach's models (idz
+  // stays: the demo's file gives it a p22 prior).
   auto id_only_keys = BaseKeys(canal.serve.port(), dir);
-  id_only_keys.emplace_back("online_models", "[\"id\"]\nbatch_models = [\"id\"]");
+  id_only_keys.emplace_back("batch_models", "[\"id\", \"idz\"]");
   const std::string id_only =
       WriteConfig(dir / "canalidd-id.toml", id_only_keys, ExplicitExperiment(0.05, 6, "manual"));
   auto third = StartDaemon(dir, id_only, "canalidd-3.log", "run-3.lcmlog");
@@ -643,8 +658,8 @@ TEST(DaemonCanalsim, StepExperimentStepsHoldsReturnsAndFitsAFoptd) {
   const double nominal = ReadSetpoint(canal.master);
   auto keys = BaseKeys(canal.serve.port(), dir);
   keys.emplace_back("online_models",
-                    "[\"id\", \"frac-foptd\"]\nbatch_models = [\"id\", \"foptd\"]\n"
-                    "actuator_position = \"gate1_position\"");
+                    "[\"id\", \"frac-foptd\"]\nactuator_position = \"gate1_position\"");
+  keys.emplace_back("batch_models", "[\"id\", \"idz\", \"foptd\"]");
   // 60 samples up, 60 back (Ts = 60 plant s): 12 wall s.
   const std::string step =
       "[[experiment]]\nname = \"pool2_step\"\nreach = \"pool2\"\nmode = \"step\"\n"

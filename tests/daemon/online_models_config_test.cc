@@ -205,12 +205,47 @@ TEST(OnlineModelsConfig, BatchModelsChooseTheEndOfExperimentFits) {
                                                  core::ProcessBatchKind::kFoptd}));
   EXPECT_THAT(Issues("batch_models = []\n"),
               ::testing::Contains(HasSubstr("reach[0].batch_models: is empty (allowed: at least "
-                                            "one of id, foptd, frac-foptd)")));
+                                            "one of id, idz, foptd, frac-foptd)")));
   EXPECT_THAT(Issues("batch_models = [\"id\", \"id\"]\n"),
               ::testing::Contains(HasSubstr("reach[0].batch_models[1]: duplicate model \"id\"")));
   EXPECT_THAT(Issues("batch_models = [\"arx\"]\n"),
-              ::testing::Contains(HasSubstr("\"arx\" is not allowed (allowed: id, foptd, "
+              ::testing::Contains(HasSubstr("\"arx\" is not allowed (allowed: id, idz, foptd, "
                                             "frac-foptd)")));
+}
+
+// idz at the end of experiments, with the p22 prior of the geometry (the fit: idz_fit_plant_test).
+TEST(OnlineModelsConfig, IdzBatchModelTakesItsP22Prior) {
+  const core::ReachSampleProcessorOptions none = Build("batch_models = [\"idz\"]\n").pipeline;
+  ASSERT_TRUE(none.batch_idz.has_value());
+  EXPECT_FALSE(none.batch_id);
+  EXPECT_LT(none.batch_idz->fit.p22_prior_s_per_m2, 0.0);  // no prior: from the data, or 0
+  // The delay range is the ID bank's.
+  EXPECT_EQ(none.batch_idz->fit.min_nk, none.online_id.min_delay_samples);
+  EXPECT_EQ(none.batch_idz->fit.max_nk, none.online_id.max_delay_samples);
+  const core::ReachSampleProcessorOptions prior =
+      Build("batch_models = [\"id\", \"idz\"]\nidz_p22_s_per_m2 = 0.0125\n").pipeline;
+  ASSERT_TRUE(prior.batch_idz.has_value());
+  EXPECT_TRUE(prior.batch_id);
+  EXPECT_DOUBLE_EQ(prior.batch_idz->fit.p22_prior_s_per_m2, 0.0125);
+  EXPECT_DOUBLE_EQ(prior.batch_idz->fit.p22_prior_std_s_per_m2, 0.2 * 0.0125);
+  const core::ReachSampleProcessorOptions with_std =
+      Build("batch_models = [\"idz\"]\nidz_p22_s_per_m2 = 0.0125\nidz_p22_std_s_per_m2 = 0.001\n")
+          .pipeline;
+  EXPECT_DOUBLE_EQ(with_std.batch_idz->fit.p22_prior_std_s_per_m2, 0.001);
+  EXPECT_FALSE(Build("").pipeline.batch_idz.has_value());
+  EXPECT_THAT(Issues("idz_p22_s_per_m2 = 0.0125\n"),
+              ::testing::Contains(HasSubstr(
+                  "reach[0].idz_p22_s_per_m2: has no effect: batch_models has no \"idz\"")));
+  EXPECT_THAT(Issues("batch_models = [\"idz\"]\nidz_p22_std_s_per_m2 = 0.001\n"),
+              ::testing::Contains(HasSubstr(
+                  "reach[0].idz_p22_std_s_per_m2: has no effect without idz_p22_s_per_m2")));
+  EXPECT_THAT(Issues("batch_models = [\"idz\"]\nidz_p22_s_per_m2 = -1.0\n"),
+              ::testing::Contains(HasSubstr("reach[0].idz_p22_s_per_m2: -1 is out of range")));
+  const config::DaemonConfig c =
+      ParseDaemonConfig(Config("batch_models = [\"id\", \"idz\"]\nidz_p22_s_per_m2 = 0.0125\n"
+                               "idz_p22_std_s_per_m2 = 0.001\n"),
+                        "t.toml");
+  EXPECT_EQ(ParseDaemonConfig(RenderDaemonConfig(c), "rendered.toml"), c);
 }
 
 // mode = "step": amplitude and hold_s, the PRBS keys refused by name.

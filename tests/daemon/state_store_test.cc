@@ -294,5 +294,30 @@ TEST_F(StateStoreTest, ReloadedModelsAreValidatedLikeAnyInput) {
   EXPECT_NE(PersistedIntegratorDelayProblem(arx, bank), "");
 }
 
+// An idz model is read back with its own reader and the same checks as an id model.
+TEST_F(StateStoreTest, ReloadedIdzModelsAreValidatedLikeIdModels) {
+  const core::OnlineIntegratorDelayOptions bank = Bank();
+  auto idz = [&](const std::string& json) {
+    PersistedModel m = LoadOne(dir_, json);
+    m.model_kind = "idz";
+    return PersistedModelProblem(m, bank);
+  };
+  EXPECT_EQ(idz(R"({"model": "idz", "b": 0.00175886, "nk": 11, "sample_time_s": 60.0,
+                   "delay_s": 660.0, "area_m2": 34112.98, "p21_s_per_m2": 0.0185,
+                   "p22_s_per_m2": 0.0133})"),
+            "");
+  EXPECT_NE(idz(R"({"model": "idz", "b": 0.00175886, "nk": 31, "sample_time_s": 60.0})")
+                .find("delay 31 samples is outside the bank [0, 30]"),
+            std::string::npos);
+  EXPECT_NE(idz(R"({"model": "idz", "b": 0.00175886, "nk": 11, "sample_time_s": 60.0,
+                   "p22_s_per_m2": "x"})")
+                .find("p22_s_per_m2"),
+            std::string::npos);
+  // An id model's file under the idz kind is refused by the idz reader.
+  EXPECT_NE(idz(R"({"model": "id", "b": 0.00175886, "nk": 11, "sample_time_s": 60.0})")
+                .find("key 'model'"),
+            std::string::npos);
+}
+
 }  // namespace
 }  // namespace canalid::daemon
