@@ -1,13 +1,11 @@
-#include <sstream>
 #include <stdexcept>
 
-#include "core/hydraulics/idz_theory.h"
 #include "core/integrator_delay/identify_idz.h"
 #include "daemon/canalid/identify_command.h"
 #include "daemon/canalid/input_error.h"
+#include "daemon/canalid/pool_theory.h"
 #include "daemon/canalid/table_columns.h"
 #include "drivers/json/model_json.h"
-#include "sim/canal_config.h"
 
 namespace canalid::cli {
 namespace {
@@ -19,36 +17,16 @@ struct Prior {
 };
 
 Prior TheoryPrior(const IdentifyOptions& options, double flow_m3s) {
-  sim::Canal canal;
-  try {
-    canal = sim::LoadCanal(options.canal);
-  } catch (const std::exception& e) {
-    throw InputError(e.what());
-  }
-  for (const sim::Pool& pool : canal.pools) {
-    if (pool.name != options.pool) continue;
-    const core::PoolGeometry geometry{pool.length_m,  pool.bottom_width_m, pool.side_slope,
-                                      pool.bed_slope, pool.manning_n,      pool.target_depth_m};
-    core::IdzTheory theory;
-    try {
-      theory = core::IdzFromGeometry(geometry, flow_m3s);
-    } catch (const std::invalid_argument& e) {
-      std::ostringstream os;
-      os << options.canal << ": pool " << pool.name << " at the record's mean inflow " << flow_m3s
-         << " m3/s: " << e.what();
-      throw InputError(os.str());
-    }
-    Prior prior;
-    prior.p22 = theory.outflow_gain_low_frequency_s_per_m2;
-    prior.json = {{"from", "theory"},
-                  {"canal", options.canal},
-                  {"pool", pool.name},
-                  {"flow_m3s", flow_m3s},
-                  {"theory_area_m2", theory.model.area_m2},
-                  {"theory_delay_s", theory.model.delay_s}};
-    return prior;
-  }
-  throw InputError("--pool '" + options.pool + "' is not a pool of " + options.canal);
+  const core::IdzTheory theory = PoolTheory(options.canal, options.pool, flow_m3s);
+  Prior prior;
+  prior.p22 = theory.outflow_gain_low_frequency_s_per_m2;
+  prior.json = {{"from", "theory"},
+                {"canal", options.canal},
+                {"pool", options.pool},
+                {"flow_m3s", flow_m3s},
+                {"theory_area_m2", theory.model.area_m2},
+                {"theory_delay_s", theory.model.delay_s}};
+  return prior;
 }
 
 }  // namespace

@@ -15,6 +15,14 @@ struct StepCurve {
   Eigen::VectorXd response;
 };
 
+/// One frequency response: gain and phase of the model's level response to its inflow.
+struct BodeCurve {
+  std::string label;
+  Eigen::VectorXd omega_rad_s;
+  Eigen::VectorXd gain;  ///< output units per input unit
+  Eigen::VectorXd phase_deg;
+};
+
 /// An LPV model's parameters against the scheduling variable: the polynomials on a grid and the
 /// local estimates at the operating points' mean theta.
 struct LpvCurves {
@@ -42,6 +50,8 @@ struct ModelAnalysis {
   Eigen::VectorXd autocorrelation;
   double band_99 = 0.0;
   std::vector<StepCurve> steps;
+  /// Frequency responses compared in one figure (idz beside the geometry's model); may be empty.
+  std::vector<BodeCurve> bode;
   bool has_lpv = false;
   LpvCurves lpv;
   std::vector<std::string> notes;  ///< what could not be shown, and why; simulation warnings

@@ -1,5 +1,7 @@
 #include "daemon/canalid/report_command.h"
 
+#include "daemon/canalid/report_theory.h"
+
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <filesystem>
@@ -71,6 +73,7 @@ int RunReport(const ReportOptions& options, const std::string& command_line) {
       const nlohmann::json model = IdentifyModel(identify, table);
       progress.Show("simulating " + kind + count);
       models.push_back(AnalyseModel(kind, model, table));
+      AddIdzTheory(models.back(), identify, table);
     } catch (const InputError& e) {
       progress.Done();
       throw InputError("--model " + kind + ": " + e.what());

@@ -264,6 +264,33 @@ void StepPlot(PlotWriter& w, const std::vector<ModelAnalysis>& models, double sa
   w.Add("steps", "steps", "", "Step responses of the identified models", plot.str());
 }
 
+// A model's frequency responses beside each other: gain (log-log) over phase.
+void BodePlot(PlotWriter& w, const ModelAnalysis& m) {
+  if (m.bode.empty()) return;
+  std::ostringstream plot;
+  std::string gain = "plot ", phase = "plot ";
+  for (std::size_t j = 0; j < m.bode.size(); ++j) {
+    const BodeCurve& c = m.bode[j];
+    const std::string data =
+        w.Data("bode_" + m.kind + "_" + std::to_string(j), {"omega_rad_s", "gain", "phase_deg"},
+               {c.omega_rad_s, c.gain, c.phase_deg});
+    const std::string style = " with lines lw 2 lc rgb '" + std::string(Colour(j)) + "'" +
+                              (j ? " dt 2" : "") + " title " + Quote(c.label);
+    gain += std::string(j ? ", " : "") + data + " using 1:2" + style;
+    phase += std::string(j ? ", " : "") + data + " using 1:3" + style;
+  }
+  plot << "set multiplot layout 2,1\nset logscale x\nset key outside right top\n"
+       << "set logscale y\nset ylabel 'gain (level per inflow)'\nunset xlabel\n"
+       << gain << "\nunset logscale y\nset ylabel 'phase (deg)'\n"
+       << "set xlabel 'frequency (rad/s)'\n"
+       << phase << "\nunset multiplot\n";
+  w.Add("bode_" + m.kind, "fit", m.kind,
+        m.kind +
+            ": frequency response of the level to the inflow, identified and from the "
+            "geometry",
+        plot.str());
+}
+
 void LpvPlots(PlotWriter& w, const ModelAnalysis& m) {
   const LpvCurves& c = m.lpv;
   std::string edges;
@@ -341,6 +368,7 @@ std::vector<Plot> WritePlotScripts(const drivers::CsvTable& table,
   }
   StepPlot(w, models, table.sample_time_s());
   for (const auto& m : models) {
+    BodePlot(w, m);
     if (m.has_lpv) LpvPlots(w, m);
   }
   for (const auto& trajectory : online) OnlinePlots(w, trajectory);

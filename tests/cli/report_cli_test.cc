@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "core/fractional/mittag_leffler.h"
+#include "drivers/csv/csv_table.h"
 #include "tests/support/lpv_record.h"
 #include "tests/support/run_program.h"
 
@@ -250,6 +251,47 @@ TEST_F(ReportCli, CanalPrbsRecordWithFourKinds) {
   const nlohmann::json saved =
       nlohmann::json::parse(ReadFile(dir_ / "report" / "models" / "id.json"));
   EXPECT_EQ(saved["area_m2"], id["area_m2"]);
+}
+
+// --model idz with --canal/--pool: beside the identified model, the IDZ model of the pool's
+// geometry (canalid theory at the record's mean inflow, about 10 m3/s): its step in the step
+// figure, (t - tau)/A + p21 after the delay, and both frequency responses in bode_idz.png, whose
+// data follow |p21(jw)| = |1/(A j w) + p21| of each model.
+TEST_F(ReportCli, IdzBesideTheGeometrysModel) {
+  const std::string canal = std::string(CANALID_SOURCE_DIR) + "/config/sim/asce-canal2.toml";
+  std::set<std::string> images = ModelImages({"idz"});
+  images.insert("bode_idz.png");
+  Report(kPrbs, "--model idz --canal " + canal + " --pool 2", images);
+  std::ostringstream flow;  // the record's mean inflow, which the report uses
+  flow.precision(17);
+  flow << drivers::CsvTable::Read(kPrbs).Column("q_in").mean();
+  const ProgramRun theory_run = RunProgram(
+      CanalidProgram() + " theory --canal " + canal + " --pool 2 --flow " + flow.str(), dir_);
+  ASSERT_EQ(theory_run.exit_code, 0) << theory_run.err;
+  const auto theory = nlohmann::json::parse(theory_run.out);
+  const double area = theory["area_m2"], delay = theory["delay_s"], p21 = theory["p21_s_per_m2"];
+  const auto step = ReadData(dir_ / "report" / "gnuplot" / "step_idz_1.dat");
+  ASSERT_GT(step.size(), 100u);
+  for (const auto& row : step) {
+    const double expected = row[0] < delay ? 0.0 : (row[0] - delay) / area + p21;
+    EXPECT_NEAR(row[1], expected, 1e-9 * (1.0 + std::abs(expected))) << "t = " << row[0];
+  }
+  const auto bode = ReadData(dir_ / "report" / "gnuplot" / "bode_idz_1.dat");
+  ASSERT_EQ(bode.size(), 200u);
+  for (const auto& row : {bode.front(), bode.back()}) {
+    const double w = row[0];
+    EXPECT_NEAR(row[1], std::hypot(1.0 / (area * w), p21), 1e-8 * row[1]) << "w = " << w;
+  }
+  EXPECT_NEAR(bode.front()[0], 0.01 / delay, 1e-9 / delay);
+  EXPECT_NEAR(bode.back()[0], std::min(100.0 / delay, M_PI / 60.0), 1e-9);
+  // The identified model's curve is the other one.
+  const nlohmann::json idz = Identify(kPrbs, "--model idz");
+  const auto identified = ReadData(dir_ / "report" / "gnuplot" / "bode_idz_0.dat");
+  ASSERT_EQ(identified.size(), 200u);
+  EXPECT_NEAR(identified.back()[1],
+              std::hypot(1.0 / (idz["area_m2"].get<double>() * identified.back()[0]),
+                         idz["p21_s_per_m2"].get<double>()),
+              1e-8);
 }
 
 TEST_F(ReportCli, FractionalGateStepRecord) {
