@@ -170,8 +170,9 @@ TEST(ReplayCli, ReplaysARunToItsBatchModelThenPrintsItLast) {
   const ProgramRun run = Replay(dir, dir / "run.lcmlog");
   ASSERT_EQ(run.exit_code, 0) << run.err;
   // The config's on_start experiment records 378 samples after 10 of settling and identifies
-  // them: one batch line, then the final model (that batch model) as JSON.
+  // them: the batch lines (id, idz), then the final model (the id one) as JSON.
   EXPECT_NE(run.out.find("pool2  batch id: delay "), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("pool2  batch idz: area_m2 "), std::string::npos) << run.out;
   const nlohmann::json model = nlohmann::json::parse(LastLine(run.out), nullptr, false);
   ASSERT_TRUE(model.is_object()) << run.out;
   EXPECT_EQ(model.value("model", ""), "id");
@@ -192,7 +193,7 @@ TEST(ReplayCli, ReplaysARunToItsBatchModelThenPrintsItLast) {
     batch += j.value("estimator", "") == "batch";
   }
   EXPECT_EQ(online, 8);  // samples 100, 200 ... 800
-  EXPECT_EQ(batch, 1);
+  EXPECT_EQ(batch, 2);   // the demo's batch_models: id and idz
   EXPECT_EQ(LastLine(json.out), LastLine(run.out));
 
   // A window of the log: polls 0.1 s apart, so [20 s, 30 s] after the first holds 101 of them.
