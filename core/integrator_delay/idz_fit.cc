@@ -20,7 +20,7 @@ constexpr int kMinFitSamples = 20;
 Eigen::MatrixXd Regressors(const Eigen::Ref<const Eigen::VectorXd>& q_in,
                            const Eigen::Ref<const Eigen::VectorXd>& q_out, int nk, int k0,
                            bool fit_p22) {
-  const Eigen::MatrixXd base = OpenLoopRegressors(q_in, q_out, nk, k0);
+  Eigen::MatrixXd base = OpenLoopRegressors(q_in, q_out, nk, k0);
   if (!fit_p22) return base;
   Eigen::MatrixXd x(base.rows(), 5);
   x.leftCols(4) = base;

@@ -8,28 +8,6 @@
 #include "drivers/json/model_json.h"
 
 namespace canalid::cli {
-namespace {
-
-struct Prior {
-  double p22 = -1.0;
-  double std = 0.0;
-  nlohmann::json json;
-};
-
-Prior TheoryPrior(const IdentifyOptions& options, double flow_m3s) {
-  const core::IdzTheory theory = PoolTheory(options.canal, options.pool, flow_m3s);
-  Prior prior;
-  prior.p22 = theory.outflow_gain_low_frequency_s_per_m2;
-  prior.json = {{"from", "theory"},
-                {"canal", options.canal},
-                {"pool", options.pool},
-                {"flow_m3s", flow_m3s},
-                {"theory_area_m2", theory.model.area_m2},
-                {"theory_delay_s", theory.model.delay_s}};
-  return prior;
-}
-
-}  // namespace
 
 nlohmann::json IdentifyIdz(const IdentifyOptions& options, const drivers::CsvTable& table) {
   if (options.p22 >= 0.0 && !options.canal.empty()) {
@@ -39,12 +17,23 @@ nlohmann::json IdentifyIdz(const IdentifyOptions& options, const drivers::CsvTab
   const Eigen::VectorXd q_out = RequireColumn(table, options.qout);
   const Eigen::VectorXd level = RequireColumn(table, options.level);
   const double ts = table.sample_time_s();
-  Prior prior;
+  // The p22 prior and what it came from: the theory of --canal's --pool at the record's mean
+  // inflow, or --p22.
+  double p22 = -1.0;
+  nlohmann::json prior;
   if (!options.canal.empty()) {
-    prior = TheoryPrior(options, q_in.mean());
+    const double flow = q_in.mean();
+    const core::IdzTheory theory = PoolTheory(options.canal, options.pool, flow);
+    p22 = theory.outflow_gain_low_frequency_s_per_m2;
+    prior = {{"from", "theory"},
+             {"canal", options.canal},
+             {"pool", options.pool},
+             {"flow_m3s", flow},
+             {"theory_area_m2", theory.model.area_m2},
+             {"theory_delay_s", theory.model.delay_s}};
   } else if (options.p22 >= 0.0) {
-    prior.p22 = options.p22;
-    prior.json = {{"from", "--p22"}};
+    p22 = options.p22;
+    prior = {{"from", "--p22"}};
   } else if (options.p22_std >= 0.0) {
     throw InputError("--p22-std needs a prior: --p22 or --canal with --pool");
   }
@@ -53,12 +42,12 @@ nlohmann::json IdentifyIdz(const IdentifyOptions& options, const drivers::CsvTab
   if (options.max_delay_s > 0.0) {
     pipeline.fit.max_nk = OptionSamples(options.max_delay_s, table, "--max-delay-s", false);
   }
-  if (prior.p22 >= 0.0) {
-    prior.std = options.p22_std >= 0.0 ? options.p22_std : core::kIdzPriorRelativeStd * prior.p22;
-    pipeline.fit.p22_prior_s_per_m2 = prior.p22;
-    pipeline.fit.p22_prior_std_s_per_m2 = prior.std;
-    prior.json["p22_s_per_m2"] = prior.p22;
-    prior.json["p22_std_s_per_m2"] = prior.std;
+  if (p22 >= 0.0) {
+    const double std = options.p22_std >= 0.0 ? options.p22_std : core::kIdzPriorRelativeStd * p22;
+    pipeline.fit.p22_prior_s_per_m2 = p22;
+    pipeline.fit.p22_prior_std_s_per_m2 = std;
+    prior["p22_s_per_m2"] = p22;
+    prior["p22_std_s_per_m2"] = std;
   }
   nlohmann::json json;
   try {
@@ -66,7 +55,7 @@ nlohmann::json IdentifyIdz(const IdentifyOptions& options, const drivers::CsvTab
   } catch (const std::invalid_argument& e) {
     throw InputError(table.source() + ": " + e.what());
   }
-  json["p22_prior"] = prior.p22 >= 0.0 ? prior.json : nlohmann::json();
+  json["p22_prior"] = prior;  // null without a prior
   return json;
 }
 

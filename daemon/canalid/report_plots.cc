@@ -276,8 +276,9 @@ void BodePlot(PlotWriter& w, const ModelAnalysis& m) {
                {c.omega_rad_s, c.gain, c.phase_deg});
     const std::string style = " with lines lw 2 lc rgb '" + std::string(Colour(j)) + "'" +
                               (j ? " dt 2" : "") + " title " + Quote(c.label);
-    gain += std::string(j ? ", " : "") + data + " using 1:2" + style;
-    phase += std::string(j ? ", " : "") + data + " using 1:3" + style;
+    const char* separator = j ? ", " : "";
+    gain.append(separator).append(data).append(" using 1:2").append(style);
+    phase.append(separator).append(data).append(" using 1:3").append(style);
   }
   plot << "set multiplot layout 2,1\nset logscale x\nset key outside right top\n"
        << "set logscale y\nset ylabel 'gain (level per inflow)'\nunset xlabel\n"
