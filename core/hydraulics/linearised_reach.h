@@ -23,7 +23,7 @@ struct LinearisedReach {
   double froude = 0.0;        ///< V / C
   double kappa = 0.0;
   double gamma_per_s = 0.0;
-  double delta = 0.0;  ///< m/s^2
+  double delta = 0.0;  ///< m^2/s^2 (delta y has the units of q_t)
   /// delta without the top width's change V^2 T' Y' (Litrico & Fromion's areas use it).
   double delta_without_top_width_change = 0.0;
   /// a of the high-frequency gains (1/m): T/(A F (1 - F^2)) ((2 + (kappa - 1) F^2) S0 -

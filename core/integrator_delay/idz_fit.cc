@@ -7,6 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "core/integrator_delay/closed_loop_detector.h"
 #include "core/integrator_delay/integrator_delay_model.h"
@@ -26,6 +27,27 @@ Eigen::MatrixXd Regressors(const Eigen::Ref<const Eigen::VectorXd>& q_in,
   x.leftCols(4) = base;
   x.col(4) = -q_out.tail(base.rows());
   return x;
+}
+
+// The regression with p21 >= 0, as the ID fit: a negative wave-front gain lets the delay slip by a
+// sample and means no front; then p21 is held at 0 and its column (1) dropped.
+struct ActiveRegression {
+  Eigen::MatrixXd x;  // the columns fitted
+  bool p21_held = false;
+  // Index in x of column c of the full regression (c != 1 when p21 is held).
+  Eigen::Index Column(Eigen::Index c) const { return p21_held && c > 1 ? c - 1 : c; }
+};
+
+ActiveRegression WithNonNegativeP21(Eigen::MatrixXd x, const Eigen::VectorXd& target) {
+  ActiveRegression active;
+  if (x.colPivHouseholderQr().solve(target)(1) >= 0.0) {
+    active.x = std::move(x);
+    return active;
+  }
+  active.p21_held = true;
+  active.x.resize(x.rows(), x.cols() - 1);
+  active.x << x.col(0), x.rightCols(x.cols() - 2);
+  return active;
 }
 
 }  // namespace
@@ -66,7 +88,7 @@ IdzFit FitIdz(const Eigen::Ref<const Eigen::VectorXd>& q_in,
                                 std::to_string(options.min_nk) + ", " + std::to_string(max_nk) +
                                 ")");
   }
-  const bool has_prior = options.p22_prior_s_per_m2 >= 0.0;
+  const bool has_prior = !(options.p22_prior_s_per_m2 < 0.0);  // NaN: a bad prior, refused
   if (has_prior &&
       (!std::isfinite(options.p22_prior_s_per_m2) ||
        !std::isfinite(options.p22_prior_std_s_per_m2) || options.p22_prior_std_s_per_m2 < 0.0)) {
@@ -120,16 +142,18 @@ IdzFit FitIdz(const Eigen::Ref<const Eigen::VectorXd>& q_in,
   fit.loss_by_nk.resize(max_nk - options.min_nk + 1);
   double best = std::numeric_limits<double>::infinity();
   for (int nk = options.min_nk; nk <= max_nk; ++nk) {
-    const Eigen::MatrixXd x = Regressors(q_in, q_out, nk, k0, fit_p22);
-    const Eigen::VectorXd theta = x.colPivHouseholderQr().solve(target);
-    const double loss = (x * theta - target).squaredNorm() / static_cast<double>(n - k0);
+    const ActiveRegression a = WithNonNegativeP21(Regressors(q_in, q_out, nk, k0, fit_p22), target);
+    const Eigen::VectorXd theta = a.x.colPivHouseholderQr().solve(target);
+    const double loss = (a.x * theta - target).squaredNorm() / static_cast<double>(n - k0);
     fit.loss_by_nk(nk - options.min_nk) = loss;
     if (loss < best) {
       best = loss;
       fit.nk = nk;
     }
   }
-  const Eigen::MatrixXd x = Regressors(q_in, q_out, fit.nk, k0, fit_p22);
+  const ActiveRegression active =
+      WithNonNegativeP21(Regressors(q_in, q_out, fit.nk, k0, fit_p22), target);
+  const Eigen::MatrixXd& x = active.x;
   const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(x);
   const Eigen::VectorXd theta = qr.solve(target);
   const Eigen::VectorXd residual = x * theta - target;
@@ -152,13 +176,19 @@ IdzFit FitIdz(const Eigen::Ref<const Eigen::VectorXd>& q_in,
   const double b = theta(0);
   fit.area_m2 = sample_time_s / b;
   fit.area_std_m2 = sample_time_s * std::sqrt(variance(0)) / (b * b);
-  fit.p21_s_per_m2 = theta(1);
-  fit.p21_std_s_per_m2 = std::sqrt(variance(1));
-  fit.offset_m = theta(2);
-  fit.drift_m_per_sample = theta(3);
+  if (!active.p21_held) {
+    fit.p21_s_per_m2 = theta(1);
+    fit.p21_std_s_per_m2 = std::sqrt(variance(1));
+  } else {
+    fit.warnings.push_back(
+        "p21 came out negative and is held at 0: no wave front reaches the level as a jump (a "
+        "diffusive pool)");
+  }
+  fit.offset_m = theta(active.Column(2));
+  fit.drift_m_per_sample = theta(active.Column(3));
   if (fit_p22) {
-    fit.p22_s_per_m2 = theta(4);
-    fit.p22_std_s_per_m2 = std::sqrt(variance(4));
+    fit.p22_s_per_m2 = theta(active.Column(4));
+    fit.p22_std_s_per_m2 = std::sqrt(variance(active.Column(4)));
   } else if (fit.p22_source == OutflowGainSource::kPrior) {
     fit.p22_s_per_m2 = options.p22_prior_s_per_m2;
     fit.p22_std_s_per_m2 = options.p22_prior_std_s_per_m2;

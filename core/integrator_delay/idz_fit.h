@@ -24,7 +24,8 @@ inline constexpr double kIdzPriorRelativeStd = 0.2;
 struct IdzFitOptions {
   int min_nk = 0;
   int max_nk = -1;  ///< < 0: a third of the record
-  /// p22 prior (s/m^2, >= 0) and its standard deviation; a negative prior means none.  Use the
+  /// p22 prior (s/m^2, >= 0) and its standard deviation; a negative prior means none (NaN is
+  /// refused).  Use the
   /// low-frequency gain of the theory (IdzTheory::outflow_gain_low_frequency_s_per_m2): it is the
   /// one a level-driven outflow couples into the level.
   double p22_prior_s_per_m2 = -1.0;
@@ -82,8 +83,10 @@ struct IdzFit {
   }
 };
 
-/// Fits the IDZ model: for each nk the regression above by least squares (QR), the nk with the
-/// smallest residual kept.  p22 is
+/// Fits the IDZ model: for each nk the regression above by least squares (QR) with p21 >= 0 (as
+/// the ID fit: a negative p21 is held at 0, with a warning), the nk with the smallest residual
+/// kept.  As in the ID fit, Q(k) already holds q_in(k - nk), so the integrator's response starts
+/// with the sample at k - nk.  p22 is
 ///  - fitted (kData) when the outflow moves (std above 2 % of the inflow's) and does not follow
 ///    the level (|r| <= 0.3 between the detrended outflow and level): a second structure moved on
 ///    its own, a pump, an offtake;

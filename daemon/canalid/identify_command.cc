@@ -61,7 +61,7 @@ nlohmann::json IdentifyModel(const IdentifyOptions& options, const drivers::CsvT
     model = IdentifyProcessModel(options, table);
   } else {
     throw InputError("--model: unknown kind '" + options.model +
-                     "' (id, arx, foptd, soptd, frac-foptd, frac-ss, lpv)");
+                     "' (id, idz, arx, foptd, soptd, frac-foptd, frac-ss, lpv)");
   }
   // The columns the model was fitted on, so `canalid simulate` finds them again.
   if (!model.contains("inputs")) {
@@ -78,8 +78,12 @@ nlohmann::json IdentifyModel(const IdentifyOptions& options, const drivers::CsvT
 void RequireIdzOptionsUsed(const IdentifyOptions& options, const std::vector<std::string>& kinds) {
   const bool idz = std::find(kinds.begin(), kinds.end(), "idz") != kinds.end();
   const bool held_p22 = options.online && options.model == "id";
-  if (!idz && !held_p22 && (options.p22 >= 0.0 || !options.canal.empty())) {
-    throw InputError("--p22 and --canal apply to --model idz (and --p22 to --model id --online)");
+  if (!idz && !held_p22 && options.p22 >= 0.0) {
+    throw InputError("--p22 applies to --model idz and to --model id --online");
+  }
+  if (!idz && !options.canal.empty()) throw InputError("--canal applies to --model idz");
+  if (idz && kinds.size() == 1 && options.closed_loop != "auto") {
+    throw InputError("--closed-loop applies to --model id (idz's p22 settles the closed loop)");
   }
   if (!idz && options.p22_std >= 0.0) throw InputError("--p22-std applies to --model idz");
 }

@@ -41,8 +41,8 @@ void WriteModelFiles(const std::filesystem::path& dir, const std::vector<ModelAn
 int RunReport(const ReportOptions& options, const std::string& command_line) {
   if (options.models.empty()) {
     throw InputError(
-        "report: no model kind: give --model KIND... (id, arx, foptd, soptd, frac-foptd, "
-        "frac-ss, lpv)");
+        "report: no model kind: give --model KIND... (id, idz, arx, foptd, soptd, "
+        "frac-foptd, frac-ss, lpv)");
   }
   for (std::size_t i = 0; i < options.models.size(); ++i) {
     if (std::count(options.models.begin(), options.models.end(), options.models[i]) > 1) {

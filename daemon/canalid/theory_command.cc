@@ -16,6 +16,7 @@
 #include "core/hydraulics/idz_theory.h"
 #include "daemon/canalid/cli.h"
 #include "daemon/canalid/input_error.h"
+#include "daemon/canalid/pool_theory.h"
 #include "drivers/csv/csv_table.h"
 #include "drivers/json/model_json.h"
 #include "sim/canal_config.h"
@@ -24,25 +25,15 @@
 namespace canalid::cli {
 namespace {
 
-struct PoolTheory {
+// One pool's theory and the conditions it was computed for.
+struct PoolResult {
   std::string name;
   double flow_m3s = 0.0;
   double downstream_depth_m = 0.0;
   core::IdzTheory theory;
 };
 
-core::PoolGeometry GeometryOf(const sim::Pool& pool) {
-  return core::PoolGeometry{pool.length_m,  pool.bottom_width_m, pool.side_slope,
-                            pool.bed_slope, pool.manning_n,      pool.target_depth_m};
-}
-
-std::string PoolNames(const sim::Canal& canal) {
-  std::string names;
-  for (const sim::Pool& pool : canal.pools) names += (names.empty() ? "" : ", ") + pool.name;
-  return names;
-}
-
-nlohmann::json ToJson(const PoolTheory& p) {
+nlohmann::json ToJson(const PoolResult& p) {
   const core::IdzModel& m = p.theory.model;
   nlohmann::json json;
   json["pool"] = p.name;
@@ -66,9 +57,9 @@ nlohmann::json ToJson(const PoolTheory& p) {
   return json;
 }
 
-void WriteBode(const TheoryOptions& options, const std::vector<PoolTheory>& pools) {
+void WriteBode(const TheoryOptions& options, const std::vector<PoolResult>& pools) {
   double smallest_delay = std::numeric_limits<double>::infinity();
-  for (const PoolTheory& p : pools)
+  for (const PoolResult& p : pools)
     smallest_delay = std::min(smallest_delay, p.theory.model.delay_s);
   const double low = options.bode_min_rad_s > 0.0 ? options.bode_min_rad_s : 0.01 / smallest_delay;
   const double high =
@@ -113,37 +104,28 @@ int RunTheory(const TheoryOptions& options) {
   std::vector<double> steady_flows;
   try {
     canal = sim::LoadCanal(options.canal);
-    steady_flows = sim::SteadyPoolFlows(canal);
+    // The steady flows only when they are used: --flow replaces them.
+    if (!(options.flow_m3s > 0.0)) steady_flows = sim::SteadyPoolFlows(canal);
   } catch (const std::exception& e) {
     throw InputError(e.what());
   }
-  std::vector<PoolTheory> pools;
+  std::vector<PoolResult> pools;
   for (std::size_t i = 0; i < canal.pools.size(); ++i) {
     const sim::Pool& pool = canal.pools[i];
     if (!options.all && pool.name != options.pool) continue;
-    PoolTheory p;
+    PoolResult p;
     p.name = pool.name;
     p.flow_m3s = options.flow_m3s > 0.0 ? options.flow_m3s : steady_flows[i];
     p.downstream_depth_m = pool.target_depth_m;
-    try {
-      p.theory = core::IdzFromGeometry(GeometryOf(pool), p.flow_m3s);
-    } catch (const std::invalid_argument& e) {
-      std::ostringstream os;
-      os << options.canal << ": pool " << pool.name << " at " << p.flow_m3s
-         << " m3/s: " << e.what();
-      throw InputError(os.str());
-    }
+    p.theory = TheoryOf(options.canal, pool, p.flow_m3s);
     pools.push_back(p);
   }
-  if (pools.empty()) {
-    throw InputError("--pool '" + options.pool + "' is not a pool of " + options.canal +
-                     " (pools: " + PoolNames(canal) + ")");
-  }
+  if (pools.empty()) throw InputError(NotAPoolMessage(canal, options.canal, options.pool));
   nlohmann::json json;
   if (options.all) {
     json["canal"] = canal.name;
     json["pools"] = nlohmann::json::array();
-    for (const PoolTheory& p : pools) json["pools"].push_back(ToJson(p));
+    for (const PoolResult& p : pools) json["pools"].push_back(ToJson(p));
   } else {
     json = ToJson(pools.front());
     json["canal"] = canal.name;
@@ -178,17 +160,20 @@ void AddTheoryCommand(CLI::App& app, TheoryOptions& options, int& exit_code) {
   cmd->add_option("--flow", options.flow_m3s, "Flow through the pool, m3/s")
       ->check(FinitePositive())
       ->needs(pool);
-  cmd->add_option("--bode", options.bode,
-                  "Write the frequency responses p21(jw), p22(jw) of each pool as CSV");
+  CLI::Option* bode = cmd->add_option(
+      "--bode", options.bode, "Write the frequency responses p21(jw), p22(jw) of each pool as CSV");
   cmd->add_option("--bode-min-rad-s", options.bode_min_rad_s,
                   "Lowest frequency of --bode, rad/s (default 0.01 / the smallest delay)")
-      ->check(FinitePositive());
+      ->check(FinitePositive())
+      ->needs(bode);
   cmd->add_option("--bode-max-rad-s", options.bode_max_rad_s,
                   "Highest frequency of --bode, rad/s (default 100 / the smallest delay)")
-      ->check(FinitePositive());
+      ->check(FinitePositive())
+      ->needs(bode);
   cmd->add_option("--bode-points", options.bode_points, "Frequencies per pool in --bode")
       ->check(CLI::Range(2, 100000))
-      ->capture_default_str();
+      ->capture_default_str()
+      ->needs(bode);
   cmd->add_flag("--pretty", options.pretty, "Indent the JSON");
   cmd->callback([&options, &exit_code, pool, all] {
     if (pool->count() == 0 && all->count() == 0) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <sstream>
 
 #include "daemon/canalidd/clock.h"
@@ -297,15 +298,16 @@ void Daemon::ReportIdzModel(const ReachRuntime& reach, double time_s) {
   }
   nlohmann::json json = drivers::ToJson(*result);
   json["reach"] = name;
-  PublishBatchModel(reach, "idz", json, problem, time_s);
+  const bool finite = std::isfinite(result->fit.area_m2) && std::isfinite(result->fit.p21_s_per_m2);
+  PublishBatchModel(reach, "idz", json, problem, time_s, finite ? 0 : core::kFlagNan);
 }
 
 void Daemon::PublishBatchModel(const ReachRuntime& reach, const std::string& kind,
                                const nlohmann::json& json, const std::string& problem,
-                               double time_s) {
+                               double time_s, std::int32_t flags) {
   const std::string& name = reach.name();
   publisher_.PublishModelJson(name, json, time_s, "batch", reach.pipeline().recorded_samples(),
-                              problem.empty() ? 0 : core::kFlagOutOfBounds);
+                              flags | (problem.empty() ? 0 : core::kFlagOutOfBounds));
   if (!problem.empty()) {
     LogWarning("reach " + name + ": identified a " + kind + " model outside the bounds (" +
                problem + "); not persisted: " + json.dump());

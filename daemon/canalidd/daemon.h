@@ -80,7 +80,8 @@ class Daemon final {
   /// One end-of-experiment model other than id: published with estimator "batch", logged, and
   /// persisted unless `problem` says why it is not the reach's model.
   void PublishBatchModel(const ReachRuntime& reach, const std::string& kind,
-                         const nlohmann::json& json, const std::string& problem, double time_s);
+                         const nlohmann::json& json, const std::string& problem, double time_s,
+                         std::int32_t flags = 0);
   void ReportProcessModels(const ReachRuntime& reach, double time_s);
   /// Publishes the snapshot of every online model the sample moved.
   void PublishOnlineModels(ReachRuntime& reach, const core::ReachActions& actions, double time_s);

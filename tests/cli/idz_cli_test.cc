@@ -1,7 +1,7 @@
 // `canalid identify --model idz` on the Saint-Venant records of ASCE canal 2 pool 2 (canalsim,
-// tests/data/sim): the open-loop record, and the record whose pool ends at a fixed gate (the
-// outflow follows the level), with the prior from `--canal ... --pool 2` and without it.
-// Reference: Litrico & Fromion (2004), 682 s and 34113 m2.
+// tests/data/sim): the open-loop record, and the record whose pool ends at a free weir (the
+// outflow follows the level; the file is named "fixed-gate"), with the prior from `--canal ...
+// --pool 2` and without it. Reference: Litrico & Fromion (2004), 682 s and 34113 m2.
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
@@ -27,7 +27,7 @@ ProgramRun Identify(const std::string& record, const std::string& args) {
 const std::string kCanal2 =
     std::string(" --canal ") + CANALID_SOURCE_DIR + "/config/sim/asce-canal2.toml --pool 2";
 
-TEST(IdzCli, FixedGateRecordWithTheGeometryPriorGetsTheArea) {
+TEST(IdzCli, FreeWeirRecordWithTheGeometryPriorGetsTheArea) {
   const ProgramRun run = Identify("asce2-pool2-prbs-fixed-gate", "--max-delay-s 1800" + kCanal2);
   ASSERT_EQ(run.exit_code, 0) << run.err;
   const auto json = nlohmann::json::parse(run.out);
@@ -45,7 +45,7 @@ TEST(IdzCli, FixedGateRecordWithTheGeometryPriorGetsTheArea) {
   EXPECT_EQ(json["output"], "level");
 }
 
-TEST(IdzCli, FixedGateRecordWithoutPriorWarnsAndReadsTheClosedLoopArea) {
+TEST(IdzCli, FreeWeirRecordWithoutPriorWarnsAndReadsTheClosedLoopArea) {
   const ProgramRun run = Identify("asce2-pool2-prbs-fixed-gate", "--max-delay-s 1800");
   ASSERT_EQ(run.exit_code, 0) << run.err;
   const auto json = nlohmann::json::parse(run.out);
@@ -96,7 +96,13 @@ TEST(IdzCli, PriorOptionsAreCheckedAndNamed) {
   const ProgramRun id = RunProgram(CanalidProgram() + " identify --model id --p22 0.01 --input " +
                                        CANALID_SOURCE_DIR + "/tests/data/sim/asce2-pool2-prbs.csv",
                                    dir);
-  expect_error(id, "--p22 and --canal apply to --model idz");
+  expect_error(id, "--p22 applies to --model idz and to --model id --online");
+  const ProgramRun online =
+      RunProgram(CanalidProgram() + " identify --model id --online" + kCanal2 + " --input " +
+                     CANALID_SOURCE_DIR + "/tests/data/sim/asce2-pool2-prbs.csv",
+                 dir);
+  expect_error(online, "--canal applies to --model idz");
+  expect_error(Identify("asce2-pool2-prbs", "--closed-loop off"), "--closed-loop applies to");
   // --p22 as the prior: the JSON says where it came from.
   const ProgramRun given = Identify("asce2-pool2-prbs-fixed-gate", "--p22 0.0133 --p22-std 0");
   ASSERT_EQ(given.exit_code, 0) << given.err;

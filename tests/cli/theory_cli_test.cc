@@ -156,6 +156,9 @@ TEST(TheoryCli, BadInputIsNamedAndExitsTwo) {
   EXPECT_NE(r.err.find("out of range"), std::string::npos) << r.err;
   r = run("--canal " + Canal(2) + " --all --flow 3");
   EXPECT_EQ(r.exit_code, 2);
+  r = run("--canal " + Canal(2) + " --pool 2 --bode-min-rad-s 0.001");  // does nothing alone
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--bode-min-rad-s requires --bode"), std::string::npos) << r.err;
   const auto bad = dir / "bad.toml";
   WriteFile(bad,
             "name = \"x\"\n[upstream]\ntype = \"flow\"\nflow_m3s = 1.0\n[[pool]]\nname = \"1\"\n"
