@@ -11,8 +11,8 @@
 namespace canalid::core {
 namespace {
 
-constexpr std::array<std::string_view, kOnlineModelKinds.size()> kKindNames{"id", "arx",
-                                                                            "frac-foptd", "lpv"};
+constexpr std::array<std::string_view, kOnlineModelKinds.size()> kKindNames{
+    "id", "arx", "frac-foptd", "lpv", "idz"};
 
 // Largest delay or memory a setting may ask for, in samples (the banks allocate per sample).
 constexpr double kMaxSettingSamples = 1e6;
@@ -73,6 +73,16 @@ OnlineModelOptions OnlineModelOptionsFor(OnlineModelKind kind, const OnlineModel
       o.id.closed_loop = s.closed_loop;
       o.id.outflow_direct_gain_s_per_m2 = s.p22_s_per_m2;
       break;
+    case OnlineModelKind::kIdz:
+      o.id.sample_time_s = s.sample_time_s;
+      o.id.min_delay_samples = Samples("min_delay_s", s.min_delay_s, s.sample_time_s);
+      o.id.max_delay_samples = Samples("max_delay_s", s.max_delay_s, s.sample_time_s);
+      o.id.wave_front_term = true;
+      o.id.wave_front_non_negative = true;
+      o.id.rls = RlsFor(s, 4);
+      o.id.closed_loop = s.closed_loop;
+      o.id.outflow_direct_gain_s_per_m2 = s.idz_p22_s_per_m2;
+      break;
     case OnlineModelKind::kArx:
       o.arx.na = s.arx_na;
       o.arx.nb = s.arx_nb;
@@ -112,6 +122,7 @@ void OnlineModelOptions::Validate() const {
   }
   switch (kind) {
     case OnlineModelKind::kIntegratorDelay:
+    case OnlineModelKind::kIdz:
       id.Validate();
       break;
     case OnlineModelKind::kArx:
@@ -137,6 +148,7 @@ std::unique_ptr<OnlineModel> MakeOnlineModel(const OnlineModelOptions& options) 
   options.Validate();
   switch (options.kind) {
     case OnlineModelKind::kIntegratorDelay:
+    case OnlineModelKind::kIdz:
       return MakeOnlineIntegratorDelayModel(options);
     case OnlineModelKind::kArx:
       return MakeOnlineArxModel(options);

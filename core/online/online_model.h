@@ -22,10 +22,14 @@ enum class OnlineModelKind : std::uint8_t {
   kArx,              ///< "arx": actuator -> level, a bank over the delay
   kFractionalFoptd,  ///< "frac-foptd": K e^{-tau s} / (1 + T s^alpha), a bank over alpha
   kLpvArx,           ///< "lpv": ARX whose coefficients are quadratics in a scheduling variable
+  /// "idz": the id bank with the wave front (p21 >= 0) and the outflow's direct gain p22 held at
+  /// its prior (the theory's low-frequency p22): IDZ, whose area is right where the outflow
+  /// follows the level (docs/closed-loop.md)
+  kIdz,
 };
 inline constexpr std::array kOnlineModelKinds{
     OnlineModelKind::kIntegratorDelay, OnlineModelKind::kArx, OnlineModelKind::kFractionalFoptd,
-    OnlineModelKind::kLpvArx};
+    OnlineModelKind::kLpvArx, OnlineModelKind::kIdz};
 /// The kind's name in configurations, CLI options, model JSON and LCM messages.
 std::string_view OnlineModelKindName(OnlineModelKind kind);
 std::optional<OnlineModelKind> OnlineModelKindFromName(std::string_view name);
@@ -58,6 +62,8 @@ struct OnlineModelSettings {
   bool wave_front_term = false;  ///< OnlineIntegratorDelayOptions::wave_front_term (p21 >= 0)
   ClosedLoopMode closed_loop = ClosedLoopMode::kOff;
   double p22_s_per_m2 = 0.0;  ///< OnlineIntegratorDelayOptions::outflow_direct_gain_s_per_m2
+  // idz: the id bank's settings above, with the wave front and this p22 prior held (s/m2, >= 0)
+  double idz_p22_s_per_m2 = 0.0;
   // arx
   int arx_na = 2;
   int arx_nb = 2;

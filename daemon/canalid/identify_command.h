@@ -87,6 +87,10 @@ nlohmann::json IdentifyModel(const IdentifyOptions& options, const drivers::CsvT
 nlohmann::json IdentifyId(const IdentifyOptions& options, const drivers::CsvTable& table);
 nlohmann::json IdentifyArx(const IdentifyOptions& options, const drivers::CsvTable& table);
 nlohmann::json IdentifyIdz(const IdentifyOptions& options, const drivers::CsvTable& table);
+/// The idz p22 prior of --p22 or of --canal's --pool (the theory's low-frequency p22 at
+/// `mean_inflow_m3s`), negative when neither is given; `prior` says where it came from (null
+/// when none).  @throws InputError on both given, --p22-std alone, or a bad canal or pool.
+double IdzP22Prior(const IdentifyOptions& options, double mean_inflow_m3s, nlohmann::json* prior);
 
 /// The ARX problem as the options describe it: orders (one nb/nk for all inputs, or one each),
 /// the output and input columns (inputs must move), optionally detrended.  @throws InputError.

@@ -9,34 +9,39 @@
 
 namespace canalid::cli {
 
-nlohmann::json IdentifyIdz(const IdentifyOptions& options, const drivers::CsvTable& table) {
+double IdzP22Prior(const IdentifyOptions& options, double mean_inflow_m3s, nlohmann::json* prior) {
   if (options.p22 >= 0.0 && !options.canal.empty()) {
     throw InputError("--p22 and --canal both give the p22 prior: give one");
   }
+  *prior = nullptr;
+  if (!options.canal.empty()) {
+    const core::IdzTheory theory = PoolTheory(options.canal, options.pool, mean_inflow_m3s);
+    *prior = {{"from", "theory"},
+              {"canal", options.canal},
+              {"pool", options.pool},
+              {"flow_m3s", mean_inflow_m3s},
+              {"theory_area_m2", theory.model.area_m2},
+              {"theory_delay_s", theory.model.delay_s}};
+    return theory.outflow_gain_low_frequency_s_per_m2;
+  }
+  if (options.p22 >= 0.0) {
+    *prior = {{"from", "--p22"}};
+    return options.p22;
+  }
+  if (options.p22_std >= 0.0) {
+    throw InputError("--p22-std needs a prior: --p22 or --canal with --pool");
+  }
+  return -1.0;
+}
+
+nlohmann::json IdentifyIdz(const IdentifyOptions& options, const drivers::CsvTable& table) {
   const Eigen::VectorXd q_in = RequireMovingColumn(table, options.qin);
   const Eigen::VectorXd q_out = RequireColumn(table, options.qout);
   const Eigen::VectorXd level = RequireColumn(table, options.level);
   const double ts = table.sample_time_s();
-  // The p22 prior and what it came from: the theory of --canal's --pool at the record's mean
-  // inflow, or --p22.
-  double p22 = -1.0;
+  // The p22 prior and what it came from (the theory at the record's mean inflow, or --p22).
   nlohmann::json prior;
-  if (!options.canal.empty()) {
-    const double flow = q_in.mean();
-    const core::IdzTheory theory = PoolTheory(options.canal, options.pool, flow);
-    p22 = theory.outflow_gain_low_frequency_s_per_m2;
-    prior = {{"from", "theory"},
-             {"canal", options.canal},
-             {"pool", options.pool},
-             {"flow_m3s", flow},
-             {"theory_area_m2", theory.model.area_m2},
-             {"theory_delay_s", theory.model.delay_s}};
-  } else if (options.p22 >= 0.0) {
-    p22 = options.p22;
-    prior = {{"from", "--p22"}};
-  } else if (options.p22_std >= 0.0) {
-    throw InputError("--p22-std needs a prior: --p22 or --canal with --pool");
-  }
+  const double p22 = IdzP22Prior(options, q_in.mean(), &prior);
   core::IdzIdentificationOptions pipeline;
   pipeline.remove_level_outliers = !options.keep_outliers;
   if (options.max_delay_s > 0.0) {

@@ -2,6 +2,7 @@
 // estimators the daemon runs: --model frac-foptd|lpv with the command's flags, and any registry
 // kind with --config FILE --reach NAME, which takes the reach's settings and channel columns from
 // a canalidd configuration, so that the result equals the daemon's on the same samples.
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -36,6 +37,21 @@ int SingleInteger(const std::string& option, const std::string& text) {
   throw InputError(option + " " + text + ": expected one integer (online: a single input)");
 }
 
+// idz: the flows and the level, delays 0..--max-delay-s (default a third of the record, as the
+// online id bank), the p22 prior held.
+core::OnlineModelSettings IdzSettings(const IdentifyOptions& o, const drivers::CsvTable& table,
+                                      core::OnlineModelSettings s, OnlineColumns& c) {
+  c.q_in = RequireMovingColumn(table, o.qin);
+  c.q_out = RequireColumn(table, o.qout);
+  c.level = RequireColumn(table, o.level);
+  s.min_delay_s = 0.0;
+  s.max_delay_s =
+      o.max_delay_s > 0.0 ? o.max_delay_s : static_cast<double>(table.rows() / 3) * s.sample_time_s;
+  nlohmann::json prior;
+  s.idz_p22_s_per_m2 = std::max(IdzP22Prior(o, c.q_in.mean(), &prior), 0.0);
+  return s;
+}
+
 core::OnlineModelSettings SettingsFromFlags(const IdentifyOptions& o,
                                             const drivers::CsvTable& table, OnlineColumns& c) {
   core::OnlineModelSettings s;
@@ -52,6 +68,7 @@ core::OnlineModelSettings SettingsFromFlags(const IdentifyOptions& o,
   s.rls_method = *method;
   s.forgetting = o.forgetting;
   s.initial_covariance = kInitialCovariance;
+  if (o.model == "idz") return IdzSettings(o, table, s, c);
   const int nk = SingleInteger("--nk", o.nk);
   if (nk < 0 || nk >= table.rows() / 2) {
     throw InputError("--nk " + o.nk + ": out of range (0 <= nk < half the record's " +
@@ -112,7 +129,7 @@ nlohmann::json IdentifyOnlineModel(const IdentifyOptions& options, const drivers
   const auto kind = core::OnlineModelKindFromName(options.model);
   if (!kind) {
     throw InputError("--online: --model " + options.model +
-                     " has no online estimator (online: id, arx, frac-foptd, lpv)");
+                     " has no online estimator (online: id, arx, frac-foptd, lpv, idz)");
   }
   OnlineColumns columns;
   const core::OnlineModelSettings settings = options.config.empty()

@@ -131,7 +131,8 @@ struct ReachConfig {
   std::vector<BatchModel> batch_models{BatchModel::kId};
   /// idz: the prior of the outflow's direct gain p22 (s/m2, [0, 10]; `canalid theory`'s
   /// p22_low_frequency_s_per_m2 at the nominal inflow) and its standard deviation (default 20 %
-  /// of it).  Absent: p22 comes from the data when the outflow moves on its own, else is 0.
+  /// of it).  Batch: absent, p22 comes from the data when the outflow moves on its own, else is
+  /// 0.  Online: held in the bank (absent: 0, the id bank with the wave front).
   std::optional<double> idz_p22_s_per_m2;
   std::optional<double> idz_p22_std_s_per_m2;
   /// The actuator's measured position (role gate or pump; empty: none): the process models'

@@ -102,6 +102,7 @@ core::OnlineModelSettings BuildOnlineModelSettings(const DaemonConfig& config,
   settings.lpv_na = reach.lpv_na;
   settings.lpv_nb = reach.lpv_nb;
   settings.lpv_delay_s = reach.lpv_delay_s;
+  settings.idz_p22_s_per_m2 = reach.idz_p22_s_per_m2.value_or(0.0);
   return settings;
 }
 

@@ -67,6 +67,24 @@ TEST(IdzCli, OpenLoopRecordGetsTheAreaWithOrWithoutPrior) {
   }
 }
 
+// --online: the daemon's online idz kind (the id bank with the wave front and p22 held at the
+// prior) on the free-weir record: the prior brings the area back from A (1 + p22 g).
+TEST(IdzCli, OnlineIdzWithThePriorGetsTheArea) {
+  const ProgramRun with =
+      Identify("asce2-pool2-prbs-fixed-gate", "--online --max-delay-s 1800" + kCanal2);
+  ASSERT_EQ(with.exit_code, 0) << with.err;
+  const auto json = nlohmann::json::parse(with.out);
+  EXPECT_EQ(json["model"], "idz");
+  EXPECT_EQ(json["estimator"], "online");
+  EXPECT_NEAR(json["area_m2"].get<double>() / kArea, 1.0, 0.10);  // measured +0.15 %
+  EXPECT_GT(json["p22_s_per_m2"].get<double>(), 0.0);
+  const ProgramRun without = Identify("asce2-pool2-prbs-fixed-gate", "--online --max-delay-s 1800");
+  ASSERT_EQ(without.exit_code, 0) << without.err;
+  const auto plain = nlohmann::json::parse(without.out);
+  EXPECT_DOUBLE_EQ(plain["p22_s_per_m2"].get<double>(), 0.0);
+  EXPECT_GT(plain["area_m2"].get<double>() / kArea, 1.15);  // measured +21 %
+}
+
 // `canalid simulate` runs the model JSON's level equation: on the record it was fitted on (level
 // spikes kept, so both compare with the same level) it reproduces the fit's metrics.
 TEST(IdzCli, SimulateReproducesTheModel) {

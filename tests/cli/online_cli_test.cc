@@ -260,7 +260,7 @@ TEST(OnlineCli, BadOptionsExitTwoWithAClearMessage) {
   ExpectBadInput("method", "--model arx --u q_in --y level --online --method fast" + csv,
                  "--method fast: unknown (allowed: ud_directional");
   ExpectBadInput("kind", "--model foptd --u q_in --y level --online" + csv,
-                 "--model foptd has no online estimator (online: id, arx, frac-foptd, lpv)");
+                 "--model foptd has no online estimator (online: id, arx, frac-foptd, lpv, idz)");
 }
 
 }  // namespace

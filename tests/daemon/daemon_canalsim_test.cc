@@ -312,7 +312,8 @@ std::map<std::string, nlohmann::json> ReplayedModels(const fs::path& dir, const 
   return last;
 }
 
-// Every online kind the daemon runs on pool 2 (id, arx, frac-foptd), live over Modbus: the last
+// Every online kind the daemon runs on pool 2 (id, arx, frac-foptd, idz with the demo file's
+// p22 prior), live over Modbus: the last
 // snapshot of each that it published equals, bit for bit, the final one of `canalid replay` of
 // its log and that of `canalid identify --online --config` on the record `canalid export` wrote
 // (the same registry, settings and samples); each kind was published.
@@ -320,7 +321,7 @@ TEST(DaemonCanalsim, EveryOnlineKindIsReproducedByReplayAndIdentify) {
   const fs::path dir = TestDir();
   Canal canal(dir);
   auto keys = BaseKeys(canal.serve.port(), dir);
-  keys.emplace_back("online_models", "[\"id\", \"arx\", \"frac-foptd\"]");
+  keys.emplace_back("online_models", "[\"id\", \"arx\", \"frac-foptd\", \"idz\"]");
   const std::string config = WriteConfig(dir / "canalidd.toml", keys, ExplicitExperiment(0.05, 6));
   auto daemon = StartDaemon(dir, config);
   // 126 samples of excitation at 10 samples per wall second.
@@ -328,12 +329,17 @@ TEST(DaemonCanalsim, EveryOnlineKindIsReproducedByReplayAndIdentify) {
   EXPECT_EQ(daemon->Stop(SIGTERM), 0) << daemon->output();
 
   const auto live = LastOnlineModels(dir, "CANALID_ASCE2_MODEL_pool2");
-  ASSERT_EQ(live.size(), 3U);
-  for (const char* kind : {"id", "arx", "frac-foptd"}) {
+  ASSERT_EQ(live.size(), 4U);
+  for (const char* kind : {"id", "arx", "frac-foptd", "idz"}) {
     ASSERT_EQ(live.count(kind), 1U) << kind;
     EXPECT_GT(live.at(kind).samples_used, 100) << kind;
   }
   EXPECT_EQ(live.at("frac-foptd").num_params, 6);
+  // idz: the id bank's parameters, the wave front, and the prior held (the demo file's).
+  const canalid::model_snapshot_t& idz = live.at("idz");
+  ASSERT_EQ(idz.num_params, 7);
+  EXPECT_EQ(idz.param_names[6], "p22_s_per_m2");
+  EXPECT_DOUBLE_EQ(idz.param_values[6], 0.01334);
 
   // Replay, a snapshot after every sample: the last of each kind is the final state.
   std::map<std::string, nlohmann::json> replayed =

@@ -164,7 +164,7 @@ TEST(OnlineModelsConfig, BadValuesNameTheirKey) {
                                     "model \"lpv\")")));
   EXPECT_THAT(Issues("online_models = [\"frac\"]\n"),
               ::testing::Contains(HasSubstr("\"frac\" is not allowed (allowed: id, arx, "
-                                            "frac-foptd, lpv)")));
+                                            "frac-foptd, lpv, idz)")));
   EXPECT_THAT(Issues("arx_na = 10\narx_nb = 7\n"),
               ::testing::Contains(HasSubstr("reach[0].arx_nb: 7 is out of range")));
   EXPECT_THAT(Issues("arx_nb = 0\n"), ::testing::Contains(HasSubstr("reach[0].arx_nb")));
@@ -233,9 +233,18 @@ TEST(OnlineModelsConfig, IdzBatchModelTakesItsP22Prior) {
           .pipeline;
   EXPECT_DOUBLE_EQ(with_std.batch_idz->fit.p22_prior_std_s_per_m2, 0.001);
   EXPECT_FALSE(Build("").pipeline.batch_idz.has_value());
+  // Online: the id bank with the wave front and the prior held.
+  const core::ReachSampleProcessorOptions online =
+      Build("online_models = [\"id\", \"idz\"]\nidz_p22_s_per_m2 = 0.0125\n").pipeline;
+  ASSERT_EQ(online.process_models.size(), 1U);
+  EXPECT_EQ(online.process_models[0].kind, core::OnlineModelKind::kIdz);
+  EXPECT_DOUBLE_EQ(online.process_models[0].id.outflow_direct_gain_s_per_m2, 0.0125);
+  EXPECT_TRUE(online.process_models[0].id.wave_front_term);
+  EXPECT_DOUBLE_EQ(online.online_id.outflow_direct_gain_s_per_m2, 0.0);  // id unchanged
   EXPECT_THAT(Issues("idz_p22_s_per_m2 = 0.0125\n"),
-              ::testing::Contains(HasSubstr(
-                  "reach[0].idz_p22_s_per_m2: has no effect: batch_models has no \"idz\"")));
+              ::testing::Contains(
+                  HasSubstr("reach[0].idz_p22_s_per_m2: has no effect: neither batch_models nor "
+                            "online_models has \"idz\"")));
   EXPECT_THAT(Issues("batch_models = [\"idz\"]\nidz_p22_std_s_per_m2 = 0.001\n"),
               ::testing::Contains(HasSubstr(
                   "reach[0].idz_p22_std_s_per_m2: has no effect without idz_p22_s_per_m2")));
