@@ -88,7 +88,8 @@ struct IdzFit {
 /// kept.  As in the ID fit, Q(k) already holds q_in(k - nk), so the integrator's response starts
 /// with the sample at k - nk.  p22 is
 ///  - fitted (kData) when the outflow moves (std above 2 % of the inflow's) and does not follow
-///    the level (|r| <= 0.3 between the detrended outflow and level): a second structure moved on
+///    the level (r <= 0.3 between the detrended outflow and level: a level-driven outflow rises
+///    with the level, while one moved on its own lowers it, r < 0): a second structure moved on
 ///    its own, a pump, an offtake;
 ///  - held at the prior (kPrior) otherwise, when there is one: with a level-driven outflow
 ///    q_out ~ q0 + g y the term p22 q_out is p22 g y, which no regression can tell from the
