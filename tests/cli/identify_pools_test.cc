@@ -183,11 +183,10 @@ TEST_P(IdentifyPoolsTwoStructures, OutflowPrbsGivesP22FromTheData) {
     EXPECT_NEAR(z["p21_s_per_m2"].get<double>(), c.idz_p21, 0.30 * c.idz_p21) << z.dump();
   }
   std::printf(
-      "canal 2 pool %d two structures: area %+.1f %%, delay %.2f x, p21 %+.0f %%, p22 "
-      "%+.0f %%\n",
+      "canal 2 pool %d two structures: area %+.1f %%, delay %.2f x, p21 %.4g (table %.4g), "
+      "p22 %+.0f %%\n",
       c.pool, 100.0 * (z["area_m2"].get<double>() / c.idz_area_m2 - 1.0),
-      z["delay_s"].get<double>() / c.idz_delay_s,
-      100.0 * (z["p21_s_per_m2"].get<double>() / (c.idz_p21 > 0 ? c.idz_p21 : 1.0) - 1.0),
+      z["delay_s"].get<double>() / c.idz_delay_s, z["p21_s_per_m2"].get<double>(), c.idz_p21,
       100.0 * (z["p22_s_per_m2"].get<double>() / c.idz_p22 - 1.0));
 }
 
