@@ -40,6 +40,15 @@ void RequireSampleTime(const drivers::CsvTable& table, double model_ts, const st
   }
 }
 
+// A pool model's simulation starts at row k0 (fit_from_sample) and needs two rows from there.
+void RequireRowsFrom(const drivers::CsvTable& table, int k0) {
+  if (table.rows() < k0 + 2) {
+    throw InputError(table.source() + ": " + std::to_string(table.rows()) +
+                     " rows; the model starts at row " + std::to_string(k0) +
+                     " (fit_from_sample), needs at least 2 more");
+  }
+}
+
 SimulatedOutput SimulateId(const nlohmann::json& model, const std::string& source,
                            const drivers::CsvTable& table, const SimulateOptions& options) {
   drivers::IntegratorDelayModelRecord r = drivers::IntegratorDelayModelFromJson(model, source);
@@ -53,11 +62,7 @@ SimulatedOutput SimulateId(const nlohmann::json& model, const std::string& sourc
   const Eigen::VectorXd q_in = RequireColumn(table, names[0]);
   const Eigen::VectorXd q_out = RequireColumn(table, names[1]);
   const int k0 = r.fit_from_sample;
-  if (table.rows() < k0 + 2) {
-    throw InputError(table.source() + ": " + std::to_string(table.rows()) +
-                     " rows; the model starts at row " + std::to_string(k0) +
-                     " (fit_from_sample), needs at least 2 more");
-  }
+  RequireRowsFrom(table, k0);
   Eigen::Vector4d theta(r.model.b, r.p21_s_per_m2, r.offset_m,
                         r.drift_m_per_s * r.model.sample_time_s);
   SimulatedOutput out;
@@ -81,11 +86,7 @@ SimulatedOutput SimulateIdz(const nlohmann::json& model, const std::string& sour
   const Eigen::VectorXd q_in = RequireColumn(table, names[0]);
   const Eigen::VectorXd q_out = RequireColumn(table, names[1]);
   const int k0 = r.fit_from_sample;
-  if (table.rows() < k0 + 2) {
-    throw InputError(table.source() + ": " + std::to_string(table.rows()) +
-                     " rows; the model starts at row " + std::to_string(k0) +
-                     " (fit_from_sample), needs at least 2 more");
-  }
+  RequireRowsFrom(table, k0);
   SimulatedOutput out;
   out.first_row = k0;
   out.y = core::IdzLevel(q_in, q_out, r.model, k0);

@@ -112,6 +112,15 @@ std::optional<double> OptionalPositive(const json& j, const std::string& key,
   return Positive(j, key, source);
 }
 
+// k0 of a pool model ("fit_from_sample", default nk + 1), which must come after the delay.
+int FitFromSample(const json& j, const std::string& source, int nk) {
+  const int k0 = j.contains("fit_from_sample") ? Integer(j, "fit_from_sample", source, 0) : nk + 1;
+  if (k0 < nk + 1) {
+    Fail(source, "fit_from_sample", std::to_string(k0) + " must be > nk = " + std::to_string(nk));
+  }
+  return k0;
+}
+
 }  // namespace
 
 std::string ModelKind(const json& j, const std::string& source) {
@@ -141,12 +150,7 @@ IntegratorDelayModelRecord IntegratorDelayModelFromJson(const json& j, const std
   r.p21_s_per_m2 = NumberOr(j, "p21_s_per_m2", source, 0.0);
   r.offset_m = NumberOr(j, "offset_m", source, 0.0);
   r.drift_m_per_s = NumberOr(j, "drift_m_per_s", source, 0.0);
-  r.fit_from_sample =
-      j.contains("fit_from_sample") ? Integer(j, "fit_from_sample", source, 0) : r.model.nk + 1;
-  if (r.fit_from_sample < r.model.nk + 1) {
-    Fail(source, "fit_from_sample",
-         std::to_string(r.fit_from_sample) + " must be > nk = " + std::to_string(r.model.nk));
-  }
+  r.fit_from_sample = FitFromSample(j, source, r.model.nk);
   if (j.contains("closed_loop")) {
     const json& closed = j.at("closed_loop");
     if (!closed.is_boolean()) Fail(source, "closed_loop", "not true or false: " + closed.dump());
@@ -165,12 +169,7 @@ IdzModelRecord IdzModelFromJson(const json& j, const std::string& source) {
   r.model.p22_s_per_m2 = NumberOr(j, "p22_s_per_m2", source, 0.0);
   r.model.offset_m = NumberOr(j, "offset_m", source, 0.0);
   r.drift_m_per_s = NumberOr(j, "drift_m_per_s", source, 0.0);
-  r.fit_from_sample =
-      j.contains("fit_from_sample") ? Integer(j, "fit_from_sample", source, 0) : r.model.nk + 1;
-  if (r.fit_from_sample < r.model.nk + 1) {
-    Fail(source, "fit_from_sample",
-         std::to_string(r.fit_from_sample) + " must be > nk = " + std::to_string(r.model.nk));
-  }
+  r.fit_from_sample = FitFromSample(j, source, r.model.nk);
   return r;
 }
 

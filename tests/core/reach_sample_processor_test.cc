@@ -44,18 +44,24 @@ ReachSampleProcessorOptions Options() {
   return o;
 }
 
+// Starts the plan's experiment and feeds the pool until its record is complete (at most 700
+// samples), the setpoint following the pipeline's writes; returns the last actions.
+ReachActions RunExperiment(ReachSampleProcessor& pipeline, IdPool& pool, double* setpoint) {
+  ReachActions a = pipeline.StartExperiment();
+  if (a.write_setpoint) *setpoint = *a.write_setpoint;
+  for (int k = 0; k < 700 && !a.experiment_record_complete; ++k) {
+    const double level = pool.Step(*setpoint);
+    a = pipeline.OnSample({pool.inflow(), 10.0, level, true, true, true, true});
+    if (a.write_setpoint) *setpoint = *a.write_setpoint;
+  }
+  return a;
+}
+
 TEST(ReachSampleProcessor, AnExperimentOnAnIdPoolIdentifiesItsDelayAndArea) {
   ReachSampleProcessor pipeline(Options());
   IdPool pool;
   double setpoint = 0.5;
-  ReachActions a = pipeline.StartExperiment();
-  ASSERT_TRUE(a.write_setpoint.has_value());
-  setpoint = *a.write_setpoint;
-  for (int k = 0; k < 700 && !a.experiment_record_complete; ++k) {
-    const double level = pool.Step(setpoint);
-    a = pipeline.OnSample({pool.inflow(), 10.0, level, true, true, true, true});
-    if (a.write_setpoint) setpoint = *a.write_setpoint;
-  }
+  const ReachActions a = RunExperiment(pipeline, pool, &setpoint);
   ASSERT_TRUE(a.experiment_record_complete);
   EXPECT_TRUE(a.restore_nominal);
   EXPECT_DOUBLE_EQ(setpoint, 0.5);
@@ -82,14 +88,7 @@ TEST(ReachSampleProcessor, AnIdzOnlyReachIdentifiesTheIdzModelAtTheEnd) {
   ReachSampleProcessor pipeline(options);
   IdPool pool;
   double setpoint = 0.5;
-  ReachActions a = pipeline.StartExperiment();
-  setpoint = *a.write_setpoint;
-  for (int k = 0; k < 700 && !a.experiment_record_complete; ++k) {
-    const double level = pool.Step(setpoint);
-    a = pipeline.OnSample({pool.inflow(), 10.0, level, true, true, true, true});
-    if (a.write_setpoint) setpoint = *a.write_setpoint;
-  }
-  ASSERT_TRUE(a.experiment_record_complete);
+  ASSERT_TRUE(RunExperiment(pipeline, pool, &setpoint).experiment_record_complete);
   ReachActions done;
   EXPECT_FALSE(pipeline.IdentifyRecord(&done).has_value());  // no id model asked
   ASSERT_TRUE(pipeline.idz_result().has_value()) << pipeline.idz_problem();

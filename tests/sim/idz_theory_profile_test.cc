@@ -16,6 +16,13 @@
 namespace canalid::sim {
 namespace {
 
+core::IdzTheory TheoryOf(const Pool& pool, double flow) {
+  return core::IdzFromGeometry(
+      core::PoolGeometry{pool.length_m, pool.bottom_width_m, pool.side_slope, pool.bed_slope,
+                         pool.manning_n, pool.target_depth_m},
+      flow);
+}
+
 double WaveTravelTime(const Pool& pool, double flow, int cells) {
   const std::vector<double> depth = SteadyProfile(pool, flow, cells, pool.target_depth_m);
   const TrapezoidSection section(pool.bottom_width_m, pool.side_slope, pool.manning_n);
@@ -39,9 +46,7 @@ TEST(IdzTheoryProfile, DelayIsTheWaveTravelTimeOnTheSimulatorsProfile) {
     const std::vector<double> flows = SteadyPoolFlows(canal);
     for (std::size_t i = 0; i < canal.pools.size(); ++i) {
       const Pool& pool = canal.pools[i];
-      const core::PoolGeometry geometry{pool.length_m,  pool.bottom_width_m, pool.side_slope,
-                                        pool.bed_slope, pool.manning_n,      pool.target_depth_m};
-      const double delay = core::IdzFromGeometry(geometry, flows[i]).model.delay_s;
+      const double delay = TheoryOf(pool, flows[i]).model.delay_s;
       const double travel = WaveTravelTime(pool, flows[i], 2000);
       EXPECT_NEAR(delay / travel, 1.0, 0.01) << file << " pool " << pool.name << ": IDZ delay "
                                              << delay << " s, travel time " << travel << " s";
@@ -135,9 +140,7 @@ TEST(IdzTheoryProfile, LowFrequencyGainsMatchTheLinearisedEquationsOnTheTrueProf
     const std::vector<double> flows = SteadyPoolFlows(canal);
     for (std::size_t i = 0; i < canal.pools.size(); ++i) {
       const Pool& pool = canal.pools[i];
-      const core::PoolGeometry geometry{pool.length_m,  pool.bottom_width_m, pool.side_slope,
-                                        pool.bed_slope, pool.manning_n,      pool.target_depth_m};
-      const core::IdzTheory theory = core::IdzFromGeometry(geometry, flows[i]);
+      const core::IdzTheory theory = TheoryOf(pool, flows[i]);
       const LowFrequency truth = LinearisedAlongProfile(pool, flows[i], 2000, theory.model.delay_s);
       std::cout << file << " pool " << pool.name << ": area " << theory.model.area_m2 << " vs "
                 << truth.area_m2 << ", low-frequency p22 "
