@@ -60,7 +60,7 @@ bool ClosedLoopDetector::OutflowMoves() const {
 }
 
 bool ClosedLoopDetector::ClosedLoop() const {
-  return OutflowMoves() && std::abs(OutflowLevelCorrelation()) > kCorrelationMin;
+  return OutflowMoves() && OutflowLevelCorrelation() > kCorrelationMin;
 }
 
 }  // namespace canalid::core

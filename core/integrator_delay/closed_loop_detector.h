@@ -5,7 +5,7 @@ namespace canalid::core {
 
 /// FitIntegratorDelay's closed-loop test computed sample by sample with running sums, so that an
 /// online estimator can take the same decision without storing the record:
-///   closed loop  <=>  std(q_out) > 0.02 std(q_in)  and  |r| > 0.3,
+///   closed loop  <=>  std(q_out) > 0.02 std(q_in)  and  r > 0.3,
 /// r the correlation of the outflow and the level, both with their least-squares line (in the
 /// sample index) removed.  The inflow's std is over every sample given to AddInflow; the
 /// outflow's std and r over the samples given to AddOutflowLevel (FitIntegratorDelay: k0..N-1, so
@@ -14,7 +14,7 @@ namespace canalid::core {
 class ClosedLoopDetector final {
  public:
   static constexpr double kOutflowMovesRatio = 0.02;  ///< std(q_out) / std(q_in) threshold
-  static constexpr double kCorrelationMin = 0.3;      ///< |r| threshold
+  static constexpr double kCorrelationMin = 0.3;      ///< r threshold (signed)
 
   void AddInflow(double q_in_m3s);
   void AddOutflowLevel(double q_out_m3s, double level_m);
@@ -24,7 +24,8 @@ class ClosedLoopDetector final {
   /// r (0 when either detrended series is constant or fewer than 3 samples).
   double OutflowLevelCorrelation() const;
   bool OutflowMoves() const;
-  /// OutflowMoves() and |r| > kCorrelationMin.
+  /// OutflowMoves() and r > kCorrelationMin: an outflow that follows the level rises with it; one
+  /// moved on its own (a second structure's experiment, a pump) lowers the level it drains, r < 0.
   bool ClosedLoop() const;
 
  private:

@@ -110,10 +110,7 @@ IdzFit FitIdz(const Eigen::Ref<const Eigen::VectorXd>& q_in,
   for (int k = 0; k < n; ++k) detector.AddInflow(q_in(k));
   for (int k = k0; k < n; ++k) detector.AddOutflowLevel(q_out(k), level(k));
   fit.outflow_moves = detector.OutflowMoves();
-  // A level-driven outflow rises with the level (r > 0); an outflow moved on its own lowers the
-  // level it drains (r < 0 and as large), which the ID fit's |r| test cannot tell apart.
-  fit.outflow_follows_level =
-      fit.outflow_moves && detector.OutflowLevelCorrelation() > ClosedLoopDetector::kCorrelationMin;
+  fit.outflow_follows_level = detector.ClosedLoop();  // signed: see ClosedLoopDetector
   fit.outflow_level_correlation = detector.OutflowLevelCorrelation();
   std::ostringstream why;
   const bool fit_p22 = fit.outflow_moves && !fit.outflow_follows_level;

@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/integrator_delay/closed_loop_detector.h"
 #include "core/numerics/least_squares.h"
 #include "core/signal/detrend.h"
 
@@ -294,7 +295,9 @@ IntegratorDelayFit FitIntegratorDelay(const Eigen::Ref<const Eigen::VectorXd>& q
       result.closed_loop_reason = "disabled";
       break;
     case ClosedLoopMode::kAuto:
-      result.closed_loop = outflow_moves && std::abs(result.outflow_level_correlation) > 0.3;
+      // Signed: a level-driven outflow rises with the level; one moved on its own lowers it.
+      result.closed_loop =
+          outflow_moves && result.outflow_level_correlation > ClosedLoopDetector::kCorrelationMin;
       result.closed_loop_reason = std::string(outflow_moves ? "outflow moves" : "outflow held") +
                                   ", outflow-level correlation " +
                                   std::to_string(result.outflow_level_correlation);

@@ -65,8 +65,9 @@ struct IntegratorDelayFit {
 /// zero DC gain, (3) the noise-free total flow simulated through it, integrated and fitted as
 /// above.  kAuto decides from the data: closed loop when the outflow moves (std above 2 % of the
 /// inflow's) and correlates with the level
-/// (|r| > 0.3, both detrended).  The instrumental variable with the integrated delayed inflow as
-/// instrument is always computed as a cross-check.
+/// (r > 0.3, both detrended: a level-driven outflow rises with the level, while one moved on
+/// its own lowers the level it drains, r < 0).  The instrumental variable with the integrated
+/// delayed inflow as instrument is always computed as a cross-check.
 /// @throws std::invalid_argument on size mismatch, non-finite data, Ts <= 0, fewer than 20
 ///         samples after k0, or an inflow that never moves.
 IntegratorDelayFit FitIntegratorDelay(const Eigen::Ref<const Eigen::VectorXd>& q_in,

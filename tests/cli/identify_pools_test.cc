@@ -174,6 +174,15 @@ TEST_P(IdentifyPoolsTwoStructures, OutflowPrbsGivesP22FromTheData) {
   ASSERT_EQ(idz.exit_code, 0) << idz.err;
   const auto z = nlohmann::json::parse(idz.out);
   EXPECT_EQ(z["p22_source"], "data") << z["p22_reason"];
+  // Strongly but negatively correlated: the outflow lowers the level it drains. The ID fit's
+  // closed-loop test is signed too, so it stays open loop (with |r| it ran the three-step method).
+  EXPECT_LT(z["outflow_level_correlation"].get<double>(), -0.3);
+  const ProgramRun id =
+      RunProgram(CanalidProgram() + " identify --model id --max-delay-s " +
+                     std::to_string(std::lround(3.0 * c.idz_delay_s)) + " --input " + csv,
+                 dir);
+  ASSERT_EQ(id.exit_code, 0) << id.err;
+  EXPECT_FALSE(nlohmann::json::parse(id.out)["closed_loop"].get<bool>()) << id.out;
   // The tolerances: A 10 %, tau 15 %, p21 and p22 25 % (measured on canal 2: A -7.3 to
   // +4.8 %, tau 0.99-1.06, p22 -1 to +12 %, p21 -11 to -26 % but -49 % on pool 1, unchecked).
   EXPECT_NEAR(z["area_m2"].get<double>(), c.idz_area_m2, 0.10 * c.idz_area_m2) << z.dump();

@@ -301,6 +301,43 @@ TEST(OnlineIdClosedLoop, AutoTakesTheBatchClosedLoopDecision) {
   EXPECT_EQ(open.OutflowLevelCorrelation(), 0.0);
 }
 
+// An outflow moved on its own (a second structure's PRBS, as in a two-structure experiment)
+// lowers the level it drains: a strong but negative outflow-level correlation, which is no closed
+// loop. The test is signed (it took |r| before, and ran the three-step method on such records).
+TEST(OnlineIdClosedLoop, AnOutflowMovedOnItsOwnIsNoClosedLoop) {
+  const int samples = 1500;
+  const std::vector<double> u = testdata::Prbs(samples, 8, 31);
+  const std::vector<double> v = testdata::Prbs(samples, 60, 53);  // slow: the level follows it
+  const auto n = static_cast<Eigen::Index>(samples);
+  Eigen::VectorXd q_in(n), q_out(n), level(n);
+  double y = 2.0;
+  testdata::TestRandom noise(43);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    q_in(k) = 2.0 + 0.2 * u[static_cast<std::size_t>(k)];
+    q_out(k) = 2.0 + 0.2 * v[static_cast<std::size_t>(k)];
+    if (k >= 7) y += 0.01 * (q_in(k - 7) - q_out(k - 1));
+    // IDZ's direct outflow term: the level at the structure drops at once when it opens.
+    level(k) = y - 0.05 * (q_out(k) - 2.0) + 0.002 * noise.Normal();
+  }
+  IntegratorDelayFitOptions fit_options;
+  fit_options.min_nk = 5;
+  fit_options.max_nk = 9;
+  const IntegratorDelayFit batch = FitIntegratorDelay(q_in, q_out, level, 60.0, fit_options);
+  ClosedLoopDetector detector;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    detector.AddInflow(q_in(k));
+    if (k >= 10) detector.AddOutflowLevel(q_out(k), level(k));
+  }
+  EXPECT_TRUE(detector.OutflowMoves());
+  // Negative here (-0.17); on canalsim's two-structure records it reaches -0.35 to -0.39, where
+  // |r| took them for closed loops (IdentifyPoolsTwoStructures checks those).
+  EXPECT_LT(detector.OutflowLevelCorrelation(), 0.0);
+  EXPECT_FALSE(detector.ClosedLoop());
+  EXPECT_NEAR(batch.outflow_level_correlation, detector.OutflowLevelCorrelation(), 1e-9);
+  EXPECT_FALSE(batch.closed_loop) << batch.closed_loop_reason;
+  EXPECT_EQ(batch.model.nk, 7);
+}
+
 // Against the batch code itself: without the wave-front term the closed-loop candidate is
 // FitIntegratorDelay's IV cross-check (instrument: the integrated delayed inflow, both detrended),
 // so Ts / b equals iv_area_m2 at the batch's delay (1e-6 relative; equal by Frisch-Waugh-Lovell,
