@@ -254,6 +254,26 @@ TEST(OnlineIdClosedLoop, NanInfAndAbsurdSamplesAreRejected) {
   EXPECT_EQ(s2.c_m, by_hand.CandidateSnapshot(nk).c_m);
 }
 
+// The batch ID fit over delays of 5-9 samples (k0 = 10) at Ts = 60 s.
+IntegratorDelayFit FitDelays5To9(const Eigen::VectorXd& q_in, const Eigen::VectorXd& q_out,
+                                 const Eigen::VectorXd& level) {
+  IntegratorDelayFitOptions options;
+  options.min_nk = 5;
+  options.max_nk = 9;
+  return FitIntegratorDelay(q_in, q_out, level, 60.0, options);
+}
+
+// The detector fed as FitDelays5To9 sees the record: every inflow, outflow and level from k0 = 10.
+ClosedLoopDetector DetectorFromK0(const Eigen::VectorXd& q_in, const Eigen::VectorXd& q_out,
+                                  const Eigen::VectorXd& level) {
+  ClosedLoopDetector detector;
+  for (Eigen::Index k = 0; k < q_in.size(); ++k) {
+    detector.AddInflow(q_in(k));
+    if (k >= 10) detector.AddOutflowLevel(q_out(k), level(k));
+  }
+  return detector;
+}
+
 // ClosedLoopDetector over k0..N-1 gives FitIntegratorDelay's outflow-level correlation (1e-9:
 // running sums against detrending by QR) and its decision; the auto bank then reports the IV bank.
 TEST(OnlineIdClosedLoop, AutoTakesTheBatchClosedLoopDecision) {
@@ -262,15 +282,8 @@ TEST(OnlineIdClosedLoop, AutoTakesTheBatchClosedLoopDecision) {
   const Eigen::VectorXd q_in = Eigen::Map<const Eigen::VectorXd>(d.q_in.data(), n);
   const Eigen::VectorXd q_out = Eigen::Map<const Eigen::VectorXd>(d.q_out.data(), n);
   const Eigen::VectorXd level = Eigen::Map<const Eigen::VectorXd>(d.level.data(), n);
-  IntegratorDelayFitOptions fit_options;
-  fit_options.min_nk = 5;
-  fit_options.max_nk = 9;
-  const IntegratorDelayFit batch = FitIntegratorDelay(q_in, q_out, level, 60.0, fit_options);
-  ClosedLoopDetector detector;
-  for (Eigen::Index k = 0; k < n; ++k) {
-    detector.AddInflow(q_in(k));
-    if (k >= 10) detector.AddOutflowLevel(q_out(k), level(k));
-  }
+  const IntegratorDelayFit batch = FitDelays5To9(q_in, q_out, level);
+  const ClosedLoopDetector detector = DetectorFromK0(q_in, q_out, level);
   EXPECT_NEAR(detector.OutflowLevelCorrelation(), batch.outflow_level_correlation, 1e-9);
   EXPECT_TRUE(batch.closed_loop);
   EXPECT_TRUE(detector.ClosedLoop());
@@ -319,15 +332,8 @@ TEST(OnlineIdClosedLoop, AnOutflowMovedOnItsOwnIsNoClosedLoop) {
     // IDZ's direct outflow term: the level at the structure drops at once when it opens.
     level(k) = y - 0.05 * (q_out(k) - 2.0) + 0.002 * noise.Normal();
   }
-  IntegratorDelayFitOptions fit_options;
-  fit_options.min_nk = 5;
-  fit_options.max_nk = 9;
-  const IntegratorDelayFit batch = FitIntegratorDelay(q_in, q_out, level, 60.0, fit_options);
-  ClosedLoopDetector detector;
-  for (Eigen::Index k = 0; k < n; ++k) {
-    detector.AddInflow(q_in(k));
-    if (k >= 10) detector.AddOutflowLevel(q_out(k), level(k));
-  }
+  const IntegratorDelayFit batch = FitDelays5To9(q_in, q_out, level);
+  const ClosedLoopDetector detector = DetectorFromK0(q_in, q_out, level);
   EXPECT_TRUE(detector.OutflowMoves());
   // Negative here (-0.17); on canalsim's two-structure records it reaches -0.35 to -0.39, where
   // |r| took them for closed loops (IdentifyPoolsTwoStructures checks those).

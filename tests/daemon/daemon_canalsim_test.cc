@@ -21,7 +21,6 @@
 #include <set>
 #include <sstream>
 #include <string>
-#include <thread>
 #include <utility>
 #include <vector>
 
@@ -895,11 +894,11 @@ TEST(DaemonCanalsim, ExceptionRepliesAndSpikesAreCountedNotFatal) {
   canal.master.Write(kSpikeAmplitude, 1000);
   canal.master.Write(kSpikePeriod, 2);
   canal.master.Write(kSpikeRecords, 1 << 1);
-  // Spikes on until the daemon's LCM log holds an out-of-range level: read back every 0.2 s, for
-  // at most 20 s (a fixed window failed when other builds loaded both cores).
-  for (int i = 0; i < 100 && CountOutOfRangeLevels(ReadLcmLog(dir / "run.lcmlog")) == 0; ++i) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(200));
-  }
+  // Spikes on until the daemon's LCM log holds an out-of-range level, rechecked every 0.2 s for at
+  // most 20 s (a fixed window failed when other builds loaded both cores).
+  EXPECT_TRUE(daemon->WaitUntil(
+      [&] { return CountOutOfRangeLevels(ReadLcmLog(dir / "run.lcmlog")) > 0; }, 20000, 200))
+      << "no out-of-range level in the log within 20 s";
   canal.master.Write(kSpikeRecords, 0);
   EXPECT_TRUE(daemon->Running()) << daemon->output();
   EXPECT_NEAR(ReadSetpoint(canal.master), nominal, 1e-4);
