@@ -312,10 +312,10 @@ void ValidateReachModels(const DaemonConfig& c, const ReachConfig& r, const Chan
   }
   const bool lpv = std::find(r.online_models.begin(), r.online_models.end(),
                              OnlineModel::kLpvArx) != r.online_models.end();
-  const bool idz = std::find(r.batch_models.begin(), r.batch_models.end(), BatchModel::kIdz) !=
-                       r.batch_models.end() ||
-                   std::find(r.online_models.begin(), r.online_models.end(), OnlineModel::kIdz) !=
-                       r.online_models.end();
+  const bool batch_idz = std::find(r.batch_models.begin(), r.batch_models.end(),
+                                   BatchModel::kIdz) != r.batch_models.end();
+  const bool idz = batch_idz || std::find(r.online_models.begin(), r.online_models.end(),
+                                          OnlineModel::kIdz) != r.online_models.end();
   if (r.idz_p22_s_per_m2) {
     if (!idz) {
       out.Add(at + "idz_p22_s_per_m2",
@@ -326,6 +326,8 @@ void ValidateReachModels(const DaemonConfig& c, const ReachConfig& r, const Chan
   if (r.idz_p22_std_s_per_m2) {
     if (!r.idz_p22_s_per_m2) {
       out.Add(at + "idz_p22_std_s_per_m2", "has no effect without idz_p22_s_per_m2");
+    } else if (!batch_idz) {  // the online kind holds p22 and has no use for its spread
+      out.Add(at + "idz_p22_std_s_per_m2", "has no effect: batch_models has no \"idz\"");
     }
     out.Range(at + "idz_p22_std_s_per_m2", *r.idz_p22_std_s_per_m2, 0.0, 10.0);
   }

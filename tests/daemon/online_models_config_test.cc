@@ -248,6 +248,10 @@ TEST(OnlineModelsConfig, IdzBatchModelTakesItsP22Prior) {
   EXPECT_THAT(Issues("batch_models = [\"idz\"]\nidz_p22_std_s_per_m2 = 0.001\n"),
               ::testing::Contains(HasSubstr(
                   "reach[0].idz_p22_std_s_per_m2: has no effect without idz_p22_s_per_m2")));
+  EXPECT_THAT(Issues("online_models = [\"idz\"]\nidz_p22_s_per_m2 = 0.0125\n"
+                     "idz_p22_std_s_per_m2 = 0.001\n"),
+              ::testing::Contains(HasSubstr(
+                  "reach[0].idz_p22_std_s_per_m2: has no effect: batch_models has no \"idz\"")));
   EXPECT_THAT(Issues("batch_models = [\"idz\"]\nidz_p22_s_per_m2 = -1.0\n"),
               ::testing::Contains(HasSubstr("reach[0].idz_p22_s_per_m2: -1 is out of range")));
   const config::DaemonConfig c =
