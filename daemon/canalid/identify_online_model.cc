@@ -41,6 +41,9 @@ int SingleInteger(const std::string& option, const std::string& text) {
 // online id bank), the p22 prior held.
 core::OnlineModelSettings IdzSettings(const IdentifyOptions& o, const drivers::CsvTable& table,
                                       core::OnlineModelSettings s, OnlineColumns& c) {
+  if (o.p22_std >= 0.0) {
+    throw InputError("--p22-std applies to the batch idz fit (--online holds p22 at the prior)");
+  }
   c.q_in = RequireMovingColumn(table, o.qin);
   c.q_out = RequireColumn(table, o.qout);
   c.level = RequireColumn(table, o.level);

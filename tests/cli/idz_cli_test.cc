@@ -83,6 +83,11 @@ TEST(IdzCli, OnlineIdzWithThePriorGetsTheArea) {
   const auto plain = nlohmann::json::parse(without.out);
   EXPECT_DOUBLE_EQ(plain["p22_s_per_m2"].get<double>(), 0.0);
   EXPECT_GT(plain["area_m2"].get<double>() / kArea, 1.15);  // measured +21 %
+  const ProgramRun spread =
+      Identify("asce2-pool2-prbs-fixed-gate", "--online --p22 0.0133 --p22-std 0.002");
+  EXPECT_EQ(spread.exit_code, 2);
+  EXPECT_NE(spread.err.find("--p22-std applies to the batch idz fit"), std::string::npos)
+      << spread.err;
 }
 
 // `canalid simulate` runs the model JSON's level equation: on the record it was fitted on (level
