@@ -1,5 +1,7 @@
 #include "daemon/canalid/child_process.h"
 
+#include "core/system/errno_text.h"
+
 #include <fcntl.h>
 #include <spawn.h>
 #include <sys/wait.h>
@@ -60,11 +62,11 @@ ChildResult RunChild(const std::string& program, const std::vector<std::string>&
   pid_t pid = 0;
   const int rc = posix_spawnp(&pid, file.c_str(), actions.get(), nullptr, argv.data(), environ);
   if (rc != 0) {
-    throw ToolError("cannot run '" + program + "': " + std::strerror(rc));
+    throw ToolError("cannot run '" + program + "': " + core::ErrnoText(rc));
   }
   int status = 0;
   while (waitpid(pid, &status, 0) < 0) {
-    if (errno != EINTR) throw ToolError("waiting for '" + program + "': " + std::strerror(errno));
+    if (errno != EINTR) throw ToolError("waiting for '" + program + "': " + core::ErrnoText(errno));
   }
   ChildResult result;
   result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);

@@ -8,6 +8,7 @@
 #include <limits>
 #include <utility>
 
+#include "core/system/errno_text.h"
 #include "daemon/canalid/input_error.h"
 
 namespace canalid::cli {
@@ -50,7 +51,7 @@ LogExporter::~LogExporter() {
 std::FILE* LogExporter::Open(const std::string& name) {
   const std::string path = (std::filesystem::path(dir_) / name).string();
   std::FILE* f = std::fopen(path.c_str(), "w");
-  if (f == nullptr) throw InputError(path + ": cannot create: " + std::strerror(errno));
+  if (f == nullptr) throw InputError(path + ": cannot create: " + core::ErrnoText(errno));
   files_.push_back(f);
   rows_[name] = 0;
   return f;

@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <cstring>
 
+#include "core/system/errno_text.h"
 #include "daemon/canalidd/clock.h"
 #include "daemon/canalidd/log.h"
 
@@ -40,7 +41,7 @@ void BusWatch::Watch() {
   const int fd = lcm_bus_->fileno();
   const int copy = fd < 0 ? -1 : ::dup(fd);
   if (copy < 0) {
-    OnLost(fd < 0 ? "no connection (fileno -1)" : std::string("dup: ") + std::strerror(errno));
+    OnLost(fd < 0 ? "no connection (fileno -1)" : std::string("dup: ") + core::ErrnoText(errno));
     return;
   }
   fd_ = std::make_unique<boost::asio::posix::stream_descriptor>(io_, copy);

@@ -1,5 +1,7 @@
 #include "daemon/canalidd/key_file.h"
 
+#include "core/system/errno_text.h"
+
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -40,13 +42,13 @@ struct FileBuffer {
 drivers::SecretBytes ReadKeyFile(const std::filesystem::path& path) {
   // Open first and check the opened file (fstat), so the checked file is the one read.
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NOCTTY | O_NONBLOCK);
-  if (fd < 0) Fail(path, std::string("cannot open: ") + std::strerror(errno));
+  if (fd < 0) Fail(path, std::string("cannot open: ") + core::ErrnoText(errno));
   struct FdCloser {
     int fd;
     ~FdCloser() { ::close(fd); }
   } closer{fd};
   struct stat st {};
-  if (::fstat(fd, &st) != 0) Fail(path, std::string("cannot stat: ") + std::strerror(errno));
+  if (::fstat(fd, &st) != 0) Fail(path, std::string("cannot stat: ") + core::ErrnoText(errno));
   if (!S_ISREG(st.st_mode)) Fail(path, "is not a regular file");
   const unsigned mode = st.st_mode & 07777;
   if ((mode & (S_IRGRP | S_IWGRP | S_IROTH | S_IWOTH)) != 0) {
@@ -62,7 +64,7 @@ drivers::SecretBytes ReadKeyFile(const std::filesystem::path& path) {
     const ssize_t n = ::read(fd, file.bytes.data() + file.size, file.bytes.size() - file.size);
     if (n < 0) {
       if (errno == EINTR) continue;
-      Fail(path, std::string("cannot read: ") + std::strerror(errno));
+      Fail(path, std::string("cannot read: ") + core::ErrnoText(errno));
     }
     if (n == 0) break;
     file.size += static_cast<std::size_t>(n);

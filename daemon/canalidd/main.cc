@@ -7,6 +7,7 @@
 #include <string>
 
 #include "canalid/version.h"
+#include "core/system/guarded_main.h"
 #include "daemon/canalidd/daemon.h"
 #include "daemon/canalidd/log.h"
 #include "daemon/canalidd/plan_builder.h"
@@ -43,9 +44,7 @@ bool SameFile(const std::string& a, const std::string& b) {
   return !error && same;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int Main(int argc, char** argv) {
   CLI::App app{
       "canalidd: identification daemon for canal pools, beside a PLC (Modbus) on an LCM bus"};
   std::string config_path;
@@ -149,3 +148,7 @@ int main(int argc, char** argv) {
     return kExitSoftware;
   }
 }
+
+}  // namespace
+
+int main(int argc, char** argv) { return canalid::core::GuardedMain("canalidd", Main, argc, argv); }

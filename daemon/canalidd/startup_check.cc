@@ -8,6 +8,7 @@
 #include <cstring>
 #include <string>
 
+#include "core/system/errno_text.h"
 #include "daemon/canalidd/key_file.h"
 
 namespace canalid::daemon {
@@ -29,14 +30,14 @@ void CheckStateDirectory(const std::string& directory, bool for_start, StartupNo
       notes.notes.push_back("note: " + message);
       return;
     }
-    throw StartupError(what + ": cannot stat: " + std::strerror(error));
+    throw StartupError(what + ": cannot stat: " + core::ErrnoText(error));
   }
   if (!S_ISDIR(st.st_mode)) throw StartupError(what + " is not a directory");
   // The daemon writes a temp file and renames it: try exactly that much (create, then remove).
   std::string probe = directory + "/.canalidd-write-check.XXXXXX";
   const int fd = ::mkstemp(probe.data());
   if (fd < 0) {
-    throw StartupError(what + " is not writable by this user (" + std::strerror(errno) +
+    throw StartupError(what + " is not writable by this user (" + core::ErrnoText(errno) +
                        "); models, experiment guards and command counters are saved there");
   }
   ::close(fd);

@@ -12,6 +12,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/system/errno_text.h"
 #include "drivers/json/model_json_read.h"
 
 namespace canalid::daemon {
@@ -34,7 +35,7 @@ bool ValidName(const std::string& name) {
 
 [[noreturn]] void SystemFail(const std::string& what, const std::filesystem::path& path) {
   throw std::runtime_error("state store: " + what + " " + path.string() + ": " +
-                           std::strerror(errno));
+                           core::ErrnoText(errno));
 }
 
 class Fd {

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "canalid/version.h"
+#include "core/system/guarded_main.h"
 #include "daemon/canalidd/key_file.h"
 #include "drivers/auth/command_auth.h"
 #include "drivers/lcm/bus.h"
@@ -33,9 +34,7 @@ std::string DefaultSender() {
   return std::string("operator@") + host;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int Main(int argc, char** argv) {
   using canalid::drivers::CommandKind;
   CLI::App app{"Sign a canalid operator command with the shared key and publish it on LCM."};
   std::string key_path, url, channel = "CANALID_COMMAND", reach, argument, action;
@@ -95,4 +94,10 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "canalid-command: %s\n", e.what());
     return 1;
   }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return canalid::core::GuardedMain("canalid-command", Main, argc, argv);
 }

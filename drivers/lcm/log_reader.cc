@@ -1,5 +1,7 @@
 #include "drivers/lcm/log_reader.h"
 
+#include "core/system/errno_text.h"
+
 #include <array>
 #include <cerrno>
 #include <cstring>
@@ -42,7 +44,7 @@ const char* LogEndName(LogEnd end) {
 
 LogReader::LogReader(const std::string& path) : path_(path) {
   file_ = std::fopen(path.c_str(), "rb");
-  if (file_ == nullptr) throw std::runtime_error(path + ": cannot open: " + std::strerror(errno));
+  if (file_ == nullptr) throw std::runtime_error(path + ": cannot open: " + core::ErrnoText(errno));
   // A large stdio buffer: events are small and read in a few fread calls each.
   std::setvbuf(file_, nullptr, _IOFBF, 1 << 20);
   if (std::fseek(file_, 0, SEEK_END) == 0) {
@@ -111,7 +113,7 @@ bool LogReader::Next(LogEvent* event) {
   if (std::fread(channel_.data(), 1, channel_.size(), file_) != channel_.size() ||
       std::fread(data_.data(), 1, data_.size(), file_) != data_.size()) {
     return Fail(LogEnd::kTruncated, at() + "event " + std::to_string(event_number) +
-                                        ": read failed: " + std::strerror(errno));
+                                        ": read failed: " + core::ErrnoText(errno));
   }
   position_ = start + header.size() + body;
   event->event_number = event_number;

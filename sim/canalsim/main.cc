@@ -10,6 +10,7 @@
 #include <string>
 
 #include "canalid/version.h"
+#include "core/system/guarded_main.h"
 #include "sim/canal_config.h"
 #include "sim/canalsim/plant_command.h"
 #include "sim/canalsim/serve_command.h"
@@ -85,9 +86,7 @@ int Run(const std::string& canal_path, const std::string& scenario_path,
   return 0;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int Main(int argc, char** argv) {
   CLI::App app{"canalsim: Saint-Venant canal simulator (Preissmann scheme). See docs/canalsim.md."};
   app.require_subcommand(1);
   app.set_version_flag("--version", "canalsim " + std::string(canalid::kVersion));
@@ -119,3 +118,7 @@ int main(int argc, char** argv) {
   if (plant.selected()) return plant.Run();
   return Run(canal_path, scenario_path, out_path, seed, check_only, quiet);
 }
+
+}  // namespace
+
+int main(int argc, char** argv) { return canalid::core::GuardedMain("canalsim", Main, argc, argv); }

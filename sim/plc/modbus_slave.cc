@@ -12,6 +12,7 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "core/system/errno_text.h"
 #include "sim/plc/register_map.h"
 
 namespace canalid::sim::plc {
@@ -180,8 +181,8 @@ bool ModbusSlave::Answer(Client* client) {
       return;
     }
     for (int i = 0; i < n; ++i) {
-      holding[static_cast<std::size_t>(address + i)] =
-          static_cast<std::uint16_t>(Word(pdu + values + 2 * i));
+      holding[static_cast<std::size_t>(address) + static_cast<std::size_t>(i)] =
+          static_cast<std::uint16_t>(Word(pdu + values + 2 * std::ptrdiff_t{i}));
     }
     first = address;
     count = n;
@@ -267,7 +268,7 @@ void ModbusSlave::Run(const volatile std::sig_atomic_t* stop, const sigset_t* wa
     const int n = pselect(max_fd + 1, &readable, nullptr, nullptr, &timeout, wait_mask);
     if (n < 0) {
       if (errno == EINTR) continue;
-      throw std::runtime_error(std::string("select failed: ") + std::strerror(errno));
+      throw std::runtime_error(std::string("select failed: ") + core::ErrnoText(errno));
     }
     // Iterate by index: Accept appends to clients_.
     const std::size_t existing = clients_.size();

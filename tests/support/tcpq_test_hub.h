@@ -18,6 +18,8 @@
 #include <string>
 #include <vector>
 
+#include "core/system/errno_text.h"
+
 namespace canalid::testing {
 
 inline constexpr uint32_t kMagicServer = 0x287617fa;
@@ -69,7 +71,7 @@ class TcpqTestHub {
     if (listen_fd_ < 0 || ::bind(listen_fd_, reinterpret_cast<sockaddr*>(&address), length) != 0 ||
         ::listen(listen_fd_, 4) != 0 ||
         ::getsockname(listen_fd_, reinterpret_cast<sockaddr*>(&address), &length) != 0) {
-      ADD_FAILURE() << "test hub: " << std::strerror(errno);
+      ADD_FAILURE() << "test hub: " << canalid::core::ErrnoText(errno);
       return;
     }
     port_ = ntohs(address.sin_port);
