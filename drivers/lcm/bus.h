@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include <canalid/lcm_shapes.hpp>
+
 namespace canalid::drivers {
 
 /// Receives one raw message: the channel it came on and its bytes (valid during the call only).
@@ -65,9 +67,16 @@ bool PublishMessage(Bus& bus, const std::string& channel, const Message& message
 /// decoders throw on some malformed lengths (std::length_error for a string field of length 0 or
 /// less, or a negative array count; std::bad_alloc for a huge array count): those bytes are
 /// malformed too, so they return false here instead of escaping as exceptions.
+/// Before decoding, the bytes are walked against the type's encoding (lcm_shapes.hpp, generated
+/// from the .lcm files): lcm-gen sizes an array from its count field before it reads the bytes,
+/// so a message of 100 bytes claiming 2^31 elements would allocate tens of GB.  After the walk no
+/// string or array is larger than the message.
 template <class Message>
 bool DecodeMessage(std::span<const uint8_t> data, Message& message) noexcept {
   if (data.size() > static_cast<std::size_t>(INT32_MAX)) return false;
+  if (!canalid::lcm_shapes::Fits(static_cast<const Message*>(nullptr), data.data(), data.size())) {
+    return false;
+  }
   const int size = static_cast<int>(data.size());
   try {
     return message.decode(data.data(), 0, size) == size;
