@@ -826,6 +826,53 @@ TEST(DaemonCanalsim, KilledMidPrbsRestartRestoresThePersistedNominalFirst) {
   EXPECT_EQ(replay.err.find("cannot"), std::string::npos) << replay.err;
 }
 
+// The experiment guard cannot be persisted (a directory sits where the store writes the guard's
+// temporary file: open() refuses it, also to root): the experiment aborts before any excitation
+// write with the reason, the gate never leaves its nominal, and the daemon carries on polling and
+// stops cleanly.
+TEST(DaemonCanalsim, GuardNotPersistedAbortsBeforeAnyExcitationWrite) {
+  const fs::path dir = TestDir();
+  fs::create_directories(dir / "state" / ".pool2.experiment.json.tmp" / "in-the-way");
+  ServeProcess serve({"--canal", SourcePath("config/sim/asce-canal2.toml"), "--plc",
+                      SourcePath("config/sim/plc/asce2.toml"), "--time-scale", "600"},
+                     dir / "canalsim.err");
+  Master master(serve.port(), 2.0);
+  const double nominal = ReadSetpoint(master);
+  const std::string config =
+      WriteConfig(dir / "canalidd.toml", BaseKeys(serve.port(), dir), ExplicitExperiment(0.05, 7));
+  auto daemon = StartDaemon(dir, config);
+  const std::string refused =
+      daemon->WaitForLine("reach pool2: experiment guard not persisted", 30000);
+  ASSERT_FALSE(refused.empty()) << daemon->output();
+  EXPECT_NE(refused.find("no excitation"), std::string::npos) << refused;
+  const std::string aborted = daemon->WaitForLine(
+      "reach pool2: experiment aborted (experiment guard not persisted)", 20000);
+  ASSERT_FALSE(aborted.empty()) << daemon->output();
+  // The gate, read by the test's own master for 2 wall s after the abort (bounded: 40 reads, 50 ms
+  // apart), stays at its nominal.
+  bool moved = false;
+  daemon->WaitUntil(
+      [&] {
+        moved = moved || std::abs(ReadSetpoint(master) - nominal) > 1e-6;
+        return moved;
+      },
+      2000, 50);
+  EXPECT_FALSE(moved) << "the gate left its nominal " << nominal;
+  EXPECT_EQ(daemon->Stop(SIGTERM), 0) << daemon->output();
+  EXPECT_EQ(daemon->output().find("experiment guard persisted"), std::string::npos)
+      << daemon->output();
+  EXPECT_EQ(daemon->output().find("experiment exciting"), std::string::npos) << daemon->output();
+  // Every gate value the daemon polled and published is the nominal; the daemon polled on after
+  // the abort (the abort came at the experiment's first sample, 0.1 wall s after the start).
+  const LcmRecord record = ReadLcmLog(dir / "run.lcmlog");
+  const std::vector<double> gate = ChannelValues(record.samples, "gate1_setpoint");
+  ASSERT_GT(gate.size(), 20U);
+  for (std::size_t k = 0; k < gate.size(); ++k) {
+    ASSERT_NEAR(gate[k], nominal, 1e-6) << "sample " << k;
+  }
+  EXPECT_NEAR(ReadSetpoint(master), nominal, 1e-6);
+}
+
 // canalsim serve on `port` (0: a free one) as a plain child, so it can be restarted on the same
 // port; returns the port from its ready line (0 when it did not come).
 int StartServe(std::unique_ptr<ChildProcess>& serve, const fs::path& dir, int port,
