@@ -1,8 +1,14 @@
 #!/usr/bin/env bash
 # canalidd under a full ASCE canal 2 load: all 8 pool records of canalsim's PLC polled at 10 Hz
 # (8 float input channels each = 64 channels, plus one writable gate setpoint per reach and the
-# heartbeat), 8 reaches with the online ID bank on each, against canalsim serve at --time-scale 10
+# heartbeat), 8 reaches each running the online models ONLINE_MODELS (default "id", "frac-foptd":
+# the ID bank and the fractional alpha bank), against canalsim serve at --time-scale 10
 # (poll_period_s 0.1 wall s = 1 plant s per sample).  No experiment runs.
+#
+# The peer, in the same run and window: mbpoll, a bare Modbus poller (no decoding into channels,
+# no estimators, no bus), reading the same registers at the same 10 Hz: the 64 input floats as
+# two requests of 32 and the 8 gate setpoints, three mbpoll processes whose CPU is summed.  The
+# ratio says what identification and publishing cost over polling alone.
 #
 # Prints:
 #   - start to READY: wall time from exec of canalidd to its "answers: ready" log line, 5 runs
@@ -12,15 +18,16 @@
 #     measurement starts once all eight are updating): canalidd's CPU seconds (user + system,
 #     /proc/<pid>/stat), its peak RSS (VmHWM, /proc/<pid>/status), the number of polls, the mean
 #     libmodbus round trip per poll (sample_t.round_trip_s from the LCM log the daemon writes) and
-#     the CPU time per poll cycle.
+#     the CPU time per poll cycle; the peer's CPU over the same window and the ratio.
 #
-# Usage: bench/daemon_load.sh [build-dir]        (DURATION_S=60 RUNS=5 by default)
+# Usage: bench/daemon_load.sh [build-dir]  (DURATION_S=60 RUNS=5 ONLINE_MODELS='"id", "frac-foptd"')
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 build=${1:-$here/build}
 duration_s=${DURATION_S:-60}
 warmup_s=${WARMUP_S:-205}
 runs=${RUNS:-5}
+online_models=${ONLINE_MODELS:-'"id", "frac-foptd"'}
 work=$(mktemp -d)
 trap 'kill $(jobs -p) 2>/dev/null || true' EXIT
 
@@ -138,7 +145,7 @@ nominal_inflow_m3s = ${flows[$r]}
 expected_delay_s = $delay
 level_min_m = 0.1
 level_max_m = 3.0
-online_models = ["id"]
+online_models = [$online_models]
 max_delay_s = $max_delay
 closed_loop = "off"
 EOF
@@ -172,12 +179,25 @@ pid=$!
 while ! grep -q 'answers: ready' "$work/load.log"; do sleep 0.01; done
 clk=$(getconf CLK_TCK)
 cpu_ready=$(awk '{ print $14 + $15 }' "/proc/$pid/stat")
+# The peer, polling through the warm-up so that it is steady when the window starts.
+peers=()
+for args in "-t 3:float -r 300 -c 32" "-t 3:float -r 364 -c 32" "-t 4:float -r 300 -c 8"; do
+  # shellcheck disable=SC2086  # the arguments are split on purpose
+  mbpoll -m tcp -a 1 -p "$port" -0 -B -l 100 -o 0.05 $args 127.0.0.1 >/dev/null 2>&1 &
+  peers+=($!)
+done
+peer_cpu() { for p in "${peers[@]}"; do awk '{ print $14 + $15 }' "/proc/$p/stat"; done |
+  awk '{ s += $1 } END { print s }'; }
 sleep "$warmup_s"
 cpu0=$(awk '{ print $14 + $15 }' "/proc/$pid/stat")
+peer0=$(peer_cpu)
 echo "canalidd CPU over the warm-up ($warmup_s s): $(awk -v a="$cpu_ready" -v b="$cpu0" \
   -v c="$clk" 'BEGIN { printf "%.2f", (b - a) / c }') s"
 sleep "$duration_s"
 cpu1=$(awk '{ print $14 + $15 }' "/proc/$pid/stat")
+peer1=$(peer_cpu)
+kill -TERM "${peers[@]}"
+wait "${peers[@]}" 2>/dev/null || true
 hwm=$(awk '/VmHWM/ { print $2 }' "/proc/$pid/status")
 kill -TERM "$pid"
 wait "$pid" || true
@@ -186,9 +206,9 @@ wait "$sim_pid" || true
 
 # sample_t from the LCM log (LCM log format and the sample_t encoding: big-endian, fingerprint,
 # utime, sequence, source, reach, status, exception_code, round_trip_s).
-python3 - "$lcmlog" "$cpu0" "$cpu1" "$clk" "$hwm" "$duration_s" <<'EOF'
+python3 - "$lcmlog" "$cpu0" "$cpu1" "$clk" "$hwm" "$duration_s" "$peer0" "$peer1" <<'EOF'
 import struct, sys
-path, cpu0, cpu1, clk, hwm, duration = sys.argv[1:]
+path, cpu0, cpu1, clk, hwm, duration, peer0, peer1 = sys.argv[1:]
 data = open(path, 'rb').read()
 at, trips, utimes = 0, [], []
 while at + 28 <= len(data):
@@ -217,5 +237,9 @@ print(f'round trip per poll (s): mean {sum(trips) / polls:.6f}, median {trips[po
 print(f'canalidd CPU over {duration} s: {cpu_s:.2f} s ({100 * cpu_s / float(duration):.1f} % of '
       f'one core); per poll cycle {1e3 * cpu_s / (float(duration) * rate):.3f} ms')
 print(f'canalidd peak RSS (VmHWM): {int(hwm) / 1024:.1f} MiB')
+peer_s = (float(peer1) - float(peer0)) / float(clk)
+print(f'peer (3 x mbpoll, same registers at 10 Hz) CPU over {duration} s: {peer_s:.2f} s; '
+      f'canalidd / peer: {cpu_s / peer_s:.2f}' if peer_s > 0 else
+      f'peer CPU over {duration} s: {peer_s:.2f} s (below the clock tick)')
 EOF
 echo "files: $work"
