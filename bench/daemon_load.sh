@@ -7,7 +7,8 @@
 #
 # The peer, in the same run and window: mbpoll, a bare Modbus poller (no decoding into channels,
 # no estimators, no bus), reading the same registers at the same 10 Hz: the 64 input floats as
-# two requests of 32 and the 8 gate setpoints, three mbpoll processes whose CPU is summed.  The
+# two requests of 32, and the 8 gate setpoints as one request of 16 holding floats (300-331: the
+# setpoints and the fields between them), three mbpoll processes whose CPU is summed.  The
 # ratio says what identification and publishing cost over polling alone.
 #
 # Prints:
@@ -181,13 +182,19 @@ clk=$(getconf CLK_TCK)
 cpu_ready=$(awk '{ print $14 + $15 }' "/proc/$pid/stat")
 # The peer, polling through the warm-up so that it is steady when the window starts.
 peers=()
-for args in "-t 3:float -r 300 -c 32" "-t 3:float -r 364 -c 32" "-t 4:float -r 300 -c 8"; do
+command -v mbpoll >/dev/null || { echo "daemon_load: mbpoll is missing (scripts/setup installs it)"; exit 1; }
+# The gate setpoint of record r is holding float 300 + 4 r: 16 floats from 300 cover all 8.
+for args in "-t 3:float -r 300 -c 32" "-t 3:float -r 364 -c 32" "-t 4:float -r 300 -c 16"; do
   # shellcheck disable=SC2086  # the arguments are split on purpose
   mbpoll -m tcp -a 1 -p "$port" -0 -B -l 100 -o 0.05 $args 127.0.0.1 >/dev/null 2>&1 &
   peers+=($!)
 done
-peer_cpu() { for p in "${peers[@]}"; do awk '{ print $14 + $15 }' "/proc/$p/stat"; done |
-  awk '{ s += $1 } END { print s }'; }
+peer_cpu() {
+  for p in "${peers[@]}"; do
+    [ -r "/proc/$p/stat" ] || { echo "daemon_load: mbpoll (pid $p) stopped" >&2; exit 1; }
+    awk '{ print $14 + $15 }' "/proc/$p/stat"
+  done | awk '{ s += $1 } END { print s }'
+}
 sleep "$warmup_s"
 cpu0=$(awk '{ print $14 + $15 }' "/proc/$pid/stat")
 peer0=$(peer_cpu)
