@@ -40,9 +40,10 @@ void FractionalFoptdPlant::Advance(const Eigen::Ref<const Eigen::VectorXd>& inpu
 IntegratorDelayLevelPlant::IntegratorDelayLevelPlant(const core::IntegratorDelayModel& model,
                                                      double p21_s_per_m2, double offset_m,
                                                      double drift_m_per_sample, int fit_from_sample,
-                                                     double initial_inflow_m3s)
+                                                     double initial_inflow_m3s, double p22_s_per_m2)
     : model_(model),
       p21_(p21_s_per_m2),
+      p22_(p22_s_per_m2),
       offset_m_(offset_m),
       drift_m_per_sample_(drift_m_per_sample),
       k0_(fit_from_sample),
@@ -72,7 +73,7 @@ double IntegratorDelayLevelPlant::Output(const Eigen::Ref<const Eigen::VectorXd>
   const double delayed = DelayedInflow(inputs(0));
   const double integrated =
       sample_ >= k0_ ? integrated_m3s_ + delayed - previous_outflow_m3s_ : 0.0;
-  return model_.b * integrated + p21_ * delayed + offset_m_ +
+  return model_.b * integrated + p21_ * delayed - p22_ * inputs(1) + offset_m_ +
          drift_m_per_sample_ * static_cast<double>(sample_ - k0_);
 }
 

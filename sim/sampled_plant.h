@@ -49,9 +49,10 @@ class FractionalFoptdPlant final : public SampledPlant {
 };
 
 /// The integrator-delay level equation of `canalid identify --model id`
-/// (core/integrator_delay/integrator_delay_model.h):
+/// (core/integrator_delay/integrator_delay_model.h), and with p22 the IDZ one of `--model idz`
+/// (core::IdzLevel):
 ///   Q(k) = Q(k-1) + q_in(k - nk) - q_out(k - 1),  Q(k0 - 1) = 0,
-///   y(k) = b Q(k) + p21 q_in(k - nk) + c + d (k - k0),
+///   y(k) = b Q(k) + p21 q_in(k - nk) - p22 q_out(k) + c + d (k - k0),
 /// with inputs (q_in, q_out) in m^3/s and y in m.  The plant's sample 0 is the model's sample 0;
 /// inflows before it are `initial_inflow_m3s` (at rest).  Outputs before k0 have Q = 0.
 class IntegratorDelayLevelPlant final : public SampledPlant {
@@ -59,7 +60,7 @@ class IntegratorDelayLevelPlant final : public SampledPlant {
   /// @throws std::invalid_argument unless nk >= 0, Ts > 0, b finite, k0 >= 0.
   IntegratorDelayLevelPlant(const core::IntegratorDelayModel& model, double p21_s_per_m2,
                             double offset_m, double drift_m_per_sample, int fit_from_sample,
-                            double initial_inflow_m3s);
+                            double initial_inflow_m3s, double p22_s_per_m2 = 0.0);
   double sample_time_s() const override { return model_.sample_time_s; }
   int input_count() const override { return 2; }
   double Output(const Eigen::Ref<const Eigen::VectorXd>& inputs) const override;
@@ -68,7 +69,7 @@ class IntegratorDelayLevelPlant final : public SampledPlant {
  private:
   double DelayedInflow(double inflow_now) const;
   core::IntegratorDelayModel model_;
-  double p21_, offset_m_, drift_m_per_sample_;
+  double p21_, p22_, offset_m_, drift_m_per_sample_;
   int k0_;
   Eigen::VectorXd inflow_history_;  // ring of the last nk inflows (q_in(k - nk) .. q_in(k - 1))
   int head_ = 0;                    // index of q_in(k - nk)

@@ -93,6 +93,14 @@ std::unique_ptr<SampledPlant> PlantFromModelJson(
                                                        r.drift_m_per_s * r.model.sample_time_s,
                                                        r.fit_from_sample, initial_inputs(0));
   }
+  if (kind == "idz") {
+    const drivers::IdzModelRecord r = drivers::IdzModelFromJson(json, source);
+    if (r.sample_time_s > 0.0) RequireSampleTime(r.sample_time_s, sample_time_s, source);
+    const core::IntegratorDelayModel model{r.model.b, r.model.nk, sample_time_s};
+    return std::make_unique<IntegratorDelayLevelPlant>(
+        model, r.model.p21_s_per_m2, r.model.offset_m, r.drift_m_per_s * sample_time_s,
+        r.fit_from_sample, initial_inputs(0), r.model.p22_s_per_m2);
+  }
   if (kind == "arx") {
     const core::ArxModel arx = drivers::ArxModelFromJson(json, source);
     if (json.contains("sample_time_s") && json.at("sample_time_s").is_number()) {

@@ -9,7 +9,8 @@
 namespace canalid::sim {
 
 /// The kinds PlantFromModelJson builds, for messages and --help.
-inline constexpr const char* kModelPlantKinds = "id, arx, foptd, soptd, frac-foptd, frac-ss, lpv";
+inline constexpr const char* kModelPlantKinds =
+    "id, idz, arx, foptd, soptd, frac-foptd, frac-ss, lpv";
 
 /// The plant of a `canalid identify` model JSON (read with drivers/json/model_json_read.h), with
 /// the conventions of `canalid simulate`, so the two give the same output on the same input:

@@ -34,8 +34,8 @@ std::vector<std::string> InputColumns(const nlohmann::json& model, const std::st
   const std::string kind = drivers::ModelKind(model, source);
   std::vector<std::string> names = drivers::ModelInputs(model, source);
   if (names.empty()) {
-    names =
-        kind == "id" ? std::vector<std::string>{"q_in", "q_out"} : std::vector<std::string>{"u"};
+    names = kind == "id" || kind == "idz" ? std::vector<std::string>{"q_in", "q_out"}
+                                          : std::vector<std::string>{"u"};
   }
   if (kind == "lpv") {
     names.resize(1);

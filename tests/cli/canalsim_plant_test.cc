@@ -62,7 +62,7 @@ class CanalsimPlant : public ::testing::Test {
 TEST_F(CanalsimPlant, HelpListsEveryKind) {
   const ProgramRun run = RunProgram(CanalsimProgram() + " plant --help", dir_);
   EXPECT_EQ(run.exit_code, 0);
-  EXPECT_NE(run.out.find("id, arx, foptd, soptd, frac-foptd, frac-ss, lpv"), std::string::npos)
+  EXPECT_NE(run.out.find("id, idz, arx, foptd, soptd, frac-foptd, frac-ss, lpv"), std::string::npos)
       << run.out;
 }
 
@@ -78,6 +78,16 @@ TEST_F(CanalsimPlant, SoptdIdAndLpvEqualCanalidSimulate) {
       CanalidProgram() + " identify --model id --max-delay-s 3600 --input " + prbs, dir_);
   ASSERT_EQ(id.exit_code, 0) << id.err;
   ExpectEqualToSimulate(nlohmann::json::parse(id.out), prbs);
+  // idz: with p22 from the geometry's prior (pool 2 ends at a fixed gate), so the outflow's
+  // direct term is in the output.
+  const ProgramRun idz = RunProgram(
+      CanalidProgram() + " identify --model idz --max-delay-s 3600 --canal " + CANALID_SOURCE_DIR +
+          "/config/sim/asce-canal2.toml" + " --pool 2 --input " + prbs,
+      dir_);
+  ASSERT_EQ(idz.exit_code, 0) << idz.err;
+  const nlohmann::json idz_model = nlohmann::json::parse(idz.out);
+  ASSERT_GT(idz_model.value("p22_s_per_m2", 0.0), 0.0) << idz.out;
+  ExpectEqualToSimulate(idz_model, prbs);
   // lpv: input q_in, scheduled by the downstream level (its own delay law in theta).
   const nlohmann::json lpv = {
       {"model", "lpv"},
