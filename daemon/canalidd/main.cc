@@ -18,7 +18,6 @@
 namespace {
 
 constexpr int kExitConfig = 78;  // EX_CONFIG
-constexpr int kExitSoftware = 70;
 
 // Loads, validates and plans; prints every problem and returns nothing when the file is bad.
 std::optional<canalid::daemon::DaemonPlan> LoadPlan(const std::string& path,
@@ -145,7 +144,7 @@ int Main(int argc, char** argv) {
     return kExitConfig;
   } catch (const std::exception& e) {
     canalid::daemon::LogError(std::string("fatal: ") + e.what());
-    return kExitSoftware;
+    return canalid::core::kExitInternalError;
   }
 }
 

@@ -63,14 +63,13 @@ bool PublishMessage(Bus& bus, const std::string& channel, const Message& message
   }
 }
 
-/// Decodes `data` as one lcm-gen Message: true when the bytes are exactly one message.  lcm-gen's
-/// decoders throw on some malformed lengths (std::length_error for a string field of length 0 or
-/// less, or a negative array count; std::bad_alloc for a huge array count): those bytes are
-/// malformed too, so they return false here instead of escaping as exceptions.
+/// Decodes `data` as one lcm-gen Message: true when the bytes are exactly one message.
 /// Before decoding, the bytes are walked against the type's encoding (lcm_shapes.hpp, generated
 /// from the .lcm files): lcm-gen sizes an array from its count field before it reads the bytes,
 /// so a message of 100 bytes claiming 2^31 elements would allocate tens of GB.  After the walk no
-/// string or array is larger than the message.
+/// array has more elements than the message has bytes (a decode allocates at most a few times
+/// the message: a std::string element is 32 bytes for at least 5 encoded).  Anything lcm-gen's
+/// decoders still throw (an allocation failure) is malformed too: false, never an exception.
 template <class Message>
 bool DecodeMessage(std::span<const uint8_t> data, Message& message) noexcept {
   if (data.size() > static_cast<std::size_t>(INT32_MAX)) return false;

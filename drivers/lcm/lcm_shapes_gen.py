@@ -30,8 +30,7 @@ def fail(path, message):
 
 def parse(path):
     with open(path, encoding="utf-8") as f:
-        text = re.sub(r"//[^\n]*", "", f.read())
-    text = re.sub(r"/\*.*?\*/", "", text, flags=re.S)
+        text = re.sub(r"/\*.*?\*/|//[^\n]*", "", f.read(), flags=re.S)
     package = re.search(r"\bpackage\s+(\w+)\s*;", text)
     struct = re.search(r"\bstruct\s+(\w+)\s*\{(.*)\}", text, flags=re.S)
     if not package or not struct:
@@ -66,12 +65,12 @@ def walker(package, struct, fields):
             if ftype == "string":
                 lines.append(f"  if (!r.String()) return false;  // {name}")
             elif name in counts:
-                lines.append(f"  std::int64_t {name} = 0;")
-                lines.append(f"  if (!r.Count({COUNT_TYPES[ftype]}, &{name})) return false;")
+                lines.append(f"  std::int64_t count_{name} = 0;")
+                lines.append(f"  if (!r.Count({COUNT_TYPES[ftype]}, &count_{name})) return false;")
             else:
                 lines.append(f"  if (!r.Skip({PRIMITIVE_BYTES[ftype]})) return false;  // {name}")
             continue
-        count = size
+        count = size if size.isdigit() else f"count_{size}"
         if ftype == "string":
             lines.append(f"  if (!r.Strings({count})) return false;  // {name}")
         else:

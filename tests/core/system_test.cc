@@ -21,7 +21,8 @@ TEST(ErrnoText, GivesTheLibraryTextOfKnownAndUnknownValues) {
 }
 
 TEST(ErrnoText, UnknownValuesFromManyThreadsKeepTheirOwnText) {
-  // std::strerror writes unknown values into one static buffer; ErrnoText must not.
+  // POSIX does not make std::strerror thread-safe (glibc before 2.32 wrote unknown values into
+  // one static buffer); ErrnoText's texts stay each thread's own.  On this glibc a smoke test.
   std::vector<std::thread> threads;
   std::vector<int> wrong(8, 0);
   for (std::size_t t = 0; t < wrong.size(); ++t) {

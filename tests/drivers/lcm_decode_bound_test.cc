@@ -23,8 +23,12 @@ std::size_t g_largest_request = 0;
 
 // The replacements pair malloc with free on purpose; GCC cannot see that after inlining.
 #pragma GCC diagnostic ignored "-Wmismatched-new-delete"
+// A request over 16 MiB is recorded and refused: without the walk the decoders' huge requests
+// (8 GiB for 2^28 strings) would otherwise be served and zeroed, and could take the machine down
+// instead of failing the test.
 void* operator new(std::size_t size) {
   g_largest_request = std::max(g_largest_request, size);
+  if (size > (std::size_t{16} << 20)) throw std::bad_alloc();
   if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
   throw std::bad_alloc();
 }
@@ -171,8 +175,9 @@ TEST(LcmDecodeBound, WalkAcceptsExactlyTheEncodingOfEveryType) {
   ExpectWalkMatchesEncoding(empty, "model_snapshot_t without parameters", false);
 }
 
-// A string whose length field is 0 (lcm-gen would assign length - 1 = SIZE_MAX characters) or
-// runs past the end is refused by the walk.
+// A string whose length field is 0 (lcm-gen would assign length - 1 = SIZE_MAX characters),
+// negative, or running past the end is refused by the walk itself (lcm-gen's decoder refuses
+// them too, by throwing or by its own check: DecodeMessage returns false either way).
 TEST(LcmDecodeBound, BadStringLengthsAreRefused) {
   const config_t config = testing::MakeConfig();
   const std::vector<uint8_t> good = Encode(config);
@@ -180,6 +185,9 @@ TEST(LcmDecodeBound, BadStringLengthsAreRefused) {
   for (const uint32_t length : {0U, 0x80000000U, static_cast<uint32_t>(good.size())}) {
     std::vector<uint8_t> bytes = good;
     PutInt32(bytes, path_length_at, length);
+    EXPECT_FALSE(
+        lcm_shapes::Fits(static_cast<const config_t*>(nullptr), bytes.data(), bytes.size()))
+        << "length " << length;
     config_t decoded;
     EXPECT_FALSE(DecodeMessage(std::span<const uint8_t>(bytes), decoded)) << "length " << length;
   }
