@@ -33,7 +33,7 @@ std::vector<double> SteadyProfile(const Pool& pool, double flow_m3s, int num_cel
   std::vector<double> depth(static_cast<std::size_t>(num_cells + 1));
   depth[static_cast<std::size_t>(num_cells)] = downstream_depth_m;
   for (int j = num_cells - 1; j >= 0; --j) {
-    const double hr = depth[static_cast<std::size_t>(j + 1)];
+    const double hr = depth[static_cast<std::size_t>(j) + 1];
     const double ar = section.Area(hr);
     double gr = 0.0, gr_h = 0.0, gr_q = 0.0;
     section.Friction(hr, q, &gr, &gr_h, &gr_q);

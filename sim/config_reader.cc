@@ -103,7 +103,8 @@ std::int64_t ConfigReader::Integer(const toml::table& table, std::string_view ke
 }
 
 std::string ConfigReader::String(const toml::table& table, std::string_view key,
-                                 std::string_view where, std::optional<std::string> fallback) {
+                                 std::string_view where,
+                                 const std::optional<std::string>& fallback) {
   const toml::node* node = table.get(key);
   if (node == nullptr) {
     if (!fallback) Problem(table.source(), "missing key '" + KeyPath(where, key) + "'");
@@ -117,7 +118,7 @@ std::string ConfigReader::String(const toml::table& table, std::string_view key,
 }
 
 std::string ConfigReader::Choice(const toml::table& table, std::string_view key,
-                                 std::string_view where, std::optional<std::string> fallback,
+                                 std::string_view where, const std::optional<std::string>& fallback,
                                  std::initializer_list<std::string_view> allowed) {
   std::string value = String(table, key, where, fallback);
   if (std::find(allowed.begin(), allowed.end(), value) == allowed.end()) {

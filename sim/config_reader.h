@@ -43,10 +43,10 @@ class ConfigReader final {
   std::int64_t Integer(const toml::table& table, std::string_view key, std::string_view where,
                        std::optional<std::int64_t> fallback, std::int64_t lo, std::int64_t hi);
   std::string String(const toml::table& table, std::string_view key, std::string_view where,
-                     std::optional<std::string> fallback);
+                     const std::optional<std::string>& fallback);
   /// One of `allowed`; reports the allowed values otherwise.
   std::string Choice(const toml::table& table, std::string_view key, std::string_view where,
-                     std::optional<std::string> fallback,
+                     const std::optional<std::string>& fallback,
                      std::initializer_list<std::string_view> allowed);
   /// Unknown keys are errors (a typo must not be ignored silently).
   void CheckKeys(const toml::table& table, std::string_view where,

@@ -26,13 +26,13 @@ constexpr double kDiffStep = 1e-7;
 SaintVenantCanal::SaintVenantCanal(const Canal& canal) : canal_(canal) {
   ValidateCanal(canal_);
   const int pools = num_pools();
-  offset_.assign(static_cast<std::size_t>(pools + 1), 0);
+  offset_.assign(static_cast<std::size_t>(pools) + 1, 0);
   for (int p = 0; p < pools; ++p) {
     const Pool& pool = canal_.pools[static_cast<std::size_t>(p)];
     sections_.emplace_back(pool.bottom_width_m, pool.side_slope, pool.manning_n);
     const int cells = static_cast<int>(std::ceil(pool.length_m / canal_.max_dx_m - 1e-9));
     dx_.push_back(pool.length_m / std::max(cells, 1));
-    offset_[static_cast<std::size_t>(p + 1)] =
+    offset_[static_cast<std::size_t>(p) + 1] =
         offset_[static_cast<std::size_t>(p)] + std::max(cells, 1) + 1;
     structure_setting_.push_back(pool.structure.setting);
     offtake_setting_.push_back(pool.offtake.setting);
@@ -88,16 +88,15 @@ void SaintVenantCanal::BuildSteadyState() {
       throw std::invalid_argument(e.what());
     }
     for (int i = 0; i < num_nodes(p); ++i) {
-      x_[2 * (offset_[static_cast<std::size_t>(p)] + i)] = depth[static_cast<std::size_t>(i)];
-      x_[2 * (offset_[static_cast<std::size_t>(p)] + i) + 1] =
-          pool_flow[static_cast<std::size_t>(p)];
+      x_[DepthIndex(p, i)] = depth[static_cast<std::size_t>(i)];
+      x_[DepthIndex(p, i) + 1] = pool_flow[static_cast<std::size_t>(p)];
     }
   }
   for (int p = 0; p < pools; ++p) {
     const Pool& pool = canal_.pools[static_cast<std::size_t>(p)];
     const double through =
         p + 1 < pools
-            ? pool_flow[static_cast<std::size_t>(p + 1)]
+            ? pool_flow[static_cast<std::size_t>(p) + 1]
             : pool_flow[static_cast<std::size_t>(p)] -
                   sim::OfftakeFlow(pool.offtake, offtake_setting_[static_cast<std::size_t>(p)],
                                    pool.target_depth_m);
@@ -194,7 +193,7 @@ void SaintVenantCanal::Assemble(const Eigen::VectorXd& old_x, double dt_s) {
     const double dx = dx_[static_cast<std::size_t>(p)];
     const double slope = canal_.pools[static_cast<std::size_t>(p)].bed_slope;
     for (int j = offset_[static_cast<std::size_t>(p)];
-         j + 1 < offset_[static_cast<std::size_t>(p + 1)]; ++j) {
+         j + 1 < offset_[static_cast<std::size_t>(p) + 1]; ++j) {
       const int hl = 2 * j, ql = hl + 1, hr = hl + 2, qr = hl + 3;
       const double hl1 = x_[hl], ql1 = x_[ql], hr1 = x_[hr], qr1 = x_[qr];
       const double hl0 = old_x[hl], ql0 = old_x[ql], hr0 = old_x[hr], qr0 = old_x[qr];
@@ -235,7 +234,7 @@ void SaintVenantCanal::Assemble(const Eigen::VectorXd& old_x, double dt_s) {
     }
     // Downstream end of the pool: offtake and structure.
     const Pool& pool = canal_.pools[static_cast<std::size_t>(p)];
-    const int a = offset_[static_cast<std::size_t>(p + 1)] - 1;
+    const int a = offset_[static_cast<std::size_t>(p) + 1] - 1;
     const int ha = 2 * a, qa = ha + 1;
     const double h = x_[ha];
     const double off =

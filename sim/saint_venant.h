@@ -69,16 +69,12 @@ class SaintVenantCanal final {
   double time_s() const { return time_s_; }
   int num_pools() const { return static_cast<int>(canal_.pools.size()); }
   int num_nodes(int pool) const {
-    return offset_.at(static_cast<std::size_t>(pool + 1)) -
+    return offset_.at(static_cast<std::size_t>(pool) + 1) -
            offset_.at(static_cast<std::size_t>(pool));
   }
   double dx_m(int pool) const { return dx_.at(static_cast<std::size_t>(pool)); }
-  double depth_m(int pool, int node) const {
-    return x_[2 * (offset_[static_cast<std::size_t>(pool)] + node)];
-  }
-  double flow_m3s(int pool, int node) const {
-    return x_[2 * (offset_[static_cast<std::size_t>(pool)] + node) + 1];
-  }
+  double depth_m(int pool, int node) const { return x_[DepthIndex(pool, node)]; }
+  double flow_m3s(int pool, int node) const { return x_[DepthIndex(pool, node) + 1]; }
   double PoolInflow(int pool) const { return flow_m3s(pool, 0); }
   /// Flow leaving the pool at its downstream end (structure flow plus offtake).
   double PoolOutflow(int pool) const { return flow_m3s(pool, num_nodes(pool) - 1); }
@@ -121,6 +117,11 @@ class SaintVenantCanal final {
     int actuator_pool = -1;  // -1: the upstream inflow
     long next_sample = 0;    // index of the next sample instant
   };
+
+  // Where the depth of a pool's node sits in x_ (its flow is the next entry).
+  Eigen::Index DepthIndex(int pool, int node) const {
+    return 2 * Eigen::Index{offset_[static_cast<std::size_t>(pool)] + node};
+  }
 
   Canal canal_;
   std::vector<TrapezoidSection> sections_;

@@ -100,6 +100,20 @@ SensorConfig ReadSensor(ConfigReader& reader, const toml::table& t, const std::s
 
 namespace {
 
+std::string UnknownTargetProblem(const std::string& where, const std::string& target,
+                                 const Canal& canal) {
+  return "'" + where + ".target' = \"" + target +
+         "\" must be \"inflow\", \"pool<name>.structure\" or \"pool<name>.offtake\" with a "
+         "simulated pool (" +
+         PoolNames(canal) + ")";
+}
+
+std::string ControlledTargetProblem(const std::string& where, const std::string& target,
+                                    const LevelControl& control) {
+  return "'" + where + ".target' = \"" + target + "\" is the pump of level control " +
+         control.name + ", which sets it";
+}
+
 Scenario ReadScenario(ConfigReader& reader, const Canal& full) {
   const toml::table& root = reader.root();
   reader.CheckKeys(
@@ -194,10 +208,7 @@ Scenario ReadScenario(ConfigReader& reader, const Canal& full) {
       const bool parsed = ParseInput(sc.canal, target, &e.input);
       if (!parsed) {
         reader.Problem(t->get("target") != nullptr ? t->get("target")->source() : t->source(),
-                       "'" + where + ".target' = \"" + target +
-                           "\" must be \"inflow\", \"pool<name>.structure\" or "
-                           "\"pool<name>.offtake\" with a simulated pool (" +
-                           PoolNames(sc.canal) + ")");
+                       UnknownTargetProblem(where, target, sc.canal));
       }
       for (const LevelControl& c : sc.canal.level_controls) {
         if (!parsed) break;
@@ -207,9 +218,7 @@ Scenario ReadScenario(ConfigReader& reader, const Canal& full) {
                                      sc.canal.pools[static_cast<std::size_t>(e.input.pool)].name ==
                                          c.actuator_pool;
         if (owned) {
-          reader.Problem(t->source(), "'" + where + ".target' = \"" + target +
-                                          "\" is the pump of level control " + c.name +
-                                          ", which sets it");
+          reader.Problem(t->source(), ControlledTargetProblem(where, target, c));
         }
       }
       const std::string kind =

@@ -123,7 +123,7 @@ GlFoptdSimulator::GlFoptdSimulator(const FractionalFoptdParams& params, double s
   const double h = sample_time_s / substeps;
   c_ = params.time_constant_s * std::pow(h, -params.alpha);
   weights_ = GrunwaldLetnikovWeights(params.alpha, memory_length + 1).tail(memory_length);
-  history_ = Eigen::VectorXd::Zero(2 * memory_length);
+  history_ = Eigen::VectorXd::Zero(2 * Eigen::Index{memory_length});
   previous_weight_.resize(substeps);
   for (int i = 0; i < substeps; ++i) {
     previous_weight_(i) = std::clamp((f * sample_time_s - i * h) / h, 0.0, 1.0);

@@ -10,7 +10,7 @@ namespace canalid::core {
 
 Eigen::VectorXd FitAr(const Eigen::Ref<const Eigen::VectorXd>& x, int order) {
   if (order < 1) throw std::invalid_argument("FitAr: order " + std::to_string(order) + " < 1");
-  if (x.size() <= 2 * order) {
+  if (x.size() <= 2 * Eigen::Index{order}) {
     throw std::invalid_argument("FitAr: " + std::to_string(x.size()) +
                                 " samples are too few for order " + std::to_string(order) +
                                 " (need more than " + std::to_string(2 * order) + ")");

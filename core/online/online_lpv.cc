@@ -30,7 +30,7 @@ OnlineLpvArx::OnlineLpvArx(const OnlineLpvArxOptions& options)
       u_history_(options.delay_samples + options.nb),
       y_history_(std::max(options.na, 1)),
       phi_(Eigen::VectorXd::Zero(options.na + options.nb)),
-      expanded_(Eigen::VectorXd::Zero(3 * (options.na + options.nb))) {
+      expanded_(Eigen::VectorXd::Zero(3 * Eigen::Index{options.na + options.nb})) {
   k_start_ = std::max(options_.na, options_.delay_samples + options_.nb - 1);
 }
 
@@ -62,7 +62,8 @@ void OnlineLpvArx::ParametersAt(double s, ArxParamVector& a, ArxParamVector& b) 
   a.resize(options_.na);
   b.resize(options_.nb);
   for (int i = 0; i < options_.na + options_.nb; ++i) {
-    const double p = th(3 * i) + th(3 * i + 1) * s + th(3 * i + 2) * s * s;
+    const Eigen::Index j = 3 * Eigen::Index{i};
+    const double p = th(j) + th(j + 1) * s + th(j + 2) * s * s;
     if (i < options_.na) {
       a(i) = p;
     } else {

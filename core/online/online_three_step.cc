@@ -51,7 +51,7 @@ void OnlineThreeStep::FreezeSensitivity(int order, const Eigen::Ref<const Eigen:
     throw std::invalid_argument("FreezeSensitivity: order = " + std::to_string(order) +
                                 " is out of range (allowed: 1..4)");
   }
-  if (theta.size() != 2 * order || !theta.allFinite()) {
+  if (theta.size() != 2 * Eigen::Index{order} || !theta.allFinite()) {
     throw std::invalid_argument(
         "FreezeSensitivity: theta must have 2 x order = " + std::to_string(2 * order) +
         " finite entries (got " + std::to_string(theta.size()) + ")");

@@ -57,6 +57,7 @@ ChildResult RunChild(const std::string& program, const std::vector<std::string>&
   storage.push_back(file);
   storage.insert(storage.end(), args.begin(), args.end());
   std::vector<char*> argv;
+  argv.reserve(storage.size() + 1);
   for (auto& s : storage) argv.push_back(s.data());
   argv.push_back(nullptr);
   pid_t pid = 0;

@@ -24,6 +24,8 @@ const std::vector<std::string> kComparable = {"foptd", "soptd", "frac-foptd", "f
 
 std::vector<std::string> ExpandGlob(const std::string& pattern) {
   glob_t found{};
+  // glob(3) is not thread-safe (it reads the environment and locale); canalid runs on one thread.
+  // NOLINTNEXTLINE(concurrency-mt-unsafe)
   const int status = glob(pattern.c_str(), 0, nullptr, &found);
   std::vector<std::string> files;
   if (status == 0) {

@@ -25,20 +25,26 @@ std::string Text(double v) {
   return s.str();
 }
 
+[[noreturn]] void ThrowEmptyEdge(const std::string& option, const std::string& text) {
+  throw InputError(option + ": empty item in '" + text + "'");
+}
+
+[[noreturn]] void ThrowNotANumber(const std::string& option, const std::string& item) {
+  throw InputError(option + ": '" + item + "' is not a number");
+}
+
 std::vector<double> ParseEdges(std::string text, const std::string& option) {
   // "1,,2" or a trailing comma is a typo, not two edges.
   bool item_since_comma = false;
   for (char c : text) {
     if (c == ',') {
-      if (!item_since_comma) throw InputError(option + ": empty item in '" + text + "'");
+      if (!item_since_comma) ThrowEmptyEdge(option, text);
       item_since_comma = false;
     } else if (!std::isspace(static_cast<unsigned char>(c))) {
       item_since_comma = true;
     }
   }
-  if (!item_since_comma && text.find(',') != std::string::npos) {
-    throw InputError(option + ": empty item in '" + text + "'");
-  }
+  if (!item_since_comma && text.find(',') != std::string::npos) ThrowEmptyEdge(option, text);
   for (char& c : text) {
     if (c == ',' || c == ';' || c == '\n' || c == '\t' || c == '\r') c = ' ';
   }
@@ -49,7 +55,7 @@ std::vector<double> ParseEdges(std::string text, const std::string& option) {
     char* end = nullptr;
     const double v = std::strtod(item.c_str(), &end);
     if (end != item.c_str() + item.size() || !std::isfinite(v)) {
-      throw InputError(option + ": '" + item + "' is not a number");
+      ThrowNotANumber(option, item);
     }
     edges.push_back(v);
   }

@@ -48,8 +48,9 @@ core::OnlineModelSettings IdzSettings(const IdentifyOptions& o, const drivers::C
   c.q_out = RequireColumn(table, o.qout);
   c.level = RequireColumn(table, o.level);
   s.min_delay_s = 0.0;
-  s.max_delay_s =
-      o.max_delay_s > 0.0 ? o.max_delay_s : static_cast<double>(table.rows() / 3) * s.sample_time_s;
+  s.max_delay_s = o.max_delay_s > 0.0
+                      ? o.max_delay_s
+                      : std::floor(static_cast<double>(table.rows()) / 3.0) * s.sample_time_s;
   nlohmann::json prior;
   s.idz_p22_s_per_m2 = std::max(IdzP22Prior(o, c.q_in.mean(), &prior), 0.0);
   return s;

@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <limits>
+#include <string>
 #include <utility>
 
 #include "core/system/errno_text.h"
@@ -17,6 +19,13 @@ namespace {
 constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
 
 void Cell(std::FILE* f, double value) { std::fprintf(f, ",%.17g", value); }
+
+std::string MissingChannelMessage(const std::string& log_path, std::uint64_t offset,
+                                  const std::string& channel, const std::string& reach,
+                                  const std::string& plc) {
+  return log_path + ": byte " + std::to_string(offset) + ": channel '" + channel + "' of reach '" +
+         reach + "' is not in the samples of PLC '" + plc + "'";
+}
 
 }  // namespace
 
@@ -97,9 +106,7 @@ void LogExporter::OnSample(const std::string& plc, const canalid::sample_t& samp
       for (const std::string& c : file->channels) {
         const int index = SampleChannelIndex(sample, c);
         if (index < 0) {
-          throw InputError(log_path_ + ": byte " + std::to_string(event.offset) + ": channel '" +
-                           c + "' of reach '" + reach.name + "' is not in the samples of PLC '" +
-                           plc + "'");
+          throw InputError(MissingChannelMessage(log_path_, event.offset, c, reach.name, plc));
         }
         file->indices.push_back(index);
       }

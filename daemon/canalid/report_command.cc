@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <string_view>
 
 #include "daemon/canalid/child_process.h"
 #include "daemon/canalid/cli.h"
@@ -34,6 +35,13 @@ void WriteModelFiles(const std::filesystem::path& dir, const std::vector<ModelAn
       throw ToolError(path.string() + ": cannot write");
     }
   }
+}
+
+// "identifying id (1/3)...": the progress line of model i (0-based) of n.
+std::string ProgressStep(std::string_view verb, const std::string& kind, std::size_t i,
+                         std::size_t n) {
+  return std::string(verb) + " " + kind + " (" + std::to_string(i + 1) + "/" + std::to_string(n) +
+         ")...";
 }
 
 }  // namespace
@@ -64,14 +72,13 @@ int RunReport(const ReportOptions& options, const std::string& command_line) {
   const std::size_t n = options.models.size();
   for (std::size_t i = 0; i < n; ++i) {
     const std::string& kind = options.models[i];
-    const std::string count = " (" + std::to_string(i + 1) + "/" + std::to_string(n) + ")...";
-    progress.Show("identifying " + kind + count);
+    progress.Show(ProgressStep("identifying", kind, i, n));
     IdentifyOptions identify = identify_options;
     identify.model = kind;
     identify.input = options.input;
     try {
       const nlohmann::json model = IdentifyModel(identify, table);
-      progress.Show("simulating " + kind + count);
+      progress.Show(ProgressStep("simulating", kind, i, n));
       models.push_back(AnalyseModel(kind, model, table));
       AddIdzTheory(models.back(), identify, table);
     } catch (const InputError& e) {

@@ -25,6 +25,27 @@ Eigen::VectorXd RequireMovingColumn(const drivers::CsvTable& table, const std::s
   return column;
 }
 
+namespace {
+
+[[noreturn]] void ThrowEmptyItem(const std::string& option, const std::string& text) {
+  throw InputError(option + ": empty item in '" + text + "'");
+}
+
+[[noreturn]] void ThrowNotWholeNumber(const std::string& option, const std::string& part) {
+  throw InputError(option + ": '" + part + "' is not a whole number >= 0");
+}
+
+[[noreturn]] void ThrowNonFiniteOutput(const std::string& what, double value, Eigen::Index row,
+                                       const drivers::CsvTable& table) {
+  const std::string time =
+      row < table.rows() ? " (time_s " + std::to_string(table.time_s()(row)) + ")" : "";
+  throw InputError(what + ": the simulated output is " + std::to_string(value) + " from row " +
+                   std::to_string(row) + time + " of " + table.source() +
+                   " (an unstable or overflowing model on this record); nothing written");
+}
+
+}  // namespace
+
 std::vector<std::string> SplitList(const std::string& text, const std::string& option) {
   std::vector<std::string> parts;
   std::size_t start = 0;
@@ -32,7 +53,7 @@ std::vector<std::string> SplitList(const std::string& text, const std::string& o
     const std::size_t comma = text.find(',', start);
     const std::string part =
         text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
-    if (part.empty()) throw InputError(option + ": empty item in '" + text + "'");
+    if (part.empty()) ThrowEmptyItem(option, text);
     parts.push_back(part);
     if (comma == std::string::npos) break;
     start = comma + 1;
@@ -46,7 +67,7 @@ std::vector<int> ParseIntList(const std::string& text, const std::string& option
     int v = 0;
     const auto [ptr, ec] = std::from_chars(part.data(), part.data() + part.size(), v);
     if (ec != std::errc() || ptr != part.data() + part.size() || v < 0) {
-      throw InputError(option + ": '" + part + "' is not a whole number >= 0");
+      ThrowNotWholeNumber(option, part);
     }
     values.push_back(v);
   }
@@ -56,13 +77,7 @@ std::vector<int> ParseIntList(const std::string& text, const std::string& option
 void RequireFiniteOutput(const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Index first_row,
                          const drivers::CsvTable& table, const std::string& what) {
   for (Eigen::Index k = 0; k < y.size(); ++k) {
-    if (std::isfinite(y(k))) continue;
-    const Eigen::Index row = first_row + k;
-    const std::string time =
-        row < table.rows() ? " (time_s " + std::to_string(table.time_s()(row)) + ")" : "";
-    throw InputError(what + ": the simulated output is " + std::to_string(y(k)) + " from row " +
-                     std::to_string(row) + time + " of " + table.source() +
-                     " (an unstable or overflowing model on this record); nothing written");
+    if (!std::isfinite(y(k))) ThrowNonFiniteOutput(what, y(k), first_row + k, table);
   }
 }
 

@@ -16,6 +16,14 @@
 #include "drivers/modbus/modbus_port.h"
 
 namespace canalid::daemon {
+namespace {
+
+std::string NoProcessModelMessage(const std::string& reach, const std::string& kind,
+                                  const std::string& problem) {
+  return "reach " + reach + ": no " + kind + " model: " + problem;
+}
+
+}  // namespace
 
 Daemon::Daemon(DaemonPlan plan, drivers::Bus& bus, PortFactory make_port, ReloadFunction reload)
     : plan_(std::move(plan)),
@@ -331,7 +339,7 @@ void Daemon::ReportProcessModels(const ReachRuntime& reach, double time_s) {
     std::optional<nlohmann::json> json =
         drivers::ProcessBatchJson(process, reach.pipeline().options().sample_time_s);
     if (!json) {
-      LogWarning("reach " + name + ": no " + kind + " model: " + process.problem);
+      LogWarning(NoProcessModelMessage(name, kind, process.problem));
       continue;
     }
     (*json)["reach"] = name;

@@ -44,7 +44,9 @@ bool IsKnownKind(int8_t kind) {
 }  // namespace
 
 void CanonicalCommandBytes(const CommandFields& fields, std::vector<uint8_t>& out) {
-  const std::size_t size = kDomain.size() + 1 + 4 * 4 + 2 * 8 + fields.channel.size() +
+  // The kind byte, four string lengths (u32) and two i64, then the strings.
+  constexpr std::size_t kFixedBytes = 1 + 4 * sizeof(uint32_t) + 2 * sizeof(int64_t);
+  const std::size_t size = kDomain.size() + kFixedBytes + fields.channel.size() +
                            fields.reach.size() + fields.sender.size() + fields.argument.size();
   out.resize(size);
   ByteWriter w(out.data());

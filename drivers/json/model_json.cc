@@ -168,7 +168,7 @@ nlohmann::json ToJson(const core::CommensurateFitResult& fit, double sample_time
   nlohmann::json a = nlohmann::json::array();
   for (int i = 0; i < n; ++i) {
     std::vector<double> row(static_cast<std::size_t>(n), 0.0);
-    if (i + 1 < n) row[static_cast<std::size_t>(i + 1)] = 1.0;
+    if (i + 1 < n) row[static_cast<std::size_t>(i) + 1] = 1.0;
     // Last row -[a_n, ..., a_1].
     if (i + 1 == n) {
       for (int j = 0; j < n; ++j) row[static_cast<std::size_t>(j)] = -m.a(n - 1 - j);

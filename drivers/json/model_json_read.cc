@@ -343,7 +343,7 @@ LpvRecord LpvFromJson(const json& j, const std::string& source) {
     const std::string key = "coefficients." + name;
     if (!coefficients.contains(name)) Fail(source, key, "missing");
     rows.push_back(NumberList(coefficients.at(name), key, source));
-    if (rows.back().size() != static_cast<std::size_t>(r.model.degree + 1)) {
+    if (rows.back().size() != static_cast<std::size_t>(r.model.degree) + 1) {
       Fail(source, key, "needs degree + 1 = " + std::to_string(r.model.degree + 1) + " values");
     }
   }

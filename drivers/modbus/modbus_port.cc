@@ -69,11 +69,13 @@ void ValidateModbusConfig(const ModbusRtuConfig& c) {
   CheckTimeout("response_timeout_s", c.response_timeout_s);
 }
 
-ModbusPort::ModbusPort(const ModbusTcpConfig& config) : config_(config) {
+ModbusPort::ModbusPort(const ModbusTcpConfig& config)
+    : config_(config), unit_id_(config.unit_id), response_timeout_s_(config.response_timeout_s) {
   ValidateModbusConfig(config);
 }
 
-ModbusPort::ModbusPort(const ModbusRtuConfig& config) : config_(config) {
+ModbusPort::ModbusPort(const ModbusRtuConfig& config)
+    : config_(config), unit_id_(config.unit_id), response_timeout_s_(config.response_timeout_s) {
   ValidateModbusConfig(config);
 }
 
@@ -82,21 +84,18 @@ ModbusPort::~ModbusPort() {
   if (ctx_ != nullptr) modbus_free(ctx_);
 }
 
-double ModbusPort::response_timeout_s() const noexcept {
-  return std::visit([](const auto& c) { return c.response_timeout_s; }, config_);
-}
+double ModbusPort::response_timeout_s() const noexcept { return response_timeout_s_; }
 
 PlcStatus ModbusPort::CreateContext() noexcept {
   if (const auto* tcp = std::get_if<ModbusTcpConfig>(&config_)) {
     const std::string service = std::to_string(tcp->port);
     ctx_ = modbus_new_tcp_pi(tcp->host.c_str(), service.c_str());
-  } else {
-    const auto& rtu = std::get<ModbusRtuConfig>(config_);
-    ctx_ = modbus_new_rtu(rtu.device.c_str(), rtu.baud, rtu.parity, rtu.data_bits, rtu.stop_bits);
+  } else if (const auto* rtu = std::get_if<ModbusRtuConfig>(&config_)) {
+    ctx_ =
+        modbus_new_rtu(rtu->device.c_str(), rtu->baud, rtu->parity, rtu->data_bits, rtu->stop_bits);
   }
   if (ctx_ == nullptr) return ConfigError(errno);
-  const int unit = std::visit([](const auto& c) { return c.unit_id; }, config_);
-  if (modbus_set_slave(ctx_, unit) != 0) return ConfigError(errno);
+  if (modbus_set_slave(ctx_, unit_id_) != 0) return ConfigError(errno);
   return PlcStatus::Ok();
 }
 

@@ -60,6 +60,9 @@ class ModbusPort final : public PlcPort {
   PlcStatus Failed() noexcept;  // translates errno and applies the recovery described above
 
   std::variant<ModbusTcpConfig, ModbusRtuConfig> config_;
+  // The fields both configs share, copied out so that reading them cannot throw (std::visit can).
+  int unit_id_ = 0;
+  double response_timeout_s_ = 0.0;
   _modbus* ctx_ = nullptr;
   bool connected_ = false;
 };

@@ -129,7 +129,7 @@ int ServeCommand::Run() const {
   sigemptyset(&block);
   sigaddset(&block, SIGTERM);
   sigaddset(&block, SIGINT);
-  sigprocmask(SIG_BLOCK, &block, &wait_mask);
+  pthread_sigmask(SIG_BLOCK, &block, &wait_mask);  // before any thread: they inherit it
   sigdelset(&wait_mask, SIGTERM);
   sigdelset(&wait_mask, SIGINT);
   struct sigaction action {};
