@@ -937,9 +937,12 @@ TEST(DaemonCanalsim, ExceptionRepliesAndSpikesAreCountedNotFatal) {
   ASSERT_FALSE(daemon->WaitForLine(" restored", 20000, Position(*daemon, aborted)).empty())
       << daemon->output();
   canal.master.Write(kExceptionFault, 0);
-  // Spikes of +1 m on pool record 1 (pool 2) every other plant step: 3.1 m, above valid_max 2.5.
+  // Spikes of +1 m on pool record 1 (pool 2) every 7th plant step: 3.1 m, above valid_max 2.5.
+  // The daemon polls every 6 plant steps (0.1 wall s x 600 / 10 s): with a period of 2 polls in
+  // phase with the odd steps never met a spike; 7 is coprime with 6, so whatever their phase the
+  // polls meet one at least every 7 polls.
   canal.master.Write(kSpikeAmplitude, 1000);
-  canal.master.Write(kSpikePeriod, 2);
+  canal.master.Write(kSpikePeriod, 7);
   canal.master.Write(kSpikeRecords, 1 << 1);
   // Spikes on until the daemon's LCM log holds an out-of-range level, rechecked every 0.2 s for at
   // most 20 s (a fixed window failed when other builds loaded both cores).
