@@ -29,12 +29,12 @@ TEST(ClosedLoopOption, OneMeaningPerValue) {
 // The commands that take --closed-loop, each with everything else it needs; the input file does
 // not exist, so an accepted value gets as far as reading it and a refused one stops at the option.
 const std::vector<std::string>& Commands() {
-  static const std::vector<std::string> commands = {
+  static const std::vector<std::string> kCommands = {
       "identify --model id --input missing.csv",
       "identify --model id --online --input missing.csv",
       "report --model id --input missing.csv --out report",
   };
-  return commands;
+  return kCommands;
 }
 
 TEST(ClosedLoopOption, EveryCommandAcceptsTheSameValues) {

@@ -199,6 +199,7 @@ TEST_F(FractionalCli, CompareOverAFolderPrintsSeed2sTable) {
 TEST_F(FractionalCli, CompareShowsProgressWhenStderrIsATerminal) {
   // util-linux script(1) gives the program a pseudo-terminal; its output is what the terminal
   // would show (the table goes to /dev/null).
+  // NOLINTNEXTLINE(concurrency-mt-unsafe): std::system from the test's only thread
   ASSERT_EQ(std::system("command -v script >/dev/null 2>&1"), 0)
       << "no script(1) (Debian bsdutils)";
   WriteExperiments(dir_ / "steps");

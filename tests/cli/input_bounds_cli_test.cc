@@ -43,8 +43,8 @@ class InputBoundsCli : public ::testing::Test {
   // Writes `model` and simulates it on `csv`; out.csv must not appear.
   ProgramRun Simulate(const nlohmann::json& model, const std::string& csv) {
     WriteFile(dir_ / "m.json", model.dump());
-    const ProgramRun run = Canalid("simulate --model-json " + Path("m.json") + " --input " +
-                                   Path(csv) + " --out " + Path("out.csv"));
+    ProgramRun run = Canalid("simulate --model-json " + Path("m.json") + " --input " + Path(csv) +
+                             " --out " + Path("out.csv"));
     EXPECT_FALSE(std::filesystem::exists(dir_ / "out.csv")) << ReadFile(dir_ / "out.csv");
     return run;
   }

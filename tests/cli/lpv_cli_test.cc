@@ -17,7 +17,7 @@ namespace canalid::testing {
 namespace {
 
 // The true laws: tests/support/lpv_record.h (kLpvA1, kLpvB1, nk = 3 samples, kLpvThetas).
-const char* kBands = "1.0,1.2,1.4,1.6,1.8,2.0";
+const char* const kBands = "1.0,1.2,1.4,1.6,1.8,2.0";
 
 class LpvCli : public ::testing::Test {
  protected:

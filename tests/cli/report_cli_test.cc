@@ -69,7 +69,8 @@ PngFacts InspectPng(const std::filesystem::path& path) {
     const int low = std::min({pixels[i], pixels[i + 1], pixels[i + 2]});
     if (high - low > 64) ++coloured;
   }
-  facts.coloured_fraction = static_cast<double>(coloured) / static_cast<double>(pixels.size() / 3);
+  const std::size_t rgb_pixels = pixels.size() / 3;
+  facts.coloured_fraction = static_cast<double>(coloured) / static_cast<double>(rgb_pixels);
   return facts;
 }
 
@@ -154,7 +155,7 @@ class ReportCli : public ::testing::Test {
     EXPECT_EQ(run.exit_code, 0) << run.err;
     // Not a terminal here: no progress line.
     EXPECT_EQ(run.err, "");
-    const std::string html = ReadFile(dir_ / "report" / "index.html");
+    std::string html = ReadFile(dir_ / "report" / "index.html");
     const std::vector<std::string> links = ImageLinks(html);
     EXPECT_EQ(std::set<std::string>(links.begin(), links.end()), expected_images);
     for (const std::string& link : links) {

@@ -83,7 +83,7 @@ class SimulateCli : public ::testing::Test {
   std::filesystem::path Identify(const std::string& csv_name, const std::string& csv_text,
                                  const std::string& json_name, const std::string& args) {
     WriteFile(dir_ / csv_name, csv_text);
-    const auto json = dir_ / json_name;
+    auto json = dir_ / json_name;
     const ProgramRun run = RunProgram(CanalidProgram() + " identify " + args + " --input " +
                                           (dir_ / csv_name).string() + " --out " + json.string(),
                                       dir_);
@@ -266,7 +266,7 @@ TEST_F(SimulateCli, HandWrittenMinimalFoptdMatchesTheClosedForm) {
 }
 
 TEST_F(SimulateCli, MinimalFilesSimulateAsTheFullFilesWithTheDefaultsWrittenOut) {
-  // Each full file is what identify wrote; `minimal` drops every optional key, `explicit_`
+  // Each full file is what identify wrote; `minimal` drops every optional key, `with_defaults`
   // writes the documented defaults into the full file.  The two must give the same CSV, byte
   // for byte.  frac-foptd's explicit band is the fit's own (identify ran on the same record),
   // so this also checks that simulate chooses the band as the fit does.
@@ -324,11 +324,11 @@ TEST_F(SimulateCli, MinimalFilesSimulateAsTheFullFilesWithTheDefaultsWrittenOut)
       ASSERT_TRUE(full.contains(key)) << key;  // the defaults stand for keys identify writes
       minimal.erase(key);
     }
-    nlohmann::json explicit_ = full;
-    for (const auto& [key, value] : kind.defaults.items()) explicit_[key] = value;
-    if (kind.name == "id") explicit_["fit_from_sample"] = full["nk"].get<int>() + 1;
+    nlohmann::json with_defaults = full;
+    for (const auto& [key, value] : kind.defaults.items()) with_defaults[key] = value;
+    if (kind.name == "id") with_defaults["fit_from_sample"] = full["nk"].get<int>() + 1;
     WriteFile(dir_ / "minimal.json", minimal.dump());
-    WriteFile(dir_ / "explicit.json", explicit_.dump());
+    WriteFile(dir_ / "explicit.json", with_defaults.dump());
     const ProgramRun a = Simulate(dir_ / "minimal.json", kind.name + ".csv", kind.simulate_args);
     ASSERT_EQ(a.exit_code, 0) << a.err;
     const std::string from_minimal = ReadFile(dir_ / "out.csv");
@@ -347,12 +347,12 @@ TEST_F(SimulateCli, MinimalLpvTakesZeroOffsetsAndTheRecordsSampleTime) {
   for (int k = 0; k < 60; ++k) csv << 2 * k << "," << (k < 5 ? 0 : 1) << ",0.5\n";
   WriteFile(dir_ / "lpv.csv", csv.str());
   const nlohmann::json minimal = MinimalLpvJson();
-  nlohmann::json explicit_ = minimal;
-  explicit_["input_offset"] = 0.0;
-  explicit_["output_offset"] = 0.0;
-  explicit_["sample_time_s"] = 2.0;
+  nlohmann::json with_defaults = minimal;
+  with_defaults["input_offset"] = 0.0;
+  with_defaults["output_offset"] = 0.0;
+  with_defaults["sample_time_s"] = 2.0;
   WriteFile(dir_ / "minimal.json", minimal.dump());
-  WriteFile(dir_ / "explicit.json", explicit_.dump());
+  WriteFile(dir_ / "explicit.json", with_defaults.dump());
   ASSERT_EQ(Simulate(dir_ / "minimal.json", "lpv.csv").exit_code, 0);
   const std::string from_minimal = ReadFile(dir_ / "out.csv");
   ASSERT_EQ(Simulate(dir_ / "explicit.json", "lpv.csv").exit_code, 0);

@@ -39,7 +39,9 @@ std::map<std::string, Published> PublishedTable() {
       std::getline(ss, field, ',');
       *v = std::stod(field);
     }
-    table[canal + "/" + regime + "/" + pool] = p;
+    std::string key = canal;
+    key.append("/").append(regime).append("/").append(pool);
+    table[key] = p;
   }
   return table;
 }

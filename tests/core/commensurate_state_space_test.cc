@@ -9,6 +9,12 @@
 namespace canalid::core {
 namespace {
 
+// ln |Gamma(x)|: lgamma_r, since lgamma writes the global signgam (not thread-safe).
+double LogGamma(double x) {
+  int sign = 0;
+  return ::lgamma_r(x, &sign);
+}
+
 // The LPV paper, Table 3, pool P1, OP1: alpha = 0.5 (b1..b7) and alpha = 0.25 (c1..c15), nk = 17.
 CommensurateModel SeedOneHalf() {
   CommensurateModel m;
@@ -61,8 +67,8 @@ Eigen::VectorXd NaiveSimulation(const CommensurateModel& m, const Eigen::VectorX
     if (alpha == 1.0) {
       w(j) = j == 0 ? 1.0 : (j == 1 ? -1.0 : 0.0);
     } else {
-      w(j) = std::exp(std::lgamma(static_cast<double>(j) - alpha) -
-                      std::lgamma(static_cast<double>(j) + 1.0)) /
+      w(j) = std::exp(LogGamma(static_cast<double>(j) - alpha) -
+                      LogGamma(static_cast<double>(j) + 1.0)) /
              std::tgamma(-alpha);
     }
   }

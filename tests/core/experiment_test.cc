@@ -49,7 +49,7 @@ struct Driver {
   std::vector<ExperimentActions> actions;
   ExperimentActions Apply(const ExperimentEvent& e) {
     ExperimentTransition t = Step(plan, state, e);
-    state = std::move(t.state);
+    state = t.state;
     actions.push_back(t.actions);
     return t.actions;
   }

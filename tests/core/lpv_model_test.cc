@@ -54,12 +54,13 @@ struct ArxRecord {
 
 ArxRecord MakeArxRecord() {
   std::mt19937 rng(3);
-  const int per_point = 800;
+  const Eigen::Index per_point = 800;
   ArxRecord r{Eigen::VectorXd::Zero(5 * per_point), Eigen::VectorXd::Zero(5 * per_point),
               Eigen::VectorXd::Zero(5 * per_point)};
   double level = 1.0;
   for (int k = 0; k < r.u.size(); ++k) {
-    r.theta(k) = 1.0 + k / per_point;
+    const Eigen::Index point = k / per_point;  // theta steps by 1 every per_point samples
+    r.theta(k) = 1.0 + static_cast<double>(point);
     if (k % per_point >= 20 && k % per_point < 400) {
       if (k % 15 == 0) level = (rng() % 2) ? 1.0 : -1.0;
       r.u(k) = level;
@@ -140,7 +141,7 @@ TEST(LpvModelTest, CommensurateLocalModelsRecoverQuadraticLaws) {
   // q = 1 (integer commensurate) local models whose a_1, a_2, c_1 follow quadratic laws and whose
   // delay falls with theta; each operating point is a separate experiment from rest.
   const Eigen::Vector3d a1(0.01, -0.05, 0.55), a2(0.0, 0.01, 0.08), c1(-0.02, 0.1, 0.3);
-  const int per_point = 400;
+  const Eigen::Index per_point = 400;
   Eigen::VectorXd u(4 * per_point), y(4 * per_point), theta(4 * per_point);
   std::mt19937 rng(8);
   for (int i = 0; i < 4; ++i) {

@@ -14,10 +14,14 @@
 #include "core/reach/reach_sample_processor.h"
 #include "tests/core/online_test_data.h"
 
+// glibc's own allocator entry points, which the counting versions forward to: their names are
+// glibc's (reserved, not ours to style).
+// NOLINTBEGIN(bugprone-reserved-identifier, readability-identifier-naming)
 extern "C" void* __libc_malloc(std::size_t size);
 extern "C" void* __libc_calloc(std::size_t count, std::size_t size);
 extern "C" void* __libc_realloc(void* ptr, std::size_t size);
 extern "C" void* __libc_memalign(std::size_t alignment, std::size_t size);
+// NOLINTEND(bugprone-reserved-identifier, readability-identifier-naming)
 
 namespace {
 long g_allocations = 0;

@@ -47,7 +47,7 @@ TEST(OnlineLpvArx, EqualsBatchAndRecoversTheQuadraticScheduling) {
   Eigen::MatrixXd a(rows, 6);
   Eigen::VectorXd y(rows);
   for (int r = 0; r < rows; ++r) {
-    const auto k = static_cast<std::size_t>(r + 1);
+    const auto k = static_cast<std::size_t>(r) + 1;
     const double s = d.s[k];
     a.row(r) << -d.y[k - 1], -d.y[k - 1] * s, -d.y[k - 1] * s * s, d.u[k - 1], d.u[k - 1] * s,
         d.u[k - 1] * s * s;

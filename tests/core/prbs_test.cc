@@ -115,7 +115,8 @@ TEST(Prbs, Order31PrefixFollowsItsRecurrenceAndLooksWhite) {
   for (int lag : {1, 2, 3, 28, 31, 59, 1000}) {
     long long r = 0;
     for (int t = 0; t + lag < m; ++t) {
-      r += x[static_cast<std::size_t>(t)] * x[static_cast<std::size_t>(t + lag)];
+      r += static_cast<long long>(x[static_cast<std::size_t>(t)]) *
+           x[static_cast<std::size_t>(t) + static_cast<std::size_t>(lag)];
     }
     EXPECT_LT(std::llabs(r), 5 * 1024) << "lag " << lag;
   }
@@ -128,7 +129,7 @@ TEST(Prbs, SignalHoldsEachBitForTheClockPeriod) {
   spec.clock_period_samples = 4;
   spec.order = 5;
   spec.seed = 3;
-  const Eigen::VectorXd u = GeneratePrbs(spec, 31 * 4 * 2);
+  const Eigen::VectorXd u = GeneratePrbs(spec, 248);  // two periods of 31 bits of 4 samples
   MaximalLengthSequence s(5, 3);
   for (int clock = 0; clock < 62; ++clock) {
     const double expected = 2.0 + 0.15 * s.Next();

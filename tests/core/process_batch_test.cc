@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 #include "core/reach/reach_sample_processor.h"
@@ -47,7 +48,7 @@ ReachSampleProcessorOptions FlumeOptions(bool batch_id) {
   plan.prbs.clock_period_samples = 40;
   plan.prbs.order = 6;
   plan.settle_samples = 10;
-  plan.excite_samples = 63 * 40;
+  plan.excite_samples = std::int64_t{63} * 40;
   plan.level_min_m = 0.03;
   plan.level_max_m = 0.07;
   o.experiment = plan;

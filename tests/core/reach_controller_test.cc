@@ -30,7 +30,7 @@ constexpr int kClock = 2;
 constexpr int kOrder = 3;
 constexpr std::uint32_t kSeed = 5;  // 0b101: a(t-1) = 1, a(t-2) = 0, a(t-3) = 1
 constexpr std::int64_t kSettle = 3;
-constexpr std::int64_t kExcite = 2 * 7 * kClock;
+constexpr std::int64_t kExcite = std::int64_t{2} * 7 * kClock;
 constexpr int kMaxInvalid = 2;
 constexpr double kMaxGapS = 2.5;
 constexpr double kLevelMin = 1.0;
@@ -141,7 +141,7 @@ class Harness {
       : controller(std::move(options)), pool(actuator) {}
 
   ReachPollOutcome Step(ReachReadings r, bool allowed = true) {
-    const ReachPollOutcome outcome = controller.OnPoll(r);
+    ReachPollOutcome outcome = controller.OnPoll(r);
     Take(outcome.actions);
     if (const auto start = controller.StartIfDue(r.status_ok, allowed)) {
       started_at.push_back(polls);

@@ -21,6 +21,11 @@
 namespace canalid::testing {
 namespace {
 
+// The TOML line `key = value` (value as written in the file).
+std::string KeyLine(const std::string& key, const std::string& value) {
+  return key + " = " + value;
+}
+
 namespace fs = std::filesystem;
 
 constexpr int kExitConfig = 78;
@@ -51,15 +56,15 @@ class CheckConfigCli : public ::testing::Test {
     int replaced = 0;
     while (std::getline(in, line)) {
       for (const auto& [key, value] : all) {
-        if (line.rfind(key + " = ", 0) == 0) {
-          line = key + " = " + value;
+        if (line.rfind(KeyLine(key, ""), 0) == 0) {
+          line = KeyLine(key, value);
           ++replaced;
         }
       }
       out << line << "\n";
     }
     EXPECT_EQ(replaced, static_cast<int>(all.size())) << "a key to replace is missing";
-    const fs::path path = dir_ / name;
+    fs::path path = dir_ / name;
     std::ofstream(path) << out.str();
     return path;
   }

@@ -37,6 +37,11 @@
 namespace canalid::testing {
 namespace {
 
+// The TOML line `key = value` (value as written in the file).
+std::string KeyLine(const std::string& key, const std::string& value) {
+  return key + " = " + value;
+}
+
 namespace fs = std::filesystem;
 
 constexpr int kSetpointAddress = 300;  // holding float block, pool record 0, field 0 (abcd)
@@ -64,8 +69,8 @@ std::string ReadText(const fs::path& path) {
 // A fresh folder per test under the build tree.
 fs::path TestDir() {
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const fs::path dir = fs::path(CANALID_BINARY_DIR) / "test-output" / "daemon_canalsim" /
-                       (std::string(info->test_suite_name()) + "." + info->name());
+  fs::path dir = fs::path(CANALID_BINARY_DIR) / "test-output" / "daemon_canalsim" /
+                 (std::string(info->test_suite_name()) + "." + info->name());
   fs::remove_all(dir);
   // The state directory exists before the daemon starts, as systemd's StateDirectory= makes it
   // (the store refuses to save into a missing one).
@@ -86,8 +91,8 @@ std::string WriteConfig(const fs::path& path,
   int replaced = 0;
   while (std::getline(in, line)) {
     for (const auto& [key, value] : keys) {
-      if (line.rfind(key + " = ", 0) == 0) {
-        line = key + " = " + value;
+      if (line.rfind(KeyLine(key, ""), 0) == 0) {
+        line = KeyLine(key, value);
         ++replaced;
       }
     }
@@ -154,7 +159,10 @@ std::string JsonNumbersDiffer(const nlohmann::json& expected, const nlohmann::js
       const nlohmann::json& other =
           expected.is_object() ? actual.at(it.key())
                                : actual.at(static_cast<std::size_t>(it - expected.begin()));
-      const std::string d = JsonNumbersDiffer(*it, other, relative, at + "/" + key);
+      std::string path = at;
+      path += "/";
+      path += key;
+      std::string d = JsonNumbersDiffer(*it, other, relative, path);
       if (!d.empty()) return d;
     }
     return {};
@@ -355,11 +363,11 @@ TEST(DaemonCanalsim, EveryOnlineKindIsReproducedByReplayAndIdentify) {
                      (dir / "export").string(),
                  dir);
   ASSERT_EQ(exported.exit_code, 0) << exported.err;
+  const std::string identify_online = CanalidProgram() + " identify --online --config " + config +
+                                      " --reach pool2 --input " +
+                                      (dir / "export" / "pool2.csv").string() + " --model ";
   for (const auto& [kind, model] : live) {
-    const ProgramRun identify =
-        RunProgram(CanalidProgram() + " identify --online --model " + kind + " --config " + config +
-                       " --reach pool2 --input " + (dir / "export" / "pool2.csv").string(),
-                   dir);
+    const ProgramRun identify = RunProgram(identify_online + kind, dir);
     ASSERT_EQ(identify.exit_code, 0) << kind << ": " << identify.err;
     const nlohmann::json json = nlohmann::json::parse(identify.out, nullptr, false);
     ASSERT_TRUE(json.is_object()) << identify.out;
@@ -1066,27 +1074,27 @@ TEST(DaemonCanalsim, CommandsStartOnlyWhenGenuine) {
                           std::chrono::system_clock::now().time_since_epoch())
                           .count();
   // Explicit counters above those of the probes (which default to the time of sending).
-  auto Counter = [&](int n) { return std::to_string(now_us + n); };
-  EXPECT_EQ(SendCommand(dir, canal.pid(), wrong_key, {"start", "--counter", Counter(10)}), 0);
+  auto counter = [&](int n) { return std::to_string(now_us + n); };
+  EXPECT_EQ(SendCommand(dir, canal.pid(), wrong_key, {"start", "--counter", counter(10)}), 0);
   ASSERT_FALSE(daemon.WaitForLine("command rejected (bad_mac)", 10000).empty()) << daemon.output();
   // One hour old: far outside max_clock_skew_s.
   EXPECT_EQ(SendCommand(dir, canal.pid(), key,
-                        {"start", "--counter", Counter(20), "--utime-us",
+                        {"start", "--counter", counter(20), "--utime-us",
                          std::to_string(now_us - 3600LL * 1000000LL)}),
             0);
   ASSERT_FALSE(daemon.WaitForLine("command rejected (stale)", 10000).empty()) << daemon.output();
   EXPECT_EQ(daemon.output().find("experiment settling"), std::string::npos) << daemon.output();
   EXPECT_EQ(daemon.output().find("experiment exciting"), std::string::npos) << daemon.output();
 
-  EXPECT_EQ(SendCommand(dir, canal.pid(), key, {"start", "--counter", Counter(30)}), 0);
+  EXPECT_EQ(SendCommand(dir, canal.pid(), key, {"start", "--counter", counter(30)}), 0);
   const std::string started = daemon.WaitForLine("experiment exciting", 10000);
   ASSERT_FALSE(started.empty()) << daemon.output();
   // The same counter again (a replayed abort) must not stop the experiment.
-  EXPECT_EQ(SendCommand(dir, canal.pid(), key, {"stop", "--counter", Counter(30)}), 0);
+  EXPECT_EQ(SendCommand(dir, canal.pid(), key, {"stop", "--counter", counter(30)}), 0);
   ASSERT_FALSE(daemon.WaitForLine("command rejected (replayed)", 10000).empty()) << daemon.output();
   EXPECT_EQ(daemon.output().find("experiment aborted"), std::string::npos) << daemon.output();
   // A genuine stop with a new counter does.
-  EXPECT_EQ(SendCommand(dir, canal.pid(), key, {"stop", "--counter", Counter(40)}), 0);
+  EXPECT_EQ(SendCommand(dir, canal.pid(), key, {"stop", "--counter", counter(40)}), 0);
   EXPECT_FALSE(daemon.WaitForLine("experiment aborted (stopped by operator)", 10000).empty())
       << daemon.output();
   EXPECT_EQ(daemon.Stop(SIGTERM), 0) << daemon.output();
@@ -1173,33 +1181,33 @@ TEST(DaemonCanalsim, TwoDaemonsShareOneBusOnTheirOwnPrefixes) {
   const fs::path canal_b_path = dir / "canal-b.toml";
   std::ofstream(canal_b_path) << canal_b_text;
 
-  auto ServeArgs = [&](const std::string& canal) {
+  auto serve_args = [&](const std::string& canal) {
     return std::vector<std::string>{
         CanalsimProgram(), "serve", "--listen", "127.0.0.1:0",
         "--canal",         canal,   "--plc",    SourcePath("config/sim/plc/asce2.toml"),
         "--time-scale",    "600"};
   };
   std::vector<std::string> argv_a = InNewPrivateNetwork();
-  for (const std::string& a : ServeArgs(SourcePath("config/sim/asce-canal2.toml")))
+  for (const std::string& a : serve_args(SourcePath("config/sim/asce-canal2.toml")))
     argv_a.push_back(a);
   ChildProcess canal_a(argv_a, {}, dir / "canalsim-a.log");
   const std::string ready_a = canal_a.WaitForLine("listening on 127.0.0.1:", 60000);
   ASSERT_FALSE(ready_a.empty()) << canal_a.output();
   const int port_a = std::stoi(ready_a.substr(ready_a.find("127.0.0.1:") + 10));
   const std::vector<std::string> enter = InPrivateNetworkOf(canal_a.pid());
-  auto InNamespace = [&](const std::vector<std::string>& argv) {
+  auto in_namespace = [&](const std::vector<std::string>& argv) {
     std::vector<std::string> all = enter;
     all.insert(all.end(), argv.begin(), argv.end());
     return all;
   };
-  ChildProcess canal_b(InNamespace(ServeArgs(canal_b_path.string())), {}, dir / "canalsim-b.log");
+  ChildProcess canal_b(in_namespace(serve_args(canal_b_path.string())), {}, dir / "canalsim-b.log");
   const std::string ready_b = canal_b.WaitForLine("listening on 127.0.0.1:", 60000);
   ASSERT_FALSE(ready_b.empty()) << canal_b.output();
   const int port_b = std::stoi(ready_b.substr(ready_b.find("127.0.0.1:") + 10));
 
   const fs::path bus_log = dir / "bus.lcmlog";
-  ChildProcess logger(InNamespace({"/usr/bin/lcm-logger", "-f", "--flush-interval=10",
-                                   std::string("--lcm-url=") + kUdpmUrl, bus_log.string()}),
+  ChildProcess logger(in_namespace({"/usr/bin/lcm-logger", "-f", "--flush-interval=10",
+                                    std::string("--lcm-url=") + kUdpmUrl, bus_log.string()}),
                       {}, dir / "lcm-logger.log");
 
   // Daemon B: its own state folder, prefix and PLC name ("asce2b" wherever "asce2" is quoted).
@@ -1216,9 +1224,9 @@ TEST(DaemonCanalsim, TwoDaemonsShareOneBusOnTheirOwnPrefixes) {
     text_b.replace(at, 7, "\"asce2b\"");
   std::ofstream(config_b) << text_b;
 
-  ChildProcess daemon_a(InNamespace({DaemonProgram(), "--config", config_a}), {kUdpmEnv},
+  ChildProcess daemon_a(in_namespace({DaemonProgram(), "--config", config_a}), {kUdpmEnv},
                         dir / "canalidd-a.log");
-  ChildProcess daemon_b(InNamespace({DaemonProgram(), "--config", config_b.string()}), {kUdpmEnv},
+  ChildProcess daemon_b(in_namespace({DaemonProgram(), "--config", config_b.string()}), {kUdpmEnv},
                         dir / "canalidd-b.log");
   // Order 4, two samples per bit: 30 samples (3 s) of excitation; wait until both have started.
   ASSERT_FALSE(daemon_a.WaitForLine("experiment exciting", 30000).empty()) << daemon_a.output();
@@ -1260,8 +1268,8 @@ TEST(DaemonCanalsim, TwoDaemonsShareOneBusOnTheirOwnPrefixes) {
             so_far.health_components.count("CANALID_B_HEALTH") == 1) {
           return true;
         }
-        ChildProcess play(InNamespace({"/usr/bin/lcm-logplayer",
-                                       std::string("--lcm-url=") + kUdpmUrl, probe_log.string()}),
+        ChildProcess play(in_namespace({"/usr/bin/lcm-logplayer",
+                                        std::string("--lcm-url=") + kUdpmUrl, probe_log.string()}),
                           {}, dir / "lcm-logplayer.log");
         EXPECT_EQ(play.WaitExit(10000), 0) << play.output();
         return false;

@@ -46,14 +46,14 @@ fs::path WriteConfig(const fs::path& dir, const std::string& url, const fs::path
       line = "enabled = true\nkey_file = \"" + key.string() + "\"";
     out << line << "\n";
   }
-  const fs::path path = dir / "canalidd.toml";
+  fs::path path = dir / "canalidd.toml";
   std::ofstream(path) << out.str();
   return path;
 }
 
 fs::path TestDir() {
-  const fs::path dir = fs::path(CANALID_BINARY_DIR) / "test-output" / "daemon_tcpq" /
-                       ::testing::UnitTest::GetInstance()->current_test_info()->name();
+  fs::path dir = fs::path(CANALID_BINARY_DIR) / "test-output" / "daemon_tcpq" /
+                 ::testing::UnitTest::GetInstance()->current_test_info()->name();
   fs::remove_all(dir);
   fs::create_directories(dir / "state");
   return dir;
@@ -61,7 +61,7 @@ fs::path TestDir() {
 
 // A valid command key (64 hex digits, mode 0600) in `dir`.
 fs::path WriteKey(const fs::path& dir) {
-  const fs::path key = dir / "command.key";
+  fs::path key = dir / "command.key";
   std::ofstream(key) << std::string(64, 'a') << "\n";
   ::chmod(key.c_str(), 0600);
   return key;

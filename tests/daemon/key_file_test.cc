@@ -21,7 +21,7 @@ class KeyFileTest : public ::testing::Test {
   std::filesystem::path dir_ = testing::TestDirectory(
       std::string("key_file.") + ::testing::UnitTest::GetInstance()->current_test_info()->name());
   std::filesystem::path Write(const std::string& text, mode_t mode = 0600) {
-    const auto path = dir_ / ("key" + std::to_string(next_++));
+    auto path = dir_ / ("key" + std::to_string(next_++));
     testing::WriteFile(path, text);
     ::chmod(path.c_str(), mode);
     return path;

@@ -148,9 +148,10 @@ INSTANTIATE_TEST_SUITE_P(
 
 TEST(LcmBus, EmptyUrlUsesLcmDefaultUrl) {
   // The environment variable is how operators redirect the daemon without editing its config.
-  ASSERT_EQ(setenv("LCM_DEFAULT_URL", "memq://", 1), 0);
+  // setenv is not thread-safe; here it runs before any thread of the test reads the environment.
+  ASSERT_EQ(setenv("LCM_DEFAULT_URL", "memq://", 1), 0);  // NOLINT(concurrency-mt-unsafe)
   LcmBus bus("");
-  unsetenv("LCM_DEFAULT_URL");
+  unsetenv("LCM_DEFAULT_URL");  // NOLINT(concurrency-mt-unsafe)
   int count = 0;
   bus.Subscribe("X", [&](const std::string&, std::span<const uint8_t> d) {
     count += static_cast<int>(d.size());

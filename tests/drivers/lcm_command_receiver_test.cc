@@ -359,7 +359,7 @@ class CommandProgram : public ::testing::Test {
   std::string program_ = std::string(CANALID_BINARY_DIR) + "/daemon/command/canalid-command";
 
   std::filesystem::path KeyFile(const std::string& name, const std::string& text, mode_t mode) {
-    const auto path = dir_ / name;
+    auto path = dir_ / name;
     testing::WriteFile(path, text);
     ::chmod(path.c_str(), mode);
     return path;

@@ -18,7 +18,7 @@ namespace {
 std::filesystem::path FreshLog(const std::string& name) {
   const auto dir = std::filesystem::path(CANALID_BINARY_DIR) / "test-output" / "lcm_log";
   std::filesystem::create_directories(dir);
-  const auto path = dir / name;
+  auto path = dir / name;
   std::filesystem::remove(path);
   return path;
 }

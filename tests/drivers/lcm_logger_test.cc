@@ -54,7 +54,7 @@ std::vector<std::vector<uint8_t>> Events(const std::filesystem::path& path,
 
 TEST(LcmLogger, RecordsASamplePublishedOnUdpm) {
   constexpr const char* kInside = "CANALID_LCM_LOGGER_TEST_IN_PRIVATE_NETWORK";
-  if (std::getenv(kInside) == nullptr) {
+  if (std::getenv(kInside) == nullptr) {  // NOLINT(concurrency-mt-unsafe): one thread here
     const auto scratch = std::filesystem::path(CANALID_BINARY_DIR) / "test-output" / "lcm_logger";
     std::filesystem::create_directories(scratch);
     const std::string problem = canalid::testing::PrivateNetworkProblem(scratch);

@@ -43,11 +43,11 @@ int FreeLoopbackPort() {
   addr.sin_family = AF_INET;
   addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
   addr.sin_port = 0;
-  bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr);
   socklen_t len = sizeof addr;
-  getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len);
+  const bool bound = bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) == 0 &&
+                     getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len) == 0;
   close(fd);
-  return ntohs(addr.sin_port);
+  return bound ? ntohs(addr.sin_port) : 0;
 }
 
 bool Accepts(int port) {
@@ -137,6 +137,7 @@ PollerConfig ServerMapConfig() {
 
 TEST(ModbusPymodbus, PortReadsWritesAndTypesExceptions) {
   const int port = FreeLoopbackPort();
+  ASSERT_GT(port, 0) << "no free loopback port";
   PymodbusServer server(port);
   ASSERT_TRUE(server.Start());
   ModbusPort plc(TcpConfig(port));
@@ -225,6 +226,7 @@ TEST(ModbusPymodbus, ConfigValidationNamesTheField) {
 
 TEST(ModbusPymodbus, PollerDecodesTheServerMapAndTypesExceptionBlocks) {
   const int port = FreeLoopbackPort();
+  ASSERT_GT(port, 0) << "no free loopback port";
   PymodbusServer server(port);
   ASSERT_TRUE(server.Start());
   PollerConfig config = ServerMapConfig();
@@ -256,6 +258,7 @@ TEST(ModbusPymodbus, PollerDecodesTheServerMapAndTypesExceptionBlocks) {
 
 TEST(ModbusPymodbus, KilledServerIsDisconnectedThenReconnectedWithBackoff) {
   const int port = FreeLoopbackPort();
+  ASSERT_GT(port, 0) << "no free loopback port";
   PymodbusServer server(port);
   ASSERT_TRUE(server.Start());
   PollerConfig config = ServerMapConfig();

@@ -39,6 +39,7 @@ TEST(ModbusReadPlan, MergesContiguousAndNearbyRegistersOfOneKind) {
 TEST(ModbusReadPlan, NeverExceeds125Registers) {
   // 130 contiguous u16 channels: 125 + 5. A 2-register channel at 124 cannot straddle the limit.
   std::vector<RegisterSpan> channels;
+  channels.reserve(130);
   for (int a = 0; a < 130; ++a) channels.push_back({kInput, a, 1});
   ReadPlan plan = PlanReads(channels, 0);
   ASSERT_EQ(plan.blocks.size(), 2u);
@@ -70,6 +71,7 @@ TEST(ModbusReadPlan, RandomMapsSatisfyThePlanInvariants) {
   for (int trial = 0; trial < 200; ++trial) {
     std::vector<RegisterSpan> channels;
     const int n = std::uniform_int_distribution<int>(1, 60)(rng);
+    channels.reserve(static_cast<std::size_t>(n));
     for (int i = 0; i < n; ++i) {
       channels.push_back({rng() % 2 ? kHolding : kInput,
                           std::uniform_int_distribution<int>(0, 600)(rng),

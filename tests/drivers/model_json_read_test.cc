@@ -27,6 +27,9 @@ void ExpectError(Call call, const std::string& text) {
   }
 }
 
+// The start of the reader's message about `key` of m.json.
+std::string KeyError(const std::string& key) { return "m.json: key '" + key + "'"; }
+
 TEST(ModelJsonReadTest, FractionalFoptdRoundTrip) {
   core::FractionalFoptdFitResult fit;
   fit.params = {0.372, 10.975, 0.83, 4.05};
@@ -237,15 +240,17 @@ TEST(ModelJsonReadTest, MinimalFormsNameEveryMissingOrMistypedKey) {
       {"frac-foptd", {"gain", "time_constant_s", "alpha", "delay_s"}},
       {"frac-ss", {"q", "A", "B", "C", "delay_samples"}},
       {"lpv", {"kind", "local_model", "schedule", "degree", "parameters", "coefficients"}}};
-  for (const auto& [kind, keys] : required) {
+  for (const auto& [required_kind, keys] : required) {
+    const std::string& kind = required_kind;  // a lambda cannot capture a structured binding in
+                                              // clang 14 (C++20 allows it; GCC does)
     SCOPED_TRACE(kind);
     EXPECT_NO_THROW(Read(Minimal(kind), kind));
     for (const std::string& key : keys) {
       nlohmann::json json = Minimal(kind);
       json.erase(key);
-      ExpectError([&] { Read(json, kind); }, "m.json: key '" + key + "': missing");
+      ExpectError([&] { Read(json, kind); }, KeyError(key) + ": missing");
       json[key] = nullptr;  // present but of no type a reader takes
-      ExpectError([&] { Read(json, kind); }, "m.json: key '" + key + "'");
+      ExpectError([&] { Read(json, kind); }, KeyError(key));
     }
   }
   // Optional keys are checked when present.
@@ -255,11 +260,13 @@ TEST(ModelJsonReadTest, MinimalFormsNameEveryMissingOrMistypedKey) {
       {"arx", "fit_from_sample"},     {"foptd", "input_offset"},   {"soptd", "output_offset"},
       {"frac-foptd", "input_offset"}, {"frac-foptd", "oustaloup"}, {"frac-ss", "sample_time_s"},
       {"frac-ss", "memory_length"},   {"lpv", "output_offset"}};
-  for (const auto& [kind, key] : optional) {
-    SCOPED_TRACE(kind + " " + key);
+  for (const auto& entry : optional) {
+    const std::string& kind = entry.first;
+    const std::string& key = entry.second;
+    SCOPED_TRACE(::testing::Message() << kind << " " << key);
     nlohmann::json json = Minimal(kind);
     json[key] = "x";
-    ExpectError([&] { Read(json, kind); }, "m.json: key '" + key + "'");
+    ExpectError([&] { Read(json, kind); }, KeyError(key));
   }
   nlohmann::json band = Minimal("frac-foptd");
   band["oustaloup"] = {{"low_frequency_rad_s", -1.0}};

@@ -23,17 +23,17 @@ namespace drivers = canalid::drivers;
 
 // The log file: one memfd for the process, rewritten for every input.
 const std::string& WriteLog(const uint8_t* data, std::size_t size) {
-  static const int fd = memfd_create("canalid-fuzz-log", 0);
-  static const std::string path = "/proc/self/fd/" + std::to_string(fd);
-  Check(fd >= 0, "memfd_create works");
-  Check(ftruncate(fd, 0) == 0, "the log file can be emptied");
+  static const int kLogFd = memfd_create("canalid-fuzz-log", 0);
+  static const std::string kLogPath = "/proc/self/fd/" + std::to_string(kLogFd);
+  Check(kLogFd >= 0, "memfd_create works");
+  Check(ftruncate(kLogFd, 0) == 0, "the log file can be emptied");
   std::size_t written = 0;
   while (written < size) {
-    const ssize_t n = pwrite(fd, data + written, size - written, static_cast<off_t>(written));
+    const ssize_t n = pwrite(kLogFd, data + written, size - written, static_cast<off_t>(written));
     Check(n > 0, "the log file can be written");
     written += static_cast<std::size_t>(n);
   }
-  return path;
+  return kLogPath;
 }
 
 class Visitor final : public drivers::LogMessageVisitor {

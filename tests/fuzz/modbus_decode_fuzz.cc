@@ -84,6 +84,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     channels.push_back(c);
   }
   std::vector<drivers::RegisterSpan> spans;
+  spans.reserve(channels.size());
   for (const Channel& c : channels) spans.push_back(c.span);
   drivers::ReadPlan plan;
   try {

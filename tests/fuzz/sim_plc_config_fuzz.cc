@@ -9,11 +9,12 @@
 #include "tests/fuzz/fuzz_check.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  static const canalid::sim::Canal canal =
+  static const canalid::sim::Canal kCanal =
       canalid::sim::LoadCanal(std::string(CANALID_SOURCE_DIR) + "/config/sim/asce-canal2.toml");
   canalid::sim::plc::PlcConfig config;
   try {
-    config = canalid::sim::plc::ParsePlcConfig(canalid::fuzz::Text(data, size), "fuzz.toml", canal);
+    config =
+        canalid::sim::plc::ParsePlcConfig(canalid::fuzz::Text(data, size), "fuzz.toml", kCanal);
   } catch (const canalid::sim::ConfigError&) {
     return 0;
   }

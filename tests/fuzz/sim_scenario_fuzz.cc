@@ -8,11 +8,11 @@
 #include "tests/fuzz/fuzz_check.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  static const canalid::sim::Canal canal =
+  static const canalid::sim::Canal kCanal =
       canalid::sim::LoadCanal(std::string(CANALID_SOURCE_DIR) + "/config/sim/asce-canal2.toml");
   try {
     const canalid::sim::Scenario scenario =
-        canalid::sim::ParseScenario(canalid::fuzz::Text(data, size), "fuzz.toml", canal);
+        canalid::sim::ParseScenario(canalid::fuzz::Text(data, size), "fuzz.toml", kCanal);
     canalid::fuzz::Check(
         scenario.duration_s > 0.0 && scenario.output_period_s > 0.0 && scenario.time_step_s > 0.0,
         "an accepted scenario has positive times");

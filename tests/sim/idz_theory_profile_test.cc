@@ -35,7 +35,7 @@ double WaveTravelTime(const Pool& pool, double flow, int cells) {
   for (int i = 0; i < cells; ++i) {
     time += 0.5 * dx *
             (slowness(depth[static_cast<std::size_t>(i)]) +
-             slowness(depth[static_cast<std::size_t>(i + 1)]));
+             slowness(depth[static_cast<std::size_t>(i) + 1]));
   }
   return time;
 }
@@ -89,7 +89,7 @@ LowFrequency LinearisedAlongProfile(const Pool& pool, double flow, int cells, do
     double q = 0.0, y = 1.0;
     for (int i = 0; i < cells; ++i) {
       const double y0 = depth[static_cast<std::size_t>(i)];
-      const double y1 = depth[static_cast<std::size_t>(i + 1)];
+      const double y1 = depth[static_cast<std::size_t>(i) + 1];
       const double slope = (y1 - y0) / dx;
       const double ym = 0.5 * (y0 + y1);
       double k1q, k1y, k2q, k2y, k3q, k3y, k4q, k4y;

@@ -20,9 +20,9 @@ const std::string kPlc = std::string(CANALID_SOURCE_DIR) + "/config/sim/plc/asce
 
 // Writes registers as a master would and lets the PLC act on them.
 void Write(PlcSimulation* sim, int address, std::initializer_list<std::uint16_t> values) {
-  int i = 0;
+  std::size_t i = 0;
   for (std::uint16_t v : values)
-    sim->holding_registers().at(static_cast<std::size_t>(address + i++)) = v;
+    sim->holding_registers().at(static_cast<std::size_t>(address) + i++) = v;
   sim->OnHoldingWrite(address, static_cast<int>(values.size()));
 }
 

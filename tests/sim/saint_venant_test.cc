@@ -49,6 +49,7 @@ TEST(SaintVenantCanal, FullCanal1StaysAtItsSteadyState) {
   const Canal canal = LoadCanal(kSource + "/config/sim/asce-canal1.toml");
   SaintVenantCanal plant(canal);
   std::vector<double> before;
+  before.reserve(8);
   for (int p = 0; p < 8; ++p) before.push_back(plant.DownstreamDepth(p));
   for (int k = 0; k < 360; ++k) plant.Step(10.0);
   // Same bound as for canal 2: Newton tolerance accumulated over an hour.

@@ -21,7 +21,13 @@ namespace canalid::sim {
 namespace {
 
 const std::string kSource = CANALID_SOURCE_DIR;
+
 const std::string kBinary = CANALID_BINARY_DIR;
+
+// A committed data file, tests/data/sim/NAME.csv.
+std::string DataCsv(const std::string& name) {
+  return kSource + "/tests/data/sim/" + name + ".csv";
+}
 
 struct Table {
   std::vector<std::string> names;
@@ -120,7 +126,7 @@ TEST(Scenario, Canal2Pool2StepArrivalAndLateArea) {
 TEST(Scenario, CommittedDataFilesAreReproduced) {
   for (const std::string name : {"asce2-pool2-step", "asce2-pool2-prbs", "asce2-pool2-prbs-noisy",
                                  "asce2-pool2-prbs-fixed-gate"}) {
-    std::ifstream in(kSource + "/tests/data/sim/" + name + ".csv");
+    std::ifstream in(DataCsv(name));
     std::stringstream file;
     file << in.rdbuf();
     EXPECT_EQ(file.str(), RunToString("asce-canal2.toml", name + ".toml")) << name;
@@ -226,7 +232,7 @@ TEST(Scenario, InputValueAppliesSetStepAndPrbsInOrder) {
 }
 
 std::string WriteTemp(const std::string& name, const std::string& text) {
-  const std::string path = kBinary + "/" + name;
+  std::string path = kBinary + "/" + name;
   std::ofstream(path) << text;
   return path;
 }

@@ -149,12 +149,14 @@ class ChildProcess {
     std::string program = options.argv[0];
     if (program.find('/') == std::string::npos) program = FindInPath(program);
     std::vector<char*> args;
+    args.reserve(options.argv.size() + 1);
     for (std::string& a : options.argv) args.push_back(a.data());
     args.push_back(nullptr);
     std::vector<std::string> env_storage;
     for (char** e = environ; *e != nullptr; ++e) env_storage.emplace_back(*e);
     env_storage.insert(env_storage.end(), options.extra_env.begin(), options.extra_env.end());
     std::vector<char*> env;
+    env.reserve(env_storage.size() + 1);
     for (std::string& e : env_storage) env.push_back(e.data());
     env.push_back(nullptr);
     const std::string err_path = options.stderr_path.string();
@@ -191,7 +193,8 @@ class ChildProcess {
   }
 
   static std::string FindInPath(const std::string& name) {
-    const char* path = std::getenv("PATH");
+    // getenv is not thread-safe against setenv; no test changes PATH.
+    const char* path = std::getenv("PATH");  // NOLINT(concurrency-mt-unsafe)
     std::string dirs = path != nullptr ? path : "/usr/bin:/bin";
     std::size_t begin = 0;
     while (begin <= dirs.size()) {

@@ -18,9 +18,10 @@ namespace canalid::testing {
 /// argv prefix that runs a program as the first process of a new network namespace whose
 /// loopback is up with the route 224.0.0.0/4 (append the program and its arguments).
 inline std::vector<std::string> InNewPrivateNetwork() {
+  const char* const script =
+      "ip link set lo up && ip route add 224.0.0.0/4 dev lo && exec \"$0\" \"$@\"";
   std::vector<std::string> argv = {"/usr/bin/unshare", geteuid() == 0 ? "-n" : "-rn", "sh", "-c",
-                                   "ip link set lo up && ip route add 224.0.0.0/4 dev lo && "
-                                   "exec \"$0\" \"$@\""};
+                                   script};
   return argv;
 }
 

@@ -18,7 +18,7 @@ struct ProgramRun {
 
 /// A fresh directory under the build tree for one test's files.
 inline std::filesystem::path TestDirectory(const std::string& name) {
-  const auto dir = std::filesystem::path(CANALID_BINARY_DIR) / "test-output" / name;
+  auto dir = std::filesystem::path(CANALID_BINARY_DIR) / "test-output" / name;
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
