@@ -64,7 +64,9 @@ std::string StepCsv(const GateStep& e, unsigned seed) {
 class FractionalCli : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = TestDirectory(::testing::UnitTest::GetInstance()->current_test_info()->name());
+    // Suite and test: two suites have tests of the same name, and ctest runs them side by side.
+    const ::testing::TestInfo* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = TestDirectory(std::string(info->test_suite_name()) + "." + info->name());
   }
   // Writes every experiment as step_<i>.csv into `folder`.
   void WriteExperiments(const std::filesystem::path& folder) {

@@ -32,7 +32,9 @@ std::string IdCsv(int n) {
 class IdentifyCli : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = TestDirectory(::testing::UnitTest::GetInstance()->current_test_info()->name());
+    // Suite and test: two suites have tests of the same name, and ctest runs them side by side.
+    const ::testing::TestInfo* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = TestDirectory(std::string(info->test_suite_name()) + "." + info->name());
   }
   ProgramRun Identify(const std::string& csv_text, const std::string& args) {
     WriteFile(dir_ / "in.csv", csv_text);

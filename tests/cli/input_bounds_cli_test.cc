@@ -33,7 +33,9 @@ std::string StepCsv(double ts, int rows) {
 class InputBoundsCli : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = TestDirectory(::testing::UnitTest::GetInstance()->current_test_info()->name());
+    // Suite and test: two suites have tests of the same name, and ctest runs them side by side.
+    const ::testing::TestInfo* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = TestDirectory(std::string(info->test_suite_name()) + "." + info->name());
     WriteFile(dir_ / "step.csv", StepCsv(1.0, 200));
   }
   ProgramRun Canalid(const std::string& args) {

@@ -22,7 +22,9 @@ const char* const kBands = "1.0,1.2,1.4,1.6,1.8,2.0";
 class LpvCli : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = TestDirectory(::testing::UnitTest::GetInstance()->current_test_info()->name());
+    // Suite and test: two suites have tests of the same name, and ctest runs them side by side.
+    const ::testing::TestInfo* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = TestDirectory(std::string(info->test_suite_name()) + "." + info->name());
   }
   ProgramRun Identify(const std::string& csv_text, const std::string& args) {
     WriteFile(dir_ / "in.csv", csv_text);

@@ -143,7 +143,9 @@ std::string GateStepCsv() {
 class ReportCli : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = TestDirectory(::testing::UnitTest::GetInstance()->current_test_info()->name());
+    // Suite and test: two suites have tests of the same name, and ctest runs them side by side.
+    const ::testing::TestInfo* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = TestDirectory(std::string(info->test_suite_name()) + "." + info->name());
   }
 
   // Runs the report into dir_/report and checks every linked figure; returns the page.

@@ -77,7 +77,9 @@ std::string StepCsv(int samples, double alpha) {
 class SimulateCli : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = TestDirectory(::testing::UnitTest::GetInstance()->current_test_info()->name());
+    // Suite and test: two suites have tests of the same name, and ctest runs them side by side.
+    const ::testing::TestInfo* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = TestDirectory(std::string(info->test_suite_name()) + "." + info->name());
   }
   // identify ARGS --input NAME.csv --out KIND.json; returns the model file.
   std::filesystem::path Identify(const std::string& csv_name, const std::string& csv_text,
