@@ -198,6 +198,21 @@ std::size_t Position(const ChildProcess& p, const std::string& line) {
   return p.output().find(line);
 }
 
+// A daemon on `canal`'s pool 2 with the base keys, `key = value` and a 126-sample PRBS experiment
+// (amplitude 0.05 m, order 6) that starts at once, run until it logs the pool identified; the
+// config's path is in `config`. Fails the test (and returns the daemon) when it does not.
+std::unique_ptr<ChildProcess> RunPool2Experiment(const fs::path& dir, const Canal& canal,
+                                                 const std::string& key, const std::string& value,
+                                                 std::string* config) {
+  auto keys = BaseKeys(canal.serve.port(), dir);
+  keys.emplace_back(key, value);
+  *config = WriteConfig(dir / "canalidd.toml", keys, ExplicitExperiment(0.05, 6));
+  auto daemon = StartDaemon(dir, *config);
+  // 126 samples of excitation at 10 samples per wall second.
+  EXPECT_FALSE(daemon->WaitForLine("reach pool2: identified ", 60000).empty()) << daemon->output();
+  return daemon;
+}
+
 // 1. The demo's designed experiment: the IDZ model it prints near the IDZ reference (pool 2 ends at
 // a fixed gate; the default closed-loop setting), nominal restored on SIGTERM, `canalid replay`
 // of the run's LCM log (file://) ends on the model identified live, the models resumed by the
@@ -327,12 +342,10 @@ std::map<std::string, nlohmann::json> ReplayedModels(const fs::path& dir, const 
 TEST(DaemonCanalsim, EveryOnlineKindIsReproducedByReplayAndIdentify) {
   const fs::path dir = TestDir();
   Canal canal(dir);
-  auto keys = BaseKeys(canal.serve.port(), dir);
-  keys.emplace_back("online_models", "[\"id\", \"arx\", \"frac-foptd\", \"idz\"]");
-  const std::string config = WriteConfig(dir / "canalidd.toml", keys, ExplicitExperiment(0.05, 6));
-  auto daemon = StartDaemon(dir, config);
-  // 126 samples of excitation at 10 samples per wall second.
-  ASSERT_FALSE(daemon->WaitForLine("reach pool2: identified ", 60000).empty()) << daemon->output();
+  std::string config;
+  auto daemon = RunPool2Experiment(dir, canal, "online_models",
+                                   "[\"id\", \"arx\", \"frac-foptd\", \"idz\"]", &config);
+  ASSERT_FALSE(::testing::Test::HasFailure());
   EXPECT_EQ(daemon->Stop(SIGTERM), 0) << daemon->output();
 
   const auto live = LastOnlineModels(dir, "CANALID_ASCE2_MODEL_pool2");
@@ -411,11 +424,10 @@ TEST(DaemonCanalsim, EveryOnlineKindIsReproducedByReplayAndIdentify) {
 TEST(DaemonCanalsim, ModelPublishPeriodThinsTheOnlineModels) {
   const fs::path dir = TestDir();
   Canal canal(dir);
-  auto keys = BaseKeys(canal.serve.port(), dir);
-  keys.emplace_back("online_models", "[\"id\", \"arx\"]\nmodel_publish_period_s = 600.0");
-  const std::string config = WriteConfig(dir / "canalidd.toml", keys, ExplicitExperiment(0.05, 6));
-  auto daemon = StartDaemon(dir, config);
-  ASSERT_FALSE(daemon->WaitForLine("reach pool2: identified ", 60000).empty()) << daemon->output();
+  std::string config;
+  auto daemon = RunPool2Experiment(dir, canal, "online_models",
+                                   "[\"id\", \"arx\"]\nmodel_publish_period_s = 600.0", &config);
+  ASSERT_FALSE(::testing::Test::HasFailure());
   EXPECT_EQ(daemon->Stop(SIGTERM), 0) << daemon->output();
   std::map<std::string, std::vector<std::int64_t>> updates;  // kind -> samples_used published
   for (const canalid::model_snapshot_t& m : ModelMessages(dir, "CANALID_ASCE2_MODEL_pool2")) {
@@ -439,11 +451,10 @@ TEST(DaemonCanalsim, ModelPublishPeriodThinsTheOnlineModels) {
 TEST(DaemonCanalsim, BatchProcessModelsArePublishedPersistedReplayedAndResumed) {
   const fs::path dir = TestDir();
   Canal canal(dir);
-  auto keys = BaseKeys(canal.serve.port(), dir);
-  keys.emplace_back("batch_models", "[\"id\", \"idz\", \"foptd\", \"frac-foptd\"]");
-  const std::string config = WriteConfig(dir / "canalidd.toml", keys, ExplicitExperiment(0.05, 6));
-  auto daemon = StartDaemon(dir, config);
-  ASSERT_FALSE(daemon->WaitForLine("reach pool2: identified ", 60000).empty()) << daemon->output();
+  std::string config;
+  auto daemon = RunPool2Experiment(dir, canal, "batch_models",
+                                   "[\"id\", \"idz\", \"foptd\", \"frac-foptd\"]", &config);
+  ASSERT_FALSE(::testing::Test::HasFailure());
   std::map<std::string, nlohmann::json> live;  // kind -> the JSON logged
   for (const char* kind : {"idz", "foptd", "frac-foptd"}) {
     const std::string line =

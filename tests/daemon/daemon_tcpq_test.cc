@@ -73,6 +73,31 @@ ChildProcess StartCanalidd(const fs::path& dir, const fs::path& config) {
       {std::string(CANALID_BINARY_DIR) + "/daemon/canalidd/canalidd", "--config", config.string()},
       {}, dir / "canalidd.log");
 }
+// canalidd started on `hub`'s bus with `dir`'s config and command key `key`, and the hub's side
+// of the daemon's connection once the hub has accepted it.
+struct DaemonOnHub {
+  DaemonOnHub(const fs::path& dir, TcpqTestHub& hub, const fs::path& key)
+      : accepted(std::async(std::launch::async, [&hub] { return hub.Accept(); })),
+        daemon(StartCanalidd(dir, WriteConfig(dir, hub.url(), key))),
+        hub_side(accepted.get()) {}
+  // Success once the hub has a connection on which the daemon subscribed its command channel and
+  // the daemon has logged that it runs.
+  ::testing::AssertionResult Running() {
+    if (hub_side < 0) return ::testing::AssertionFailure() << "no connection\n" << daemon.output();
+    const std::string subscribed = TcpqTestHub::ReadSubscribe(hub_side);
+    if (subscribed != "CANALID_ASCE2_COMMAND") {
+      return ::testing::AssertionFailure() << "subscribed '" << subscribed << "'\n"
+                                           << daemon.output();
+    }
+    if (daemon.WaitForLine("running:", kHubWaitMs).empty())
+      return ::testing::AssertionFailure() << "not running\n" << daemon.output();
+    return ::testing::AssertionSuccess();
+  }
+  std::future<int> accepted;
+  ChildProcess daemon;
+  const int hub_side;
+};
+
 // Peak resident set of process `pid` (VmHWM, KiB); -1 when unreadable.
 long PeakRssKib(pid_t pid) {
   std::ifstream status("/proc/" + std::to_string(pid) + "/status");
@@ -89,24 +114,25 @@ int64_t NowUs() {
       .count();
 }
 
-TEST(DaemonTcpq, LosingTheHubIsLoggedAndReconnectedNotAnAbort) {
-  const fs::path dir = TestDir();
-  const fs::path key = WriteKey(dir);
-  TcpqTestHub hub;
-  const fs::path config = WriteConfig(dir, hub.url(), key);
+// Each test's own directory, command key and hub.
+class DaemonTcpq : public ::testing::Test {
+ protected:
+  const fs::path dir_ = TestDir();
+  const fs::path key_ = WriteKey(dir_);
+  TcpqTestHub hub_;
+};
 
-  auto first = std::async(std::launch::async, [&hub] { return hub.Accept(); });
-  ChildProcess daemon = StartCanalidd(dir, config);
-  const int hub_side = first.get();
-  ASSERT_GE(hub_side, 0) << daemon.output();
-  EXPECT_EQ(TcpqTestHub::ReadSubscribe(hub_side), "CANALID_ASCE2_COMMAND") << daemon.output();
-  ASSERT_FALSE(daemon.WaitForLine("running:", kHubWaitMs).empty()) << daemon.output();
+TEST_F(DaemonTcpq, LosingTheHubIsLoggedAndReconnectedNotAnAbort) {
+  DaemonOnHub on_hub(dir_, hub_, key_);
+  ASSERT_TRUE(on_hub.Running());
+  ChildProcess& daemon = on_hub.daemon;
+  const int hub_side = on_hub.hub_side;
 
   // The hub goes away; it comes back (accepts again) once the daemon has noticed.
   const auto lost_at = std::chrono::steady_clock::now();
   ::close(hub_side);
   ASSERT_FALSE(daemon.WaitForLine("lost", kHubWaitMs).empty()) << daemon.output();
-  auto second = std::async(std::launch::async, [&hub] { return hub.Accept(); });
+  auto second = std::async(std::launch::async, [this] { return hub_.Accept(); });
   const int hub_side2 = second.get();
   ASSERT_GE(hub_side2, 0) << daemon.output();
   EXPECT_EQ(TcpqTestHub::ReadSubscribe(hub_side2), "CANALID_ASCE2_COMMAND") << daemon.output();
@@ -117,7 +143,7 @@ TEST(DaemonTcpq, LosingTheHubIsLoggedAndReconnectedNotAnAbort) {
 
   // Lost for good: nothing listens any more. The daemon retries with a doubling backoff and
   // stays up; SIGTERM still stops it cleanly.
-  hub.StopListening();
+  hub_.StopListening();
   ::close(hub_side2);
   const std::string retry = daemon.WaitForLine("reconnecting in 0.2", kHubWaitMs);
   EXPECT_FALSE(retry.empty()) << daemon.output();
@@ -125,19 +151,13 @@ TEST(DaemonTcpq, LosingTheHubIsLoggedAndReconnectedNotAnAbort) {
   EXPECT_EQ(daemon.Stop(SIGTERM), 0) << daemon.output();
 }
 
-TEST(DaemonTcpq, AFloodOfOversizeCommandsNeitherStallsTheLoopNorAllocates) {
-  const fs::path dir = TestDir();
-  const fs::path key = WriteKey(dir);
-  const std::vector<uint8_t> key_bytes(32, 0xaa);
-  TcpqTestHub hub;
-  const fs::path config = WriteConfig(dir, hub.url(), key);
-  auto accepted = std::async(std::launch::async, [&hub] { return hub.Accept(); });
-  ChildProcess daemon = StartCanalidd(dir, config);
-  const int hub_side = accepted.get();
-  ASSERT_GE(hub_side, 0) << daemon.output();
+TEST_F(DaemonTcpq, AFloodOfOversizeCommandsNeitherStallsTheLoopNorAllocates) {
+  const std::vector<uint8_t> key_bytes(32, 0xaa);  // key_'s bytes
+  DaemonOnHub on_hub(dir_, hub_, key_);
+  ASSERT_TRUE(on_hub.Running());
+  ChildProcess& daemon = on_hub.daemon;
+  const int hub_side = on_hub.hub_side;
   const std::string channel = "CANALID_ASCE2_COMMAND";
-  ASSERT_EQ(TcpqTestHub::ReadSubscribe(hub_side), channel) << daemon.output();
-  ASSERT_FALSE(daemon.WaitForLine("running:", kHubWaitMs).empty()) << daemon.output();
   const long rss_before_kib = PeakRssKib(daemon.pid());
 
   // A 60-byte message as in the issue: short strings, no MAC bytes, hmac_size = 0x7fffffff.
@@ -217,23 +237,18 @@ TEST(DaemonTcpq, AFloodOfOversizeCommandsNeitherStallsTheLoopNorAllocates) {
 
 // SIGHUP with a key file that start-up would refuse: the reload is refused and the running daemon
 // carries on (main took the new plan, stopped, then failed to start); once fixed, it reloads.
-TEST(DaemonTcpq, SighupWithABadKeyFileKeepsTheRunningDaemon) {
-  const fs::path dir = TestDir();
-  const fs::path key = WriteKey(dir);
-  TcpqTestHub hub;
-  const fs::path config = WriteConfig(dir, hub.url(), key);
-  auto accepted = std::async(std::launch::async, [&hub] { return hub.Accept(); });
-  ChildProcess daemon = StartCanalidd(dir, config);
-  const int hub_side = accepted.get();
-  ASSERT_GE(hub_side, 0) << daemon.output();
-  ASSERT_FALSE(daemon.WaitForLine("running:", kHubWaitMs).empty()) << daemon.output();
-  ::chmod(key.c_str(), 0644);
+TEST_F(DaemonTcpq, SighupWithABadKeyFileKeepsTheRunningDaemon) {
+  DaemonOnHub on_hub(dir_, hub_, key_);
+  ASSERT_TRUE(on_hub.Running());
+  ChildProcess& daemon = on_hub.daemon;
+  const int hub_side = on_hub.hub_side;
+  ::chmod(key_.c_str(), 0644);
   ::kill(daemon.pid(), SIGHUP);
   ASSERT_FALSE(daemon.WaitForLine("carrying on", kHubWaitMs).empty()) << daemon.output();
   EXPECT_NE(daemon.output().find("chmod 600"), std::string::npos) << daemon.output();
   EXPECT_EQ(daemon.output().find("reloading the configuration"), std::string::npos)
       << daemon.output();
-  ::chmod(key.c_str(), 0600);
+  ::chmod(key_.c_str(), 0600);
   const std::size_t before = daemon.output().size();
   ::kill(daemon.pid(), SIGHUP);
   EXPECT_FALSE(daemon.WaitForLine("reloading the configuration", kHubWaitMs, before).empty())
