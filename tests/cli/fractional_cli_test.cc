@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "core/fractional/mittag_leffler.h"
+#include "tests/support/frac_gate_step.h"
 #include "tests/support/run_program.h"
 
 namespace canalid::testing {
@@ -23,14 +23,7 @@ constexpr int kSamples = 2400;  // 360 s per experiment
 constexpr double kNoiseMm = 0.15;
 constexpr int kStepSample = 40;  // the gate moves at 6 s
 
-struct GateStep {
-  double gain;             // K, mm of level per mm of gate
-  double time_constant_s;  // T [s^alpha]
-  double delay_s;
-  double alpha;
-  double gate_from_mm;
-  double gate_to_mm;
-};
+using GateStep = FracGateStep;
 
 // Inside the flume paper's ranges (K 0.086..0.775, T 1.17..48, tau 2.25..5.7 s, alpha 0.6..1.25),
 // gate steps on its 5 mm grid giving level changes of 6..15 mm (40..100 sigma of the noise).
@@ -41,24 +34,9 @@ const std::vector<GateStep> kExperiments = {
     {0.60, 4.0, 2.8, 0.75, 40, 15},      {0.15, 25.0, 5.5, 1.20, 10, 50},
 };
 
-// Level in mm: rest at 60 mm, the exact response K (1 - E_alpha(-(t - tau)^alpha / T)) to the
-// held gate step, plus seeded white noise.
+// The experiment's record, its noise seeded with `seed`.
 std::string StepCsv(const GateStep& e, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> noise(0.0, kNoiseMm);
-  std::ostringstream csv;
-  csv.precision(17);
-  csv << "time_s,gate,level\n";
-  for (int k = 0; k < kSamples; ++k) {
-    const double since = (k - kStepSample) * kTs - e.delay_s;
-    const double response =
-        since > 0.0
-            ? 1.0 - core::MittagLeffler(e.alpha, -std::pow(since, e.alpha) / e.time_constant_s)
-            : 0.0;
-    csv << k * kTs << "," << (k < kStepSample ? e.gate_from_mm : e.gate_to_mm) << ","
-        << 60.0 + e.gain * (e.gate_to_mm - e.gate_from_mm) * response + noise(rng) << "\n";
-  }
-  return csv.str();
+  return FracGateStepCsv(e, {kSamples, kStepSample, kTs, kNoiseMm, seed});
 }
 
 class FractionalCli : public ::testing::Test {

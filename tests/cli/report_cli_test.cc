@@ -17,8 +17,8 @@
 #include <string>
 #include <vector>
 
-#include "core/fractional/mittag_leffler.h"
 #include "drivers/csv/csv_table.h"
+#include "tests/support/frac_gate_step.h"
 #include "tests/support/lpv_record.h"
 #include "tests/support/run_program.h"
 
@@ -121,23 +121,8 @@ std::vector<std::vector<double>> ReadData(const std::filesystem::path& path) {
 
 // The flume paper's flume: a gate step at 6 s, Ts = 0.15 s, level from the exact Mittag-Leffler
 // response of K e^{-tau s}/(1 + T s^alpha) plus seeded noise (as tests/cli/fractional_cli_test.cc).
-constexpr double kGain = 0.55, kTimeConstant = 6.0, kDelay = 3.0, kAlpha = 0.7;
 std::string GateStepCsv() {
-  constexpr double kTs = 0.15;
-  std::mt19937 rng(7);
-  std::normal_distribution<double> noise(0.0, 0.15);
-  std::ostringstream csv;
-  csv.precision(17);
-  csv << "time_s,gate,level\n";
-  for (int k = 0; k < 2400; ++k) {
-    const double since = (k - 40) * kTs - kDelay;
-    const double response =
-        since > 0.0 ? 1.0 - core::MittagLeffler(kAlpha, -std::pow(since, kAlpha) / kTimeConstant)
-                    : 0.0;
-    csv << k * kTs << "," << (k < 40 ? 15 : 40) << ","
-        << 60.0 + kGain * 25.0 * response + noise(rng) << "\n";
-  }
-  return csv.str();
+  return FracGateStepCsv({0.55, 6.0, 3.0, 0.7, 15.0, 40.0}, {2400, 40, 0.15, 0.15, 7});
 }
 
 class ReportCli : public ::testing::Test {
@@ -315,9 +300,7 @@ TEST_F(ReportCli, FractionalGateStepRecord) {
   ASSERT_GT(step.size(), 1000u);
   double worst = 0.0;
   for (const auto& row : step) {
-    const double since = row[0] - tau;
-    const double exact =
-        since > 0.0 ? k * (1.0 - core::MittagLeffler(a, -std::pow(since, a) / t)) : 0.0;
+    const double exact = k * FracUnitStep(a, t, row[0] - tau);
     worst = std::max(worst, std::abs(row[1] - exact));
   }
   EXPECT_LT(worst, 0.002 * k);

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "core/fractional/mittag_leffler.h"
+#include "tests/support/frac_gate_step.h"
 #include "tests/support/frac_step_reference.h"
 #include "tests/support/minimal_lpv_json.h"
 #include "tests/support/run_program.h"
@@ -59,19 +59,8 @@ std::string ArxCsv() {
 
 // Gate step through K e^{-tau s}/(1 + T s^alpha) (exact Mittag-Leffler), 0.15 mm noise.
 std::string StepCsv(int samples, double alpha) {
-  std::mt19937 rng(5);
-  std::normal_distribution<double> noise(0.0, 0.15);
-  std::ostringstream csv;
-  csv.precision(17);
-  csv << "time_s,u,y\n";
-  for (int k = 0; k < samples; ++k) {
-    const double since = (k - 20) * 0.15 - 3.0;
-    const double r =
-        since > 0.0 ? 1.0 - core::MittagLeffler(alpha, -std::pow(since, alpha) / 6.0) : 0.0;
-    csv << k * 0.15 << "," << (k < 20 ? 20.0 : 45.0) << "," << 60.0 + 0.5 * 25.0 * r + noise(rng)
-        << "\n";
-  }
-  return csv.str();
+  return FracGateStepCsv({0.5, 6.0, 3.0, alpha, 20.0, 45.0},
+                         {samples, 20, 0.15, 0.15, 5, "u", "y"});
 }
 
 class SimulateCli : public ::testing::Test {
@@ -134,9 +123,7 @@ TEST_F(SimulateCli, PredictsAnotherExperimentWithTheIdentifiedModel) {
   other << "time_s,u\n";
   std::vector<double> truth;
   for (int k = 0; k < 1200; ++k) {
-    const double since = (k - 100) * 0.15 - 3.0;
-    const double r =
-        since > 0.0 ? 1.0 - core::MittagLeffler(0.7, -std::pow(since, 0.7) / 6.0) : 0.0;
+    const double r = FracUnitStep(0.7, 6.0, (k - 100) * 0.15 - 3.0);
     other << k * 0.15 << "," << (k < 100 ? 30.0 : 10.0) << "\n";
     truth.push_back(0.5 * (10.0 - 30.0) * r);
   }
