@@ -722,8 +722,10 @@ TEST(DaemonCanalsim, StepExperimentStepsHoldsReturnsAndFitsAFoptd) {
     up += std::abs(v - (nominal + 0.05)) < 1e-4;
     above += v > nominal + 0.05 + 1e-4;
   }
-  // The hold is 60 samples; the register shows a write one poll later at most.
-  EXPECT_GE(up, 58);
+  // The hold is 60 samples. The register shows a write one poll later as a rule, and up to a few
+  // polls later when the machine is loaded (57 seen with both cores busy), so the bounds allow
+  // five polls of lag; a hold of another length (30, 120) still fails them.
+  EXPECT_GE(up, 55);
   EXPECT_LE(up, 61);
   EXPECT_EQ(above, 0);
   ASSERT_FALSE(setpoints.empty());
@@ -882,10 +884,12 @@ TEST(DaemonCanalsim, GuardNotPersistedAbortsBeforeAnyExcitationWrite) {
       << daemon->output();
   EXPECT_EQ(daemon->output().find("experiment exciting"), std::string::npos) << daemon->output();
   // Every gate value the daemon polled and published is the nominal; the daemon polled on after
-  // the abort (the abort came at the experiment's first sample, 0.1 wall s after the start).
+  // the abort (the abort came at the experiment's first sample, 0.1 wall s after the start, and
+  // the test watched for 2 s more: about 20 polls at 10 Hz, 20 exactly on a loaded machine, so
+  // half of that is asked for).
   const LcmRecord record = ReadLcmLog(dir / "run.lcmlog");
   const std::vector<double> gate = ChannelValues(record.samples, "gate1_setpoint");
-  ASSERT_GT(gate.size(), 20U);
+  ASSERT_GE(gate.size(), 10U);
   for (std::size_t k = 0; k < gate.size(); ++k) {
     ASSERT_NEAR(gate[k], nominal, 1e-6) << "sample " << k;
   }
