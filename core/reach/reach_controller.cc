@@ -1,5 +1,6 @@
 #include "core/reach/reach_controller.h"
 
+#include <cmath>
 #include <limits>
 #include <stdexcept>
 #include <utility>
@@ -27,6 +28,10 @@ std::string ReachController::SetNominal(double nominal) {
 std::string ReachController::ApplyRestart(const RestartDecision& decision) {
   refused_ = !decision.excitation_allowed;
   held_ = decision.hold_until_restored;
+  // A decision other than "start as usual" comes from a guard an interrupted run left.
+  guard_on_disk_ = decision.action != RestartDecision::Action::kNone;
+  keep_guard_ = decision.action == RestartDecision::Action::kRefuse;
+  restore_pending_ = decision.restore_setpoint;
   // Refused without a nominal: the actuator may sit at a PRBS level, so its reading is no nominal.
   adopt_reading_ = !refused_;
   if (decision.nominal) return SetNominal(*decision.nominal);
@@ -55,7 +60,12 @@ ReachPollOutcome ReachController::OnPoll(const ReachReadings& r) {
     sample.input = r.actuator_valid ? r.actuator : kNan;
   }
   sample.scheduling = r.scheduling_valid ? r.scheduling : kNan;
-  outcome.actions = pipeline_.OnSample(sample);
+  outcome.actions = Track(pipeline_.OnSample(sample));
+  if (restore_pending_ && r.link_ok && !outcome.actions.write_setpoint) {
+    // Asked again until the PLC confirms it (a write may be lost with the link, or refused).
+    outcome.actions.write_setpoint = restore_pending_;
+    outcome.actions.restore_nominal = true;
+  }
   return outcome;
 }
 
@@ -65,7 +75,64 @@ std::optional<ReachActions> ReachController::StartIfDue(bool status_ok, bool all
     return std::nullopt;
   }
   started_ = true;
-  return pipeline_.StartExperiment();
+  return Track(pipeline_.StartExperiment());
+}
+
+std::string ReachController::StartRefusal() const {
+  if (!pipeline_.experiment_plan()) return "no experiment to start";
+  if (!excitation_allowed()) {
+    return "experiment refused: an interrupted experiment's nominal is not restored (see the "
+           "start-up log)";
+  }
+  return {};
+}
+
+ReachActions ReachController::Start() { return Track(pipeline_.StartExperiment()); }
+
+ReachActions ReachController::Stop() { return Track(pipeline_.StopExperiment()); }
+
+ReachActions ReachController::OnLinkLost() { return Track(pipeline_.OnLinkLost()); }
+
+ReachActions ReachController::OnGuardNotPersisted() {
+  return Track(pipeline_.OnGuardNotPersisted());
+}
+
+std::optional<IntegratorDelayIdentification> ReachController::IdentifyRecord(
+    ReachActions* actions) {
+  std::optional<IntegratorDelayIdentification> result = pipeline_.IdentifyRecord(actions);
+  *actions = Track(*actions);
+  return result;
+}
+
+ReachWriteOutcome ReachController::OnWriteResult(const ActuatorWrite& write) {
+  ReachWriteOutcome outcome;
+  if (!write.written) {
+    outcome.actions = Track(pipeline_.OnWriteFailed());
+    return outcome;
+  }
+  if (!restore_pending_ ||
+      std::abs(write.value - *restore_pending_) > 1e-9 * (1.0 + std::abs(*restore_pending_))) {
+    return outcome;  // an excitation write, or an older value
+  }
+  restore_pending_.reset();
+  outcome.restore_confirmed = true;
+  const ExperimentPhase phase = pipeline_.experiment_state().phase;
+  if (phase == ExperimentPhase::kSettling || phase == ExperimentPhase::kExciting) {
+    return outcome;  // a new experiment's settling write, not an end: its guard stays
+  }
+  outcome.remove_guard = guard_on_disk_ && !keep_guard_;
+  if (outcome.remove_guard) guard_on_disk_ = false;
+  held_ = false;
+  return outcome;
+}
+
+ReachActions ReachController::Track(ReachActions actions) {
+  // A restore is pending until confirmed; an excitation write supersedes it (the experiment's
+  // end or abort restores again), so no poll re-asks for the nominal in the middle of one.
+  if (actions.write_setpoint) {
+    restore_pending_ = actions.restore_nominal ? actions.write_setpoint : std::optional<double>();
+  }
+  return actions;
 }
 
 }  // namespace canalid::core

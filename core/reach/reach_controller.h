@@ -68,6 +68,22 @@ ReachReadings ReadReach(const ReachChannels& c, const Values& values, Valid vali
   return r;
 }
 
+/// A write on the reach's actuator as the PLC answered it.
+struct ActuatorWrite {
+  bool written = false;  ///< the PLC took it
+  double value = 0.0;    ///< the value written
+};
+
+/// What a write result did to a reach.
+struct ReachWriteOutcome {
+  /// The PLC now holds the nominal setpoint the reach was restoring (restore_pending() is none).
+  bool restore_confirmed = false;
+  /// The experiment guard has done its job: remove it (the caller's store owns the file).
+  bool remove_guard = false;
+  /// A failed write: the running experiment's abort, with the nominal to restore.
+  ReachActions actions;
+};
+
 /// What one poll did to a reach, for the caller to act on and report.
 struct ReachPollOutcome {
   ReachActions actions;
@@ -81,35 +97,71 @@ struct ReachPollOutcome {
 /// log), so the two run the same code on the same samples: the nominal setpoint read from the
 /// actuator's first valid value when the configuration gives none, the experiment plan around it,
 /// the ReachSampleProcessor step, and the start of an on_start experiment at the first complete
-/// poll. Pure and deterministic; allocates only when a plan is installed (once).
+/// poll. It also holds the reach's restore safety, the rules that bring the actuator back to its
+/// nominal and decide when that is done:
+/// - every action that restores the nominal leaves it pending until a write of that value is
+///   confirmed (OnWriteResult) or an excitation write supersedes it; each poll with the link up
+///   asks for it again (OnPoll);
+/// - an excitation write needs the experiment guard durably written first (needs_guard(),
+///   OnGuardPersisted(); OnGuardNotPersisted() aborts instead);
+/// - the guard is removed once the nominal is confirmed with no experiment running, and kept
+///   after a refused start-up (for an operator to check);
+/// - after a restart that restores first, no experiment starts before that restore is confirmed.
+/// Every event that can change the actuator goes through this class, never the pipeline
+/// directly. Pure and deterministic; allocates only when a plan is installed (once).
 class ReachController final {
  public:
   /// @throws std::invalid_argument on bad pipeline options.
   explicit ReachController(ReachControllerOptions options);
 
   /// Steps the reach with one poll.  The caller acts on `actions` (writes, record complete: call
-  /// pipeline().IdentifyRecord()) and then calls StartIfDue().
+  /// IdentifyRecord()) and then calls StartIfDue().  With a restore pending and the link up, the
+  /// actions write its nominal when they write nothing else.
   ReachPollOutcome OnPoll(const ReachReadings& readings);
   /// Starts the on_start experiment once: after a poll with every block read, when the nominal is
   /// known, excitation_allowed() and `allowed` (the daemon is not stopping).  Returns the start's
   /// actions, or none.
   std::optional<ReachActions> StartIfDue(bool status_ok, bool allowed);
 
+  /// Why an operator's start would be refused now (empty: it would start).
+  std::string StartRefusal() const;
+  /// Starts the experiment now (an operator's command: check StartRefusal() first; a replay
+  /// follows the live run's start).
+  ReachActions Start();
+  /// An operator's stop, or the daemon's: aborts a running experiment, restoring the nominal.
+  ReachActions Stop();
+  /// The link to the PLC is down between polls: aborts a running experiment.
+  ReachActions OnLinkLost();
+  /// The PLC's answer to a write on the reach's actuator.
+  ReachWriteOutcome OnWriteResult(const ActuatorWrite& write);
+  /// An excitation write in `actions` that needs the experiment guard written first.
+  bool needs_guard(const ReachActions& actions) const {
+    return actions.write_setpoint && !actions.restore_nominal && !guard_on_disk_;
+  }
+  /// The experiment guard is durably written: excitation writes may go out.
+  void OnGuardPersisted() { guard_on_disk_ = true; }
+  /// The experiment guard could not be written: aborts the experiment, restoring the nominal.
+  ReachActions OnGuardNotPersisted();
+  /// The record of a complete experiment identified (ReachSampleProcessor::IdentifyRecord).
+  std::optional<IntegratorDelayIdentification> IdentifyRecord(ReachActions* actions);
+  /// An operator's reset of the online estimators.
+  void ResetOnlineEstimator() { pipeline_.ResetOnlineEstimator(); }
+
   /// Applies the start-up decision on an interrupted experiment (DecideRestart), before the first
   /// poll: adopts its nominal (installing the experiment around it; returns the plan error, empty
-  /// when none), never takes a reading as the nominal when it refuses, and holds experiments until
-  /// OnRestoreConfirmed() when it restores first.
+  /// when none), never takes a reading as the nominal when it refuses, makes its restore pending
+  /// (written at the first poll with the link up), and holds experiments until that restore is
+  /// confirmed.
   std::string ApplyRestart(const RestartDecision& decision);
-  /// The PLC confirmed the restore of ApplyRestart: experiments may start (unless refused).
-  void OnRestoreConfirmed() { held_ = false; }
   /// An experiment may start now (not refused at start-up, no restore pending confirmation).
   bool excitation_allowed() const { return !refused_ && !held_; }
+  /// The nominal setpoint being restored and not yet confirmed by the PLC (none: nothing pending).
+  const std::optional<double>& restore_pending() const { return restore_pending_; }
 
   /// Sets the nominal setpoint and installs the experiment around it; returns why there is no
   /// experiment (empty when there is one or none is planned).
   std::string SetNominal(double nominal);
 
-  ReachSampleProcessor& pipeline() { return pipeline_; }
   const ReachSampleProcessor& pipeline() const { return pipeline_; }
   const ReachControllerOptions& options() const { return options_; }
   const std::string& name() const { return options_.name; }
@@ -119,6 +171,9 @@ class ReachController final {
   const std::string& initial_plan_error() const { return initial_plan_error_; }
 
  private:
+  /// Notes the restore `actions` ask for (pending until confirmed); returns them.
+  ReachActions Track(ReachActions actions);
+
   ReachControllerOptions options_;
   ReachSampleProcessor pipeline_;
   bool nominal_known_ = false;
@@ -127,6 +182,9 @@ class ReachController final {
   bool refused_ = false;
   bool held_ = false;
   bool adopt_reading_ = true;
+  std::optional<double> restore_pending_;
+  bool guard_on_disk_ = false;  ///< written by this run, or left by an interrupted one
+  bool keep_guard_ = false;     ///< a refused start-up: the guard stays for an operator
   std::string initial_plan_error_;
 };
 

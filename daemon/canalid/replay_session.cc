@@ -149,7 +149,7 @@ void ReplaySession::Step(Reach& reach, const core::ReachActions& actions, double
   core::ReachActions after;
   const core::ReachSampleProcessor& pipeline = reach.runner->pipeline();
   const std::optional<core::IntegratorDelayIdentification> result =
-      reach.runner->pipeline().IdentifyRecord(&after);
+      reach.runner->IdentifyRecord(&after);
   // The other batch kinds (idz, the process models), as the daemon publishes them.
   auto other_batch = [&](std::string kind, nlohmann::json json) {
     json["reach"] = reach.config.name;
@@ -196,27 +196,27 @@ void ReplaySession::OnExperiment(const canalid::experiment_state_t& live,
   }
   for (auto& reach : reaches_) {
     if (reach->config.name != live.reach || !reach->runner) continue;
-    core::ReachSampleProcessor& pipeline = reach->runner->pipeline();
-    const core::ExperimentPhase ours = pipeline.experiment_state().phase;
+    core::ReachController& runner = *reach->runner;
+    const core::ExperimentPhase ours = runner.pipeline().experiment_state().phase;
     const double t = first_utime_ ? static_cast<double>(live.utime - *first_utime_) * 1e-6 : 0.0;
     if (LiveRunning(live.state) && !Running(ours)) {
       // Started by an operator command between two polls.
-      Step(*reach, pipeline.StartExperiment(), t);
+      Step(*reach, runner.Start(), t);
     } else if (live.state == canalid::experiment_state_t::STATE_ABORTED && Running(ours)) {
       // Ended by something the samples do not carry.
       if (live.reason == core::AbortReasonName(core::AbortReason::kLinkLost)) {
-        Step(*reach, pipeline.OnLinkLost(), t);
+        Step(*reach, runner.OnLinkLost(), t);
       } else if (live.reason == core::AbortReasonName(core::AbortReason::kWriteFailed)) {
-        Step(*reach, pipeline.OnWriteFailed(), t);
+        Step(*reach, runner.OnWriteResult({false, 0.0}).actions, t);
       } else if (live.reason == core::AbortReasonName(core::AbortReason::kGuardNotPersisted)) {
-        Step(*reach, pipeline.OnGuardNotPersisted(), t);
+        Step(*reach, runner.OnGuardNotPersisted(), t);
       } else {
         if (live.reason != core::AbortReasonName(core::AbortReason::kOperatorStop)) {
           on_warning_(At(options_.log_path, event) + ": reach " + live.reach +
                       ": the live experiment aborted (" + live.reason +
                       ") where the replay's did not: the replay diverges from the live run");
         }
-        Step(*reach, pipeline.StopExperiment(), t);
+        Step(*reach, runner.Stop(), t);
       }
     }
   }
@@ -227,8 +227,7 @@ void ReplaySession::OnModel(const canalid::model_snapshot_t& model,
   if (model.estimator == "rls-bank-reset") {
     // An operator reset the online estimator between two polls.
     for (auto& reach : reaches_) {
-      if (reach->config.name == model.reach && reach->runner)
-        reach->runner->pipeline().ResetOnlineEstimator();
+      if (reach->config.name == model.reach && reach->runner) reach->runner->ResetOnlineEstimator();
     }
     return;
   }

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "core/reach/stop_rule.h"
 #include "daemon/canalidd/clock.h"
 #include "daemon/canalidd/health_report.h"
 #include "daemon/canalidd/log.h"
@@ -149,7 +150,7 @@ void Daemon::Drain(int index) {
   if (!plc.poller->counters().connected) {
     for (const int r : plc.reaches) {
       ReachRuntime& reach = *reaches_[static_cast<std::size_t>(r)];
-      Handle(reach, reach.pipeline().OnLinkLost(), reach.last_time_s);
+      Handle(reach, reach.runner.OnLinkLost(), reach.last_time_s);
     }
   }
 }
@@ -184,8 +185,6 @@ void Daemon::OnPoll(int index, const drivers::PollSample& s) {
       LogError("reach " + reach.name() + ": no experiment: " + outcome.plan_error);
     Handle(reach, outcome.actions, s.time_s);
     if (outcome.actions.online_updated) PublishOnlineModels(reach, outcome.actions, s.time_s);
-    if (reach.restore_pending && link_ok && !outcome.actions.write_setpoint)
-      RequestSetpoint(reach, reach.restore_target);
     if (const auto start = reach.runner.StartIfDue(s.status.ok(), !stopping_)) {
       LogInfo("reach " + reach.name() + ": starting the experiment");
       Handle(reach, *start, s.time_s);
@@ -217,16 +216,17 @@ void Daemon::OnWriteResult(int index, const drivers::WriteResult& result) {
   for (const int r : plc.reaches) {
     ReachRuntime& reach = *reaches_[static_cast<std::size_t>(r)];
     if (reach.wiring.runner.channels.actuator != result.channel) continue;
-    if (ConfirmsRestore(reach, result)) {
-      reach.restore_pending = false;
-      LogInfo("reach " + reach.name() + ": nominal setpoint " +
-              std::to_string(reach.restore_target) + " restored");
-      OnRestoreConfirmed(reach, store());
+    const bool written = result.outcome == drivers::WriteOutcome::kWritten;
+    const core::ReachWriteOutcome outcome = reach.runner.OnWriteResult({written, result.written});
+    if (outcome.restore_confirmed) {
+      LogInfo("reach " + reach.name() + ": nominal setpoint " + std::to_string(result.written) +
+              " restored");
     }
-    if (result.outcome != drivers::WriteOutcome::kWritten) {
+    if (outcome.remove_guard) RemoveGuard(reach, store());
+    if (!written) {
       LogWarning("reach " + reach.name() + ": setpoint write failed (" +
                  drivers::PlcErrorKindName(result.plc.kind) + ")");
-      Handle(reach, reach.pipeline().OnWriteFailed(), reach.last_time_s);
+      Handle(reach, outcome.actions, reach.last_time_s);
     }
   }
   if (stopping_) FinishStopWhenSafe();
@@ -245,15 +245,11 @@ void Daemon::Handle(ReachRuntime& reach, const core::ReachActions& actions, doub
   const std::string& name = reach.name();
   const int actuator = reach.wiring.runner.channels.actuator;
   if (actions.write_setpoint && actuator >= 0) {
-    if (!actions.restore_nominal && !reach.guard_on_disk &&
+    if (reach.runner.needs_guard(actions) &&
         !PersistGuard(reach, ActuatorName(plcs_, reach), store())) {
       // No excitation write without a durable guard: abort instead, which restores the nominal.
-      Handle(reach, reach.pipeline().OnGuardNotPersisted(), time_s);
+      Handle(reach, reach.runner.OnGuardNotPersisted(), time_s);
       return;
-    }
-    if (actions.restore_nominal) {
-      reach.restore_pending = true;
-      reach.restore_target = *actions.write_setpoint;
     }
     RequestSetpoint(reach, *actions.write_setpoint);
   }
@@ -271,7 +267,7 @@ void Daemon::Handle(ReachRuntime& reach, const core::ReachActions& actions, doub
   if (actions.experiment_record_complete) {
     core::ReachActions after;
     const std::optional<core::IntegratorDelayIdentification> result =
-        reach.pipeline().IdentifyRecord(&after);
+        reach.runner.IdentifyRecord(&after);
     const std::string& problem = reach.pipeline().identification_problem();
     if (result) {
       publisher_.PublishBatchId(name, *result, time_s, reach.pipeline().recorded_samples(),
@@ -376,21 +372,17 @@ void Daemon::OnCommand(const drivers::AcceptedCommand& command) {
     LogInfo("command from " + command.sender + " for reach " + command.reach);
     switch (command.kind) {
       case drivers::CommandKind::kStartExperiment:
-        if (!reach->pipeline().experiment_plan()) {
-          LogWarning("reach " + command.reach + ": no experiment to start");
-        } else if (!reach->runner.excitation_allowed()) {
-          LogWarning("reach " + command.reach +
-                     ": experiment refused: an interrupted experiment's nominal is not restored "
-                     "(see the start-up log)");
+        if (const std::string refusal = reach->runner.StartRefusal(); !refusal.empty()) {
+          LogWarning("reach " + command.reach + ": " + refusal);
         } else if (!stopping_) {
-          Handle(*reach, reach->pipeline().StartExperiment(), reach->last_time_s);
+          Handle(*reach, reach->runner.Start(), reach->last_time_s);
         }
         break;
       case drivers::CommandKind::kAbortExperiment:
-        Handle(*reach, reach->pipeline().StopExperiment(), reach->last_time_s);
+        Handle(*reach, reach->runner.Stop(), reach->last_time_s);
         break;
       case drivers::CommandKind::kResetEstimator:
-        reach->pipeline().ResetOnlineEstimator();
+        reach->runner.ResetOnlineEstimator();
         // Marks the reset in the record (`canalid replay` resets its bank here too).
         if (!reach->pipeline().online_models().empty()) {
           reach->pipeline().online_models().front()->FillSnapshot(snapshot_);
@@ -431,8 +423,7 @@ void Daemon::BeginStop(DaemonExit exit) {
   if (stopping_) return;
   exit_ = exit;
   NotifyStopping();
-  for (auto& reach : reaches_)
-    Handle(*reach, reach->pipeline().StopExperiment(), reach->last_time_s);
+  for (auto& reach : reaches_) Handle(*reach, reach->runner.Stop(), reach->last_time_s);
   stopping_ = true;
   health_timer_.cancel();
   for (auto& plc : plcs_) plc->heartbeat->Cancel();
@@ -442,8 +433,9 @@ void Daemon::BeginStop(DaemonExit exit) {
 
 void Daemon::FinishStopWhenSafe() {
   bool pending = false;
-  for (const auto& reach : reaches_) pending = pending || reach->restore_pending;
-  if (pending && SteadyNowS() < stop_deadline_s_) {
+  for (const auto& reach : reaches_) pending = pending || reach->runner.restore_pending();
+  const core::StopProgress progress = core::DecideStop(pending, SteadyNowS(), stop_deadline_s_);
+  if (progress == core::StopProgress::kWait) {
     // Write results arrive through Drain; re-check at least every 50 ms until the deadline.
     stop_timer_.expires_after(std::chrono::milliseconds(50));
     stop_timer_.async_wait([this](const boost::system::error_code& error) {
@@ -451,7 +443,8 @@ void Daemon::FinishStopWhenSafe() {
     });
     return;
   }
-  if (pending) LogError("stopping with a nominal setpoint not confirmed by the PLC");
+  if (progress == core::StopProgress::kDeadlinePassed)
+    LogError("stopping with a nominal setpoint not confirmed by the PLC");
   commands_.LogRejected(true);
   PublishHealth();
   signals_.Cancel();

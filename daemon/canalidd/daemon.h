@@ -36,14 +36,15 @@ enum class DaemonExit { kStopped, kReload, kFailed };
 /// Persistence: an identified model is saved on the PersistenceWorker's thread, never on the
 /// sample path; Run() saves every queued model before it returns.
 ///
-/// Safety: every restore of a nominal setpoint stays pending until the PLC confirms the nominal
-/// value was written (a write refused while the link is down, or shortened by the rate limit, is
-/// asked again on the next sample).  No excitation write goes out before the reach's experiment
-/// guard (core/experiment/experiment_guard.h) is durably in the state directory; the guard is
-/// removed once the PLC confirms the nominal at the experiment's end.  At start, a guard left by a
-/// crash is decided on by core::DecideRestart: its nominal is restored first, before any
-/// experiment. SIGTERM/SIGINT stop the experiments, wait (at most `stop_timeout_s`) for the nominal
-/// setpoints to be written, then stop.  SIGHUP asks `reload` for a new plan: when it returns one,
+/// Safety (the rules are core::ReachController's and core::DecideStop's, tested in process; the
+/// daemon carries out their actions): every restore of a nominal setpoint stays pending until the
+/// PLC confirms the nominal value was written (a write refused while the link is down, or
+/// shortened by the rate limit, is asked again on the next sample).  No excitation write goes out
+/// before the reach's experiment guard (core/experiment/experiment_guard.h) is durably in the
+/// state directory; the guard is removed once the PLC confirms the nominal at the experiment's
+/// end.  At start, a guard left by a crash is decided on by core::DecideRestart: its nominal is
+/// restored first, before any experiment. SIGTERM/SIGINT stop the experiments, wait (at most
+/// `stop_timeout_s`) for the nominal setpoints to be written, then stop.  SIGHUP asks `reload` for a new plan: when it returns one,
 /// Run() stops safely and returns kReload (the caller builds a new Daemon); when it returns none
 /// (invalid configuration), the daemon carries on.
 class Daemon final {

@@ -31,16 +31,11 @@ struct ReachRuntime {
       : wiring(w), runner(w.runner), published_at(runner.pipeline().online_models().size(), -1) {}
   const ReachWiring& wiring;
   core::ReachController runner;
-  bool restore_pending = false;  ///< a nominal setpoint not yet confirmed by the PLC
-  double restore_target = 0.0;   ///< the value that restore waits for
-  bool guard_on_disk = false;    ///< <reach>.experiment.json exists (written, or left by a crash)
-  bool keep_guard = false;       ///< a refused start-up: the guard stays for an operator to check
   double last_time_s = 0.0;
   /// Per online model (ReachSampleProcessor::online_models()): the sample it was last published
   /// at, -1 before its first publication (model_publish_every).
   std::vector<std::int64_t> published_at;
   const std::string& name() const { return runner.name(); }
-  core::ReachSampleProcessor& pipeline() { return runner.pipeline(); }
   const core::ReachSampleProcessor& pipeline() const { return runner.pipeline(); }
 };
 

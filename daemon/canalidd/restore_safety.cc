@@ -31,13 +31,6 @@ void ResumeInterruptedExperiment(ReachRuntime& reach, const drivers::PollChannel
   (decision.error ? LogError : LogWarning)(decision.message);
   const std::string plan_error = reach.runner.ApplyRestart(decision);
   if (!plan_error.empty()) LogError("reach " + reach.name() + ": no experiment: " + plan_error);
-  reach.guard_on_disk = true;
-  reach.keep_guard = decision.action == core::RestartDecision::Action::kRefuse;
-  // The first write once the PLC answers (OnPoll asks it again until confirmed).
-  if (decision.restore_setpoint) {
-    reach.restore_pending = true;
-    reach.restore_target = *decision.restore_setpoint;
-  }
   const bool restore = decision.action == core::RestartDecision::Action::kRestore;
   const std::string reason =
       restore ? std::string(core::kRestartRestoreReason) + " " +
@@ -72,33 +65,20 @@ bool PersistGuard(ReachRuntime& reach, const std::string& actuator, StateStore* 
              std::to_string(nominal));
     return false;
   }
-  reach.guard_on_disk = true;
+  reach.runner.OnGuardPersisted();
   LogInfo("reach " + reach.name() + ": experiment guard persisted (" + guard.actuator +
           ", nominal " + std::to_string(nominal) + ")");
   return true;
 }
 
-bool ConfirmsRestore(const ReachRuntime& reach, const drivers::WriteResult& result) {
-  return result.outcome == drivers::WriteOutcome::kWritten && reach.restore_pending &&
-         std::abs(result.written - reach.restore_target) <=
-             1e-9 * (1.0 + std::abs(reach.restore_target));
-}
-
-void OnRestoreConfirmed(ReachRuntime& reach, StateStore* store) {
-  const core::ExperimentPhase phase = reach.pipeline().experiment_state().phase;
-  if (phase == core::ExperimentPhase::kSettling || phase == core::ExperimentPhase::kExciting)
-    return;  // a new experiment's settling write, not an end: its guard stays
-  if (reach.guard_on_disk && !reach.keep_guard) {
-    try {
-      // guard_on_disk: the guard was written through, or read from, the store.
-      store->RemoveGuard(reach.name());
-    } catch (const std::exception& e) {
-      // The file stays and names a nominal the PLC has confirmed; the next experiment rewrites it.
-      LogError(std::string("state: ") + e.what());
-    }
-    reach.guard_on_disk = false;
+void RemoveGuard(const ReachRuntime& reach, StateStore* store) {
+  // The controller asks only for a guard written through, or read from, the store.
+  if (store == nullptr) return;
+  try {
+    store->RemoveGuard(reach.name());
+  } catch (const std::exception& e) {
+    LogError(std::string("state: ") + e.what());
   }
-  reach.runner.OnRestoreConfirmed();
 }
 
 }  // namespace canalid::daemon

@@ -1,14 +1,18 @@
-// DecideRestart: each start-up rule on an interrupted experiment's guard; the reach runner that
-// applies the decision (restore first, hold, refuse, never a PRBS reading as the nominal); the
-// abort on a guard not persisted; and the decision `canalid replay` rebuilds from the message.
+// DecideRestart: each start-up rule on an interrupted experiment's guard; the reach controller
+// that applies the decision (restore first, hold, refuse, never a PRBS reading as the nominal); the
+// abort on a guard not persisted; the restore safety the controller keeps (a restore asked again
+// until the PLC confirms that value, when the guard is removed or kept, an operator's start
+// refused); the stop's wait; and the decision `canalid replay` rebuilds from the message.
 #include "core/experiment/experiment_guard.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include "core/reach/reach_controller.h"
+#include "core/reach/stop_rule.h"
 
 namespace canalid::core {
 namespace {
@@ -155,9 +159,11 @@ TEST(ReachControllerRestart, RestoresFirstThenCentresTheExperimentOnThePersisted
   const ReachPollOutcome poll = runner.OnPoll(Readings(1.417689));
   EXPECT_FALSE(poll.nominal_read);
   EXPECT_EQ(runner.nominal(), 1.532637);
+  EXPECT_EQ(poll.actions.write_setpoint, 1.532637);  // the restore, written first
+  EXPECT_TRUE(poll.actions.restore_nominal);
   EXPECT_FALSE(runner.excitation_allowed());
   EXPECT_FALSE(runner.StartIfDue(true, true));  // held until the restore is confirmed
-  runner.OnRestoreConfirmed();
+  EXPECT_TRUE(runner.OnWriteResult({true, 1.532637}).restore_confirmed);
   EXPECT_TRUE(runner.excitation_allowed());
   const auto start = runner.StartIfDue(true, true);
   ASSERT_TRUE(start);
@@ -171,7 +177,8 @@ TEST(ReachControllerRestart, ARefusalNeverStartsAndTakesNoReadingAsNominal) {
   const ReachPollOutcome poll = runner.OnPoll(Readings(1.417689));
   EXPECT_FALSE(poll.nominal_read);
   EXPECT_FALSE(runner.nominal_known());
-  runner.OnRestoreConfirmed();
+  EXPECT_FALSE(poll.actions.write_setpoint);  // no nominal known: nothing to restore
+  EXPECT_FALSE(runner.OnWriteResult({true, 1.417689}).restore_confirmed);
   EXPECT_FALSE(runner.excitation_allowed());
   EXPECT_FALSE(runner.StartIfDue(true, true));
 }
@@ -180,7 +187,7 @@ TEST(ReachSampleProcessorGuard, AGuardNotPersistedAbortsAndRestoresTheNominal) {
   ReachController runner(RunnerOptions());
   runner.OnPoll(Readings(1.2));
   ASSERT_TRUE(runner.StartIfDue(true, true));
-  const ReachActions a = runner.pipeline().OnGuardNotPersisted();
+  const ReachActions a = runner.OnGuardNotPersisted();
   EXPECT_EQ(runner.pipeline().experiment_state().phase, ExperimentPhase::kAborted);
   EXPECT_EQ(runner.pipeline().experiment_state().abort_reason, AbortReason::kGuardNotPersisted);
   EXPECT_STREQ(AbortReasonName(AbortReason::kGuardNotPersisted), "experiment guard not persisted");
@@ -188,7 +195,152 @@ TEST(ReachSampleProcessorGuard, AGuardNotPersistedAbortsAndRestoresTheNominal) {
   EXPECT_EQ(*a.write_setpoint, 1.2);
   EXPECT_TRUE(a.restore_nominal);
   // Not running: nothing to abort.
-  EXPECT_FALSE(runner.pipeline().OnGuardNotPersisted().write_setpoint);
+  EXPECT_FALSE(runner.OnGuardNotPersisted().write_setpoint);
+}
+
+// ----- the restore safety the controller keeps (reach_controller.h) -----------------------------
+
+ReachReadings LinkDown(double time_s) {
+  ReachReadings r;
+  r.link_ok = false;
+  r.status_ok = false;
+  r.time_s = time_s;
+  return r;
+}
+
+// A controller whose experiment around 1.2 (settling `settle_samples` first) is running, its
+// guard persisted.
+ReachController Running(std::int64_t settle_samples = 0) {
+  ReachControllerOptions options = RunnerOptions();
+  options.experiment_for_nominal = [settle_samples,
+                                    plan_for = options.experiment_for_nominal](double nominal) {
+    ExperimentPlan plan = plan_for(nominal);
+    plan.settle_samples = settle_samples;
+    return plan;
+  };
+  ReachController runner(options);
+  runner.OnPoll(Readings(1.2));
+  const auto start = runner.StartIfDue(true, true);
+  EXPECT_TRUE(start);
+  for (std::int64_t k = 0; k < settle_samples; ++k) runner.OnPoll(Readings(1.2));
+  EXPECT_EQ(runner.pipeline().experiment_state().phase, ExperimentPhase::kExciting);
+  runner.OnGuardPersisted();
+  return runner;
+}
+
+TEST(ReachControllerRestoreSafety, APendingRestoreIsAskedAgainOnEveryPollUntilTheValueIsConfirmed) {
+  ReachController runner = Running();
+  const ReachActions stop = runner.Stop();
+  EXPECT_EQ(stop.write_setpoint, 1.2);
+  EXPECT_EQ(runner.restore_pending(), 1.2);
+  // Every poll with the link up asks for it again; one with the link down does not.
+  for (int i = 0; i < 3; ++i) {
+    const ReachActions again = runner.OnPoll(Readings(1.25)).actions;
+    EXPECT_EQ(again.write_setpoint, 1.2) << i;
+    EXPECT_TRUE(again.restore_nominal) << i;
+    EXPECT_FALSE(runner.needs_guard(again)) << i;  // a restore never waits for the guard
+  }
+  EXPECT_FALSE(runner.OnPoll(LinkDown(0.0)).actions.write_setpoint);
+  // Neither another value written nor a failed write confirms it.
+  EXPECT_FALSE(runner.OnWriteResult({true, 1.25}).restore_confirmed);
+  EXPECT_FALSE(runner.OnWriteResult({true, 1.2 + 1e-6}).restore_confirmed);
+  const ReachWriteOutcome failed = runner.OnWriteResult({false, 1.2});
+  EXPECT_FALSE(failed.restore_confirmed);
+  EXPECT_FALSE(failed.actions.write_setpoint);  // nothing running to abort
+  EXPECT_EQ(runner.restore_pending(), 1.2);
+  // The PLC confirms 1.2: nothing more is asked, and the guard has done its job.
+  const ReachWriteOutcome confirmed = runner.OnWriteResult({true, 1.2});
+  EXPECT_TRUE(confirmed.restore_confirmed);
+  EXPECT_TRUE(confirmed.remove_guard);
+  EXPECT_FALSE(runner.restore_pending());
+  EXPECT_FALSE(runner.OnPoll(Readings(1.2)).actions.write_setpoint);
+  // A second confirmation removes nothing twice, and the next experiment needs a guard again.
+  EXPECT_FALSE(runner.OnWriteResult({true, 1.2}).remove_guard);
+  EXPECT_TRUE(runner.needs_guard(runner.Start()));
+}
+
+TEST(ReachControllerRestoreSafety, AFailedWriteDuringAnExperimentAbortsAndRestores) {
+  ReachController runner = Running();
+  const ReachWriteOutcome failed = runner.OnWriteResult({false, 1.25});
+  EXPECT_EQ(runner.pipeline().experiment_state().abort_reason, AbortReason::kWriteFailed);
+  EXPECT_EQ(failed.actions.write_setpoint, 1.2);
+  EXPECT_TRUE(failed.actions.restore_nominal);
+  EXPECT_EQ(runner.restore_pending(), 1.2);
+}
+
+TEST(ReachControllerRestoreSafety, TheLinkLostBetweenPollsAbortsAndRestoresOnceItIsBack) {
+  ReachController runner = Running();
+  const ReachActions lost = runner.OnLinkLost();
+  EXPECT_EQ(runner.pipeline().experiment_state().abort_reason, AbortReason::kLinkLost);
+  EXPECT_EQ(runner.restore_pending(), 1.2);
+  EXPECT_EQ(lost.write_setpoint, 1.2);  // queued: the poller writes it once it reconnects
+  EXPECT_EQ(runner.OnPoll(Readings(1.25)).actions.write_setpoint, 1.2);
+}
+
+TEST(ReachControllerRestoreSafety, AnExcitationWriteSupersedesAPendingRestore) {
+  ReachController runner = Running();
+  runner.Stop();
+  // An operator starts again (no settling) before the PLC has confirmed the stop's restore.
+  const ReachActions start = runner.Start();
+  ASSERT_TRUE(start.write_setpoint);
+  EXPECT_FALSE(start.restore_nominal);
+  EXPECT_FALSE(runner.restore_pending());
+  const ReachWriteOutcome late = runner.OnWriteResult({true, 1.2});
+  EXPECT_FALSE(late.restore_confirmed);
+  EXPECT_FALSE(late.remove_guard);  // the running experiment's guard
+  EXPECT_FALSE(runner.needs_guard(start));
+  // The next poll writes the PRBS's next level, not the nominal.
+  const ReachActions next = runner.OnPoll(Readings(1.25)).actions;
+  ASSERT_TRUE(next.write_setpoint);
+  EXPECT_FALSE(next.restore_nominal);
+  EXPECT_NEAR(std::abs(*next.write_setpoint - 1.2), 0.05, 1e-12);
+}
+
+TEST(ReachControllerRestoreSafety, AConfirmationWhileANewExperimentSettlesKeepsItsGuard) {
+  ReachController runner = Running(/*settle_samples=*/3);
+  runner.Stop();
+  // Started again: settling writes the nominal, as a restore.
+  const ReachActions start = runner.Start();
+  EXPECT_EQ(start.write_setpoint, 1.2);
+  EXPECT_TRUE(start.restore_nominal);
+  const ReachWriteOutcome confirmed = runner.OnWriteResult({true, 1.2});
+  EXPECT_TRUE(confirmed.restore_confirmed);
+  EXPECT_FALSE(confirmed.remove_guard);  // the settling experiment excites next
+}
+
+TEST(ReachControllerRestoreSafety, ARefusedStartUpRestoresTheConfiguredNominalAndKeepsTheGuard) {
+  ReachControllerOptions options = RunnerOptions();
+  options.nominal_setpoint = 0.9;
+  ReachController runner(options);
+  EXPECT_EQ(runner.ApplyRestart(DecideRestart(Context(0.9), Corrupt())), "");
+  EXPECT_EQ(runner.restore_pending(), 0.9);
+  EXPECT_EQ(runner.OnPoll(Readings(1.417689)).actions.write_setpoint, 0.9);
+  const ReachWriteOutcome confirmed = runner.OnWriteResult({true, 0.9});
+  EXPECT_TRUE(confirmed.restore_confirmed);
+  EXPECT_FALSE(confirmed.remove_guard);  // for an operator to check
+  EXPECT_FALSE(runner.excitation_allowed());
+  EXPECT_NE(runner.StartRefusal(), "");
+  EXPECT_FALSE(runner.StartIfDue(true, true));
+}
+
+TEST(ReachControllerRestoreSafety, AnOperatorsStartIsRefusedWithoutAPlanOrBeforeTheRestore) {
+  ReachControllerOptions none = RunnerOptions();
+  none.experiment_for_nominal = nullptr;
+  ReachController no_plan(none);
+  no_plan.OnPoll(Readings(1.2));
+  EXPECT_EQ(no_plan.StartRefusal(), "no experiment to start");
+  ReachController held(RunnerOptions());
+  held.ApplyRestart(DecideRestart(Context(), Found(1.2)));
+  EXPECT_NE(held.StartRefusal().find("not restored"), std::string::npos) << held.StartRefusal();
+  held.OnWriteResult({true, 1.2});
+  EXPECT_EQ(held.StartRefusal(), "");
+}
+
+TEST(DecideStop, WaitsForEveryRestoreUntilTheDeadline) {
+  EXPECT_EQ(DecideStop(false, 10.0, 5.0), StopProgress::kSafe);
+  EXPECT_EQ(DecideStop(false, 1.0, 5.0), StopProgress::kSafe);
+  EXPECT_EQ(DecideStop(true, 4.999, 5.0), StopProgress::kWait);
+  EXPECT_EQ(DecideStop(true, 5.0, 5.0), StopProgress::kDeadlinePassed);
 }
 
 TEST(RestartDecisionFromMessage, RebuildsWhatTheDaemonDecided) {

@@ -134,7 +134,8 @@ struct Write {
 };
 
 // Runs the daemon's per-poll sequence: OnPoll, act on its writes, then StartIfDue and act on its
-// writes (the pool takes every write at once, as a PLC that confirms it).
+// writes. The pool takes every write at once and, while `confirm_writes`, the PLC's confirmation
+// goes back to the controller at once (OnWriteResult).
 class Harness {
  public:
   explicit Harness(ReachControllerOptions options, double actuator = 1.0)
@@ -162,6 +163,7 @@ class Harness {
   std::vector<Write> writes;
   std::vector<int> started_at;
   int polls = 0;
+  bool confirm_writes = true;
 
  private:
   void Take(const ReachActions& a) {
@@ -171,6 +173,10 @@ class Harness {
     }
     writes.push_back({polls, *a.write_setpoint, a.restore_nominal, a.experiment_record_complete});
     pool.Write(*a.write_setpoint);
+    if (confirm_writes) {
+      const ReachWriteOutcome outcome = controller.OnWriteResult({true, *a.write_setpoint});
+      EXPECT_FALSE(outcome.actions.write_setpoint) << "a written setpoint aborted, poll " << polls;
+    }
   }
 };
 
@@ -417,7 +423,7 @@ TEST(ReachControllerExperiment, APlantWithAnIdModelInsideTheBankEndsDone) {
   h.Steps(static_cast<int>(kSettle + kExcite) + 1);
   ASSERT_EQ(h.phase(), ExperimentPhase::kIdentifying);
   ReachActions done;
-  const auto result = h.controller.pipeline().IdentifyRecord(&done);
+  const auto result = h.controller.IdentifyRecord(&done);
   ASSERT_TRUE(result);
   EXPECT_EQ(h.controller.pipeline().identification_problem(), "");
   EXPECT_EQ(h.phase(), ExperimentPhase::kDone);
@@ -431,7 +437,7 @@ TEST(ReachControllerExperiment, AStopRestoresTheNominal) {
   h.Steps(static_cast<int>(kSettle) + 4);
   ASSERT_EQ(h.phase(), ExperimentPhase::kExciting);
   EXPECT_NE(h.pool.actuator(), 1.0);
-  const ReachActions stop = h.controller.pipeline().StopExperiment();
+  const ReachActions stop = h.controller.Stop();
   ASSERT_TRUE(stop.write_setpoint);
   EXPECT_EQ(*stop.write_setpoint, 1.0);
   EXPECT_TRUE(stop.restore_nominal);
@@ -617,21 +623,30 @@ TEST(ReachControllerRestart, AGuardFromACrashRestoresItsNominalNotTheExcitedRead
   EXPECT_EQ(h.controller.pipeline().experiment_plan()->prbs.nominal, 1.2);
   EXPECT_FALSE(h.controller.excitation_allowed());
 
-  // Polls before the PLC confirms the restore: the excited reading is not the nominal, and
-  // nothing starts.
+  // Polls before the PLC confirms the restore: each asks for the guard's nominal again, the
+  // excited reading is not the nominal, and nothing starts.
+  ASSERT_TRUE(decision.restore_setpoint);
+  EXPECT_EQ(*decision.restore_setpoint, 1.2);
+  h.confirm_writes = false;
   for (int i = 0; i < 3; ++i) EXPECT_FALSE(h.Step().nominal_read);
   EXPECT_EQ(h.controller.nominal(), 1.2);
   EXPECT_TRUE(h.started_at.empty());
-  EXPECT_TRUE(h.writes.empty());
+  ASSERT_EQ(h.writes.size(), 3U);
+  for (const Write& w : h.writes) {
+    EXPECT_EQ(w.value, 1.2) << "poll " << w.poll;
+    EXPECT_TRUE(w.restore) << "poll " << w.poll;
+  }
 
-  // The daemon writes restore_setpoint; the PLC confirms it.
-  ASSERT_TRUE(decision.restore_setpoint);
-  EXPECT_EQ(*decision.restore_setpoint, 1.2);
-  h.pool.Write(*decision.restore_setpoint);
-  h.controller.OnRestoreConfirmed();
+  // The PLC confirms it: the guard has done its job, experiments may start.
+  const ReachWriteOutcome confirmed = h.controller.OnWriteResult({true, 1.2});
+  EXPECT_TRUE(confirmed.restore_confirmed);
+  EXPECT_TRUE(confirmed.remove_guard);
   EXPECT_TRUE(h.controller.excitation_allowed());
+  EXPECT_FALSE(h.controller.restore_pending());
 
   // The on_start experiment now runs around the guarded nominal and ends on it.
+  h.confirm_writes = true;
+  h.writes.clear();
   const int start = h.polls;
   h.Steps(static_cast<int>(kSettle + kExcite) + 1);
   EXPECT_EQ(h.started_at, std::vector<int>{start});
@@ -647,9 +662,11 @@ TEST(ReachControllerRestart, AGuardFromACrashRestoresItsNominalNotTheExcitedRead
 TEST(ReachControllerRestart, AnAbortAfterARestartRestoresTheGuardedNominal) {
   Harness h(Options(std::nullopt), /*actuator=*/1.1);
   EXPECT_EQ(h.controller.ApplyRestart(DecideRestart(Context(), Guard(1.2))), "");
-  h.pool.Write(1.2);
-  h.controller.OnRestoreConfirmed();
+  // The first poll writes the guard's nominal (confirmed at once here), then starts.
   h.Steps(static_cast<int>(kSettle) + 4);
+  EXPECT_EQ(h.writes.front().value, 1.2);
+  EXPECT_TRUE(h.writes.front().restore);
+  EXPECT_EQ(h.started_at, std::vector<int>{0});
   ASSERT_EQ(h.phase(), ExperimentPhase::kExciting);
   ReachReadings down;
   down.link_ok = false;
@@ -668,8 +685,20 @@ TEST(ReachControllerRestart, TheConfiguredNominalWinsForTheNextExperiment) {
   EXPECT_EQ(h.controller.ApplyRestart(decision), "");
   EXPECT_EQ(h.controller.nominal(), 1.0);
   EXPECT_EQ(h.controller.pipeline().experiment_plan()->prbs.nominal, 1.0);
+  // The guard's nominal is restored first, and nothing starts before the PLC confirms it.
+  h.confirm_writes = false;
   EXPECT_FALSE(h.Step().nominal_read);
+  ASSERT_EQ(h.writes.size(), 1U);
+  EXPECT_EQ(h.writes[0].value, 1.2);
+  EXPECT_TRUE(h.writes[0].restore);
   EXPECT_TRUE(h.started_at.empty());
+  EXPECT_TRUE(h.controller.OnWriteResult({true, 1.2}).restore_confirmed);
+  // Then the experiment settles at the configured nominal.
+  h.confirm_writes = true;
+  h.Step();
+  EXPECT_EQ(h.started_at, std::vector<int>{1});
+  EXPECT_EQ(h.writes.back().value, 1.0);
+  EXPECT_TRUE(h.writes.back().restore);  // settling holds the nominal (experiment.h)
 }
 
 TEST(ReachControllerRestart, ARefusalWithoutANominalNeverExcitesNorReadsOne) {
@@ -678,7 +707,9 @@ TEST(ReachControllerRestart, ARefusalWithoutANominalNeverExcitesNorReadsOne) {
   corrupt.kind = GuardReading::Kind::kCorrupt;
   corrupt.problem = "state/pool1.experiment.json: not JSON";
   EXPECT_EQ(h.controller.ApplyRestart(DecideRestart(Context(), corrupt)), "");
-  h.controller.OnRestoreConfirmed();  // nothing to confirm; still refused
+  // Nothing is pending: a write of the reading confirms nothing, and it stays refused.
+  EXPECT_FALSE(h.controller.restore_pending());
+  EXPECT_FALSE(h.controller.OnWriteResult({true, 1.3}).restore_confirmed);
   for (int i = 0; i < 5; ++i) EXPECT_FALSE(h.Step().nominal_read);
   EXPECT_FALSE(h.controller.nominal_known());
   EXPECT_FALSE(h.controller.excitation_allowed());
