@@ -99,7 +99,8 @@ struct ExperimentState {
 /// What the caller must do after a transition.
 struct ExperimentActions {
   std::optional<double> write_setpoint;  ///< write this value to the actuator now
-  bool restore_nominal = false;       ///< the write above is the nominal setpoint (abort/stop/end)
+  /// The write above is the nominal setpoint (settling, abort, stop, end of the excitation).
+  bool restore_nominal = false;
   bool record_sample = false;         ///< this sample belongs to the experiment record
   bool start_identification = false;  ///< the record is complete: identify it
   bool phase_changed = false;         ///< publish the new state

@@ -32,6 +32,7 @@ std::string ReachController::ApplyRestart(const RestartDecision& decision) {
   guard_on_disk_ = decision.action != RestartDecision::Action::kNone;
   keep_guard_ = decision.action == RestartDecision::Action::kRefuse;
   restore_pending_ = decision.restore_setpoint;
+  restore_first_write_.reset();
   // Refused without a nominal: the actuator may sit at a PRBS level, so its reading is no nominal.
   adopt_reading_ = !refused_;
   if (decision.nominal) return SetNominal(*decision.nominal);
@@ -110,11 +111,14 @@ ReachWriteOutcome ReachController::OnWriteResult(const ActuatorWrite& write) {
     outcome.actions = Track(pipeline_.OnWriteFailed());
     return outcome;
   }
-  if (!restore_pending_ ||
+  // A write asked for before this restore began (say, the previous stop's, answered after an
+  // excitation write) says nothing of where the actuator is now.
+  if (!restore_pending_ || !restore_first_write_ || write.id < *restore_first_write_ ||
       std::abs(write.value - *restore_pending_) > 1e-9 * (1.0 + std::abs(*restore_pending_))) {
-    return outcome;  // an excitation write, or an older value
+    return outcome;
   }
   restore_pending_.reset();
+  restore_first_write_.reset();
   outcome.restore_confirmed = true;
   const ExperimentPhase phase = pipeline_.experiment_state().phase;
   if (phase == ExperimentPhase::kSettling || phase == ExperimentPhase::kExciting) {
@@ -126,11 +130,17 @@ ReachWriteOutcome ReachController::OnWriteResult(const ActuatorWrite& write) {
   return outcome;
 }
 
+void ReachController::OnWriteQueued(std::uint64_t id) {
+  if (restore_pending_ && !restore_first_write_) restore_first_write_ = id;
+}
+
 ReachActions ReachController::Track(ReachActions actions) {
   // A restore is pending until confirmed; an excitation write supersedes it (the experiment's
-  // end or abort restores again), so no poll re-asks for the nominal in the middle of one.
+  // end or abort restores again), so no poll re-asks for the nominal in the middle of one. Each
+  // restore begins anew: only writes queued from now on can confirm it.
   if (actions.write_setpoint) {
     restore_pending_ = actions.restore_nominal ? actions.write_setpoint : std::optional<double>();
+    restore_first_write_.reset();
   }
   return actions;
 }

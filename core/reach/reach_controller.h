@@ -1,4 +1,5 @@
 #pragma once
+#include <cstdint>
 #include <functional>
 #include <limits>
 #include <optional>
@@ -72,11 +73,13 @@ ReachReadings ReadReach(const ReachChannels& c, const Values& values, Valid vali
 struct ActuatorWrite {
   bool written = false;  ///< the PLC took it
   double value = 0.0;    ///< the value written
+  std::uint64_t id = 0;  ///< the id OnWriteQueued() was told for it
 };
 
 /// What a write result did to a reach.
 struct ReachWriteOutcome {
-  /// The PLC now holds the nominal setpoint the reach was restoring (restore_pending() is none).
+  /// The PLC took the nominal setpoint the reach was restoring, in a write asked for since that
+  /// restore began (restore_pending() is none now).
   bool restore_confirmed = false;
   /// The experiment guard has done its job: remove it (the caller's store owns the file).
   bool remove_guard = false;
@@ -99,14 +102,15 @@ struct ReachPollOutcome {
 /// the ReachSampleProcessor step, and the start of an on_start experiment at the first complete
 /// poll. It also holds the reach's restore safety, the rules that bring the actuator back to its
 /// nominal and decide when that is done:
-/// - every action that restores the nominal leaves it pending until a write of that value is
-///   confirmed (OnWriteResult) or an excitation write supersedes it; each poll with the link up
-///   asks for it again (OnPoll);
+/// - every action that restores the nominal leaves it pending until a write of that value, queued
+///   since the restore began, is confirmed (OnWriteQueued, OnWriteResult), or an excitation write
+///   supersedes it; each poll with the link up asks for it again (OnPoll);
 /// - an excitation write needs the experiment guard durably written first (needs_guard(),
 ///   OnGuardPersisted(); OnGuardNotPersisted() aborts instead);
 /// - the guard is removed once the nominal is confirmed with no experiment running, and kept
 ///   after a refused start-up (for an operator to check);
-/// - after a restart that restores first, no experiment starts before that restore is confirmed.
+/// - after a restart that restores first, no experiment starts by itself (StartIfDue) or is
+///   accepted from an operator (StartRefusal) before that restore is confirmed.
 /// Every event that can change the actuator goes through this class, never the pipeline
 /// directly. Pure and deterministic; allocates only when a plan is installed (once).
 class ReachController final {
@@ -125,13 +129,16 @@ class ReachController final {
 
   /// Why an operator's start would be refused now (empty: it would start).
   std::string StartRefusal() const;
-  /// Starts the experiment now (an operator's command: check StartRefusal() first; a replay
-  /// follows the live run's start).
+  /// Starts the experiment now, without the checks of StartRefusal() (an operator's command checks
+  /// it first; a replay follows the live run's start).
   ReachActions Start();
   /// An operator's stop, or the daemon's: aborts a running experiment, restoring the nominal.
   ReachActions Stop();
   /// The link to the PLC is down between polls: aborts a running experiment.
   ReachActions OnLinkLost();
+  /// The caller queued the write of the last actions to the actuator, under `id` (ids increase
+  /// from one write to the next). Only a write queued since a restore began can confirm it.
+  void OnWriteQueued(std::uint64_t id);
   /// The PLC's answer to a write on the reach's actuator.
   ReachWriteOutcome OnWriteResult(const ActuatorWrite& write);
   /// An excitation write in `actions` that needs the experiment guard written first.
@@ -183,6 +190,8 @@ class ReachController final {
   bool held_ = false;
   bool adopt_reading_ = true;
   std::optional<double> restore_pending_;
+  /// The first write queued for the pending restore (none: none queued yet).
+  std::optional<std::uint64_t> restore_first_write_;
   bool guard_on_disk_ = false;  ///< written by this run, or left by an interrupted one
   bool keep_guard_ = false;     ///< a refused start-up: the guard stays for an operator
   std::string initial_plan_error_;

@@ -217,7 +217,8 @@ void Daemon::OnWriteResult(int index, const drivers::WriteResult& result) {
     ReachRuntime& reach = *reaches_[static_cast<std::size_t>(r)];
     if (reach.wiring.runner.channels.actuator != result.channel) continue;
     const bool written = result.outcome == drivers::WriteOutcome::kWritten;
-    const core::ReachWriteOutcome outcome = reach.runner.OnWriteResult({written, result.written});
+    const core::ReachWriteOutcome outcome =
+        reach.runner.OnWriteResult({written, result.written, result.id});
     if (outcome.restore_confirmed) {
       LogInfo("reach " + reach.name() + ": nominal setpoint " + std::to_string(result.written) +
               " restored");
@@ -238,7 +239,9 @@ void Daemon::RequestSetpoint(ReachRuntime& reach, double value) {
           reach.wiring.runner.channels.actuator, value);
   if (ticket.status != drivers::WriteQueueStatus::kQueued) {
     LogWarning("reach " + reach.name() + ": setpoint write not queued");
+    return;
   }
+  reach.runner.OnWriteQueued(ticket.id);
 }
 
 void Daemon::Handle(ReachRuntime& reach, const core::ReachActions& actions, double time_s) {

@@ -28,9 +28,9 @@ namespace canalid::daemon {
 enum class DaemonExit { kStopped, kReload, kFailed };
 
 /// The daemon's runtime: one Asio loop on the calling thread, one poller thread per PLC, one
-/// ReachSampleProcessor per reach.  Decisions on plant data are the pipelines' (core); this class
-/// moves samples, actions and messages between them, the PLCs and the bus, and wires the parts that
-/// do one job each: SignalWatch, BusWatch, Heartbeat, CommandDispatch, restore_safety.h,
+/// core::ReachController per reach.  Decisions on plant data are the controllers' (core); this
+/// class moves samples, actions and messages between them, the PLCs and the bus, and wires the
+/// parts that do one job each: SignalWatch, BusWatch, Heartbeat, CommandDispatch, restore_safety.h,
 /// model_persistence.h with its PersistenceWorker, health_report.h.
 ///
 /// Persistence: an identified model is saved on the PersistenceWorker's thread, never on the
@@ -38,15 +38,16 @@ enum class DaemonExit { kStopped, kReload, kFailed };
 ///
 /// Safety (the rules are core::ReachController's and core::DecideStop's, tested in process; the
 /// daemon carries out their actions): every restore of a nominal setpoint stays pending until the
-/// PLC confirms the nominal value was written (a write refused while the link is down, or
-/// shortened by the rate limit, is asked again on the next sample).  No excitation write goes out
+/// PLC confirms a write of the nominal queued since the restore began (a write refused while the
+/// link is down, or shortened by the rate limit, is asked again on the next sample with the link
+/// up); the next experiment's excitation write supersedes it.  No excitation write goes out
 /// before the reach's experiment guard (core/experiment/experiment_guard.h) is durably in the
 /// state directory; the guard is removed once the PLC confirms the nominal at the experiment's
 /// end.  At start, a guard left by a crash is decided on by core::DecideRestart: its nominal is
 /// restored first, before any experiment. SIGTERM/SIGINT stop the experiments, wait (at most
-/// `stop_timeout_s`) for the nominal setpoints to be written, then stop.  SIGHUP asks `reload` for a new plan: when it returns one,
-/// Run() stops safely and returns kReload (the caller builds a new Daemon); when it returns none
-/// (invalid configuration), the daemon carries on.
+/// `stop_timeout_s`) for the nominal setpoints to be written, then stop.  SIGHUP asks `reload` for
+/// a new plan: when it returns one, Run() stops safely and returns kReload (the caller builds a new
+/// Daemon); when it returns none (invalid configuration), the daemon carries on.
 class Daemon final {
  public:
   using PortFactory = std::function<std::unique_ptr<drivers::PlcPort>(const PlcWiring&)>;

@@ -163,7 +163,8 @@ TEST(ReachControllerRestart, RestoresFirstThenCentresTheExperimentOnThePersisted
   EXPECT_TRUE(poll.actions.restore_nominal);
   EXPECT_FALSE(runner.excitation_allowed());
   EXPECT_FALSE(runner.StartIfDue(true, true));  // held until the restore is confirmed
-  EXPECT_TRUE(runner.OnWriteResult({true, 1.532637}).restore_confirmed);
+  runner.OnWriteQueued(1);
+  EXPECT_TRUE(runner.OnWriteResult({true, 1.532637, 1}).restore_confirmed);
   EXPECT_TRUE(runner.excitation_allowed());
   const auto start = runner.StartIfDue(true, true);
   ASSERT_TRUE(start);
@@ -178,7 +179,8 @@ TEST(ReachControllerRestart, ARefusalNeverStartsAndTakesNoReadingAsNominal) {
   EXPECT_FALSE(poll.nominal_read);
   EXPECT_FALSE(runner.nominal_known());
   EXPECT_FALSE(poll.actions.write_setpoint);  // no nominal known: nothing to restore
-  EXPECT_FALSE(runner.OnWriteResult({true, 1.417689}).restore_confirmed);
+  runner.OnWriteQueued(1);
+  EXPECT_FALSE(runner.OnWriteResult({true, 1.417689, 1}).restore_confirmed);
   EXPECT_FALSE(runner.excitation_allowed());
   EXPECT_FALSE(runner.StartIfDue(true, true));
 }
@@ -194,6 +196,8 @@ TEST(ReachSampleProcessorGuard, AGuardNotPersistedAbortsAndRestoresTheNominal) {
   ASSERT_TRUE(a.write_setpoint);
   EXPECT_EQ(*a.write_setpoint, 1.2);
   EXPECT_TRUE(a.restore_nominal);
+  // The excitation write that needed the guard superseded nothing: the abort's restore is pending.
+  EXPECT_EQ(runner.restore_pending(), 1.2);
   // Not running: nothing to abort.
   EXPECT_FALSE(runner.OnGuardNotPersisted().write_setpoint);
 }
@@ -208,9 +212,22 @@ ReachReadings LinkDown(double time_s) {
   return r;
 }
 
-// A controller whose experiment around 1.2 (settling `settle_samples` first) is running, its
-// guard persisted.
-ReachController Running(std::int64_t settle_samples = 0) {
+// Write ids as the daemon's poller hands them out: Queue() tells the controller that the write of
+// its last actions was queued and returns the write's id.
+class WriteIds {
+ public:
+  std::uint64_t Queue(ReachController& runner) {
+    runner.OnWriteQueued(next_);
+    return next_++;
+  }
+
+ private:
+  std::uint64_t next_ = 1;
+};
+
+// A controller whose experiment around 1.2 (with RunnerOptions' 30 exciting samples, settling
+// `settle_samples` first) is running, its guard persisted, every write so far queued in `ids`.
+ReachController Running(WriteIds& ids, std::int64_t settle_samples = 0) {
   ReachControllerOptions options = RunnerOptions();
   options.experiment_for_nominal = [settle_samples,
                                     plan_for = options.experiment_for_nominal](double nominal) {
@@ -222,6 +239,7 @@ ReachController Running(std::int64_t settle_samples = 0) {
   runner.OnPoll(Readings(1.2));
   const auto start = runner.StartIfDue(true, true);
   EXPECT_TRUE(start);
+  ids.Queue(runner);
   for (std::int64_t k = 0; k < settle_samples; ++k) runner.OnPoll(Readings(1.2));
   EXPECT_EQ(runner.pipeline().experiment_state().phase, ExperimentPhase::kExciting);
   runner.OnGuardPersisted();
@@ -229,39 +247,61 @@ ReachController Running(std::int64_t settle_samples = 0) {
 }
 
 TEST(ReachControllerRestoreSafety, APendingRestoreIsAskedAgainOnEveryPollUntilTheValueIsConfirmed) {
-  ReachController runner = Running();
+  WriteIds ids;
+  ReachController runner = Running(ids);
   const ReachActions stop = runner.Stop();
   EXPECT_EQ(stop.write_setpoint, 1.2);
   EXPECT_EQ(runner.restore_pending(), 1.2);
+  ids.Queue(runner);
   // Every poll with the link up asks for it again; one with the link down does not.
   for (int i = 0; i < 3; ++i) {
     const ReachActions again = runner.OnPoll(Readings(1.25)).actions;
     EXPECT_EQ(again.write_setpoint, 1.2) << i;
     EXPECT_TRUE(again.restore_nominal) << i;
     EXPECT_FALSE(runner.needs_guard(again)) << i;  // a restore never waits for the guard
+    ids.Queue(runner);
   }
   EXPECT_FALSE(runner.OnPoll(LinkDown(0.0)).actions.write_setpoint);
   // Neither another value written nor a failed write confirms it.
-  EXPECT_FALSE(runner.OnWriteResult({true, 1.25}).restore_confirmed);
-  EXPECT_FALSE(runner.OnWriteResult({true, 1.2 + 1e-6}).restore_confirmed);
-  const ReachWriteOutcome failed = runner.OnWriteResult({false, 1.2});
+  EXPECT_FALSE(runner.OnWriteResult({true, 1.25, ids.Queue(runner)}).restore_confirmed);
+  EXPECT_FALSE(runner.OnWriteResult({true, 1.2 + 1e-6, ids.Queue(runner)}).restore_confirmed);
+  const ReachWriteOutcome failed = runner.OnWriteResult({false, 1.2, ids.Queue(runner)});
   EXPECT_FALSE(failed.restore_confirmed);
   EXPECT_FALSE(failed.actions.write_setpoint);  // nothing running to abort
   EXPECT_EQ(runner.restore_pending(), 1.2);
   // The PLC confirms 1.2: nothing more is asked, and the guard has done its job.
-  const ReachWriteOutcome confirmed = runner.OnWriteResult({true, 1.2});
+  const ReachWriteOutcome confirmed = runner.OnWriteResult({true, 1.2, ids.Queue(runner)});
   EXPECT_TRUE(confirmed.restore_confirmed);
   EXPECT_TRUE(confirmed.remove_guard);
   EXPECT_FALSE(runner.restore_pending());
   EXPECT_FALSE(runner.OnPoll(Readings(1.2)).actions.write_setpoint);
   // A second confirmation removes nothing twice, and the next experiment needs a guard again.
-  EXPECT_FALSE(runner.OnWriteResult({true, 1.2}).remove_guard);
+  EXPECT_FALSE(runner.OnWriteResult({true, 1.2, ids.Queue(runner)}).remove_guard);
   EXPECT_TRUE(runner.needs_guard(runner.Start()));
 }
 
+TEST(ReachControllerRestoreSafety, TheEndOfTheExcitationRestoresAndThenRemovesTheGuard) {
+  WriteIds ids;
+  ReachController runner = Running(ids);
+  ReachActions end;
+  for (int k = 0; k < 30 && !end.restore_nominal; ++k) {
+    end = runner.OnPoll(Readings(1.2)).actions;
+    ids.Queue(runner);
+  }
+  ASSERT_TRUE(end.restore_nominal);
+  EXPECT_EQ(end.write_setpoint, 1.2);
+  ASSERT_TRUE(end.experiment_record_complete);
+  ReachActions after;
+  runner.IdentifyRecord(&after);  // done or aborted: either way not settling or exciting
+  const ReachWriteOutcome confirmed = runner.OnWriteResult({true, 1.2, ids.Queue(runner)});
+  EXPECT_TRUE(confirmed.restore_confirmed);
+  EXPECT_TRUE(confirmed.remove_guard);
+}
+
 TEST(ReachControllerRestoreSafety, AFailedWriteDuringAnExperimentAbortsAndRestores) {
-  ReachController runner = Running();
-  const ReachWriteOutcome failed = runner.OnWriteResult({false, 1.25});
+  WriteIds ids;
+  ReachController runner = Running(ids);
+  const ReachWriteOutcome failed = runner.OnWriteResult({false, 1.25, 1});
   EXPECT_EQ(runner.pipeline().experiment_state().abort_reason, AbortReason::kWriteFailed);
   EXPECT_EQ(failed.actions.write_setpoint, 1.2);
   EXPECT_TRUE(failed.actions.restore_nominal);
@@ -269,7 +309,8 @@ TEST(ReachControllerRestoreSafety, AFailedWriteDuringAnExperimentAbortsAndRestor
 }
 
 TEST(ReachControllerRestoreSafety, TheLinkLostBetweenPollsAbortsAndRestoresOnceItIsBack) {
-  ReachController runner = Running();
+  WriteIds ids;
+  ReachController runner = Running(ids);
   const ReachActions lost = runner.OnLinkLost();
   EXPECT_EQ(runner.pipeline().experiment_state().abort_reason, AbortReason::kLinkLost);
   EXPECT_EQ(runner.restore_pending(), 1.2);
@@ -278,14 +319,17 @@ TEST(ReachControllerRestoreSafety, TheLinkLostBetweenPollsAbortsAndRestoresOnceI
 }
 
 TEST(ReachControllerRestoreSafety, AnExcitationWriteSupersedesAPendingRestore) {
-  ReachController runner = Running();
+  WriteIds ids;
+  ReachController runner = Running(ids);
   runner.Stop();
-  // An operator starts again (no settling) before the PLC has confirmed the stop's restore.
+  const std::uint64_t stop_write = ids.Queue(runner);
+  // An operator starts again (no settling) before the PLC has answered the stop's restore.
   const ReachActions start = runner.Start();
   ASSERT_TRUE(start.write_setpoint);
   EXPECT_FALSE(start.restore_nominal);
   EXPECT_FALSE(runner.restore_pending());
-  const ReachWriteOutcome late = runner.OnWriteResult({true, 1.2});
+  ids.Queue(runner);
+  const ReachWriteOutcome late = runner.OnWriteResult({true, 1.2, stop_write});
   EXPECT_FALSE(late.restore_confirmed);
   EXPECT_FALSE(late.remove_guard);  // the running experiment's guard
   EXPECT_FALSE(runner.needs_guard(start));
@@ -296,26 +340,74 @@ TEST(ReachControllerRestoreSafety, AnExcitationWriteSupersedesAPendingRestore) {
   EXPECT_NEAR(std::abs(*next.write_setpoint - 1.2), 0.05, 1e-12);
 }
 
-TEST(ReachControllerRestoreSafety, AConfirmationWhileANewExperimentSettlesKeepsItsGuard) {
-  ReachController runner = Running(/*settle_samples=*/3);
+TEST(ReachControllerRestoreSafety, AnOlderWriteOfTheSameValueNeverConfirmsANewerRestore) {
+  // Stop (restore 1.2), start (a PRBS level), stop again, all before the PLC answers: the first
+  // stop's write, of the same nominal, was followed by the PRBS level and confirms nothing.
+  WriteIds ids;
+  ReachController runner = Running(ids);
   runner.Stop();
+  const std::uint64_t first_stop = ids.Queue(runner);
+  runner.Start();
+  ids.Queue(runner);
+  runner.Stop();
+  const std::uint64_t second_stop = ids.Queue(runner);
+  EXPECT_FALSE(runner.OnWriteResult({true, 1.2, first_stop}).restore_confirmed);
+  EXPECT_EQ(runner.restore_pending(), 1.2);
+  EXPECT_EQ(runner.OnPoll(Readings(1.25)).actions.write_setpoint, 1.2);  // still asked
+  const ReachWriteOutcome confirmed = runner.OnWriteResult({true, 1.2, second_stop});
+  EXPECT_TRUE(confirmed.restore_confirmed);
+  EXPECT_TRUE(confirmed.remove_guard);
+  // A restore with no write queued yet (the queue refused it) is confirmed by nothing.
+  runner.Start();
+  ids.Queue(runner);
+  runner.Stop();
+  EXPECT_FALSE(runner.OnWriteResult({true, 1.2, second_stop}).restore_confirmed);
+  EXPECT_EQ(runner.restore_pending(), 1.2);
+}
+
+TEST(ReachControllerRestoreSafety, AConfirmationWhileANewExperimentSettlesKeepsItsGuard) {
+  WriteIds ids;
+  ReachController runner = Running(ids, /*settle_samples=*/3);
+  runner.Stop();
+  ids.Queue(runner);
   // Started again: settling writes the nominal, as a restore.
   const ReachActions start = runner.Start();
   EXPECT_EQ(start.write_setpoint, 1.2);
   EXPECT_TRUE(start.restore_nominal);
-  const ReachWriteOutcome confirmed = runner.OnWriteResult({true, 1.2});
+  const ReachWriteOutcome confirmed = runner.OnWriteResult({true, 1.2, ids.Queue(runner)});
   EXPECT_TRUE(confirmed.restore_confirmed);
   EXPECT_FALSE(confirmed.remove_guard);  // the settling experiment excites next
+}
+
+TEST(ReachControllerRestoreSafety, AStopWhileSettlingHasNoGuardToRemove) {
+  ReachControllerOptions options = RunnerOptions();
+  options.experiment_for_nominal = [plan_for = options.experiment_for_nominal](double nominal) {
+    ExperimentPlan plan = plan_for(nominal);
+    plan.settle_samples = 3;
+    return plan;
+  };
+  WriteIds ids;
+  ReachController runner(options);
+  runner.OnPoll(Readings(1.2));
+  const auto start = runner.StartIfDue(true, true);
+  ASSERT_TRUE(start);
+  EXPECT_FALSE(runner.needs_guard(*start));  // settling writes the nominal: no guard yet
+  ids.Queue(runner);
+  runner.Stop();
+  const ReachWriteOutcome confirmed = runner.OnWriteResult({true, 1.2, ids.Queue(runner)});
+  EXPECT_TRUE(confirmed.restore_confirmed);
+  EXPECT_FALSE(confirmed.remove_guard);
 }
 
 TEST(ReachControllerRestoreSafety, ARefusedStartUpRestoresTheConfiguredNominalAndKeepsTheGuard) {
   ReachControllerOptions options = RunnerOptions();
   options.nominal_setpoint = 0.9;
+  WriteIds ids;
   ReachController runner(options);
   EXPECT_EQ(runner.ApplyRestart(DecideRestart(Context(0.9), Corrupt())), "");
   EXPECT_EQ(runner.restore_pending(), 0.9);
   EXPECT_EQ(runner.OnPoll(Readings(1.417689)).actions.write_setpoint, 0.9);
-  const ReachWriteOutcome confirmed = runner.OnWriteResult({true, 0.9});
+  const ReachWriteOutcome confirmed = runner.OnWriteResult({true, 0.9, ids.Queue(runner)});
   EXPECT_TRUE(confirmed.restore_confirmed);
   EXPECT_FALSE(confirmed.remove_guard);  // for an operator to check
   EXPECT_FALSE(runner.excitation_allowed());
@@ -329,10 +421,11 @@ TEST(ReachControllerRestoreSafety, AnOperatorsStartIsRefusedWithoutAPlanOrBefore
   ReachController no_plan(none);
   no_plan.OnPoll(Readings(1.2));
   EXPECT_EQ(no_plan.StartRefusal(), "no experiment to start");
+  WriteIds ids;
   ReachController held(RunnerOptions());
   held.ApplyRestart(DecideRestart(Context(), Found(1.2)));
   EXPECT_NE(held.StartRefusal().find("not restored"), std::string::npos) << held.StartRefusal();
-  held.OnWriteResult({true, 1.2});
+  held.OnWriteResult({true, 1.2, ids.Queue(held)});
   EXPECT_EQ(held.StartRefusal(), "");
 }
 

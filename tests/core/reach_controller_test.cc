@@ -134,8 +134,9 @@ struct Write {
 };
 
 // Runs the daemon's per-poll sequence: OnPoll, act on its writes, then StartIfDue and act on its
-// writes. The pool takes every write at once and, while `confirm_writes`, the PLC's confirmation
-// goes back to the controller at once (OnWriteResult).
+// writes. Each write is queued under the next id (OnWriteQueued); the pool takes it at once and,
+// while `confirm_writes`, the PLC's confirmation goes back to the controller at once
+// (OnWriteResult).
 class Harness {
  public:
   explicit Harness(ReachControllerOptions options, double actuator = 1.0)
@@ -164,6 +165,7 @@ class Harness {
   std::vector<int> started_at;
   int polls = 0;
   bool confirm_writes = true;
+  std::uint64_t write_id = 0;  ///< the last write's
 
  private:
   void Take(const ReachActions& a) {
@@ -173,8 +175,10 @@ class Harness {
     }
     writes.push_back({polls, *a.write_setpoint, a.restore_nominal, a.experiment_record_complete});
     pool.Write(*a.write_setpoint);
+    controller.OnWriteQueued(++write_id);
     if (confirm_writes) {
-      const ReachWriteOutcome outcome = controller.OnWriteResult({true, *a.write_setpoint});
+      const ReachWriteOutcome outcome =
+          controller.OnWriteResult({true, *a.write_setpoint, write_id});
       EXPECT_FALSE(outcome.actions.write_setpoint) << "a written setpoint aborted, poll " << polls;
     }
   }
@@ -638,7 +642,7 @@ TEST(ReachControllerRestart, AGuardFromACrashRestoresItsNominalNotTheExcitedRead
   }
 
   // The PLC confirms it: the guard has done its job, experiments may start.
-  const ReachWriteOutcome confirmed = h.controller.OnWriteResult({true, 1.2});
+  const ReachWriteOutcome confirmed = h.controller.OnWriteResult({true, 1.2, h.write_id});
   EXPECT_TRUE(confirmed.restore_confirmed);
   EXPECT_TRUE(confirmed.remove_guard);
   EXPECT_TRUE(h.controller.excitation_allowed());
@@ -692,7 +696,7 @@ TEST(ReachControllerRestart, TheConfiguredNominalWinsForTheNextExperiment) {
   EXPECT_EQ(h.writes[0].value, 1.2);
   EXPECT_TRUE(h.writes[0].restore);
   EXPECT_TRUE(h.started_at.empty());
-  EXPECT_TRUE(h.controller.OnWriteResult({true, 1.2}).restore_confirmed);
+  EXPECT_TRUE(h.controller.OnWriteResult({true, 1.2, h.write_id}).restore_confirmed);
   // Then the experiment settles at the configured nominal.
   h.confirm_writes = true;
   h.Step();
@@ -709,7 +713,7 @@ TEST(ReachControllerRestart, ARefusalWithoutANominalNeverExcitesNorReadsOne) {
   EXPECT_EQ(h.controller.ApplyRestart(DecideRestart(Context(), corrupt)), "");
   // Nothing is pending: a write of the reading confirms nothing, and it stays refused.
   EXPECT_FALSE(h.controller.restore_pending());
-  EXPECT_FALSE(h.controller.OnWriteResult({true, 1.3}).restore_confirmed);
+  EXPECT_FALSE(h.controller.OnWriteResult({true, 1.3, h.write_id}).restore_confirmed);
   for (int i = 0; i < 5; ++i) EXPECT_FALSE(h.Step().nominal_read);
   EXPECT_FALSE(h.controller.nominal_known());
   EXPECT_FALSE(h.controller.excitation_allowed());
