@@ -225,9 +225,8 @@ class WriteIds {
   std::uint64_t next_ = 1;
 };
 
-// A controller whose experiment around 1.2 (with RunnerOptions' 30 exciting samples, settling
-// `settle_samples` first) is running, its guard persisted, every write so far queued in `ids`.
-ReachController Running(WriteIds& ids, std::int64_t settle_samples = 0) {
+// RunnerOptions with `settle_samples` of settling before each experiment's excitation.
+ReachControllerOptions SettlingOptions(std::int64_t settle_samples) {
   ReachControllerOptions options = RunnerOptions();
   options.experiment_for_nominal = [settle_samples,
                                     plan_for = options.experiment_for_nominal](double nominal) {
@@ -235,7 +234,13 @@ ReachController Running(WriteIds& ids, std::int64_t settle_samples = 0) {
     plan.settle_samples = settle_samples;
     return plan;
   };
-  ReachController runner(options);
+  return options;
+}
+
+// A controller whose experiment around 1.2 (with RunnerOptions' 30 exciting samples, settling
+// `settle_samples` first) is running, its guard persisted, every write so far queued in `ids`.
+ReachController Running(WriteIds& ids, std::int64_t settle_samples = 0) {
+  ReachController runner(SettlingOptions(settle_samples));
   runner.OnPoll(Readings(1.2));
   const auto start = runner.StartIfDue(true, true);
   EXPECT_TRUE(start);
@@ -380,14 +385,8 @@ TEST(ReachControllerRestoreSafety, AConfirmationWhileANewExperimentSettlesKeepsI
 }
 
 TEST(ReachControllerRestoreSafety, AStopWhileSettlingHasNoGuardToRemove) {
-  ReachControllerOptions options = RunnerOptions();
-  options.experiment_for_nominal = [plan_for = options.experiment_for_nominal](double nominal) {
-    ExperimentPlan plan = plan_for(nominal);
-    plan.settle_samples = 3;
-    return plan;
-  };
   WriteIds ids;
-  ReachController runner(options);
+  ReachController runner(SettlingOptions(3));
   runner.OnPoll(Readings(1.2));
   const auto start = runner.StartIfDue(true, true);
   ASSERT_TRUE(start);
