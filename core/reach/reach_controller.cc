@@ -1,5 +1,6 @@
 #include "core/reach/reach_controller.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -15,14 +16,62 @@ ReachController::ReachController(ReachControllerOptions options)
 std::string ReachController::SetNominal(double nominal) {
   nominal_ = nominal;
   nominal_known_ = true;
-  if (!options_.experiment_for_nominal) return {};
-  try {
-    pipeline_.SetExperimentPlan(options_.experiment_for_nominal(nominal));
-  } catch (const std::invalid_argument& e) {
-    // No safe experiment around this nominal: the reach is watched and estimated, never excited.
-    return e.what();
+  std::string errors;
+  plans_.assign(options_.experiments.size(), std::nullopt);
+  std::optional<std::size_t> first;
+  for (std::size_t i = 0; i < options_.experiments.size(); ++i) {
+    const ReachExperiment& experiment = options_.experiments[i];
+    try {
+      ExperimentPlan plan = experiment.plan_for_nominal(nominal);
+      plan.Validate();
+      plans_[i] = plan;
+      if (!first || experiment.start_on_start) first = i;
+    } catch (const std::invalid_argument& e) {
+      // No safe plan around this nominal: the experiment cannot run (the reach is still watched
+      // and estimated).
+      if (!errors.empty()) errors += "; ";
+      errors += "experiment '" + experiment.name + "': " + e.what();
+    }
   }
-  return {};
+  installed_.reset();
+  if (first) Install(*first);
+  return errors;
+}
+
+const std::string& ReachController::experiment_name() const {
+  static const std::string kNone;
+  return installed_ ? options_.experiments[*installed_].name : kNone;
+}
+
+std::optional<std::size_t> ReachController::FindExperiment(std::string_view name,
+                                                           std::string* problem) const {
+  const auto& all = options_.experiments;
+  if (name.empty()) {
+    if (all.size() == 1) return 0;
+    std::string names;
+    for (const ReachExperiment& e : all) names += (names.empty() ? "'" : ", '") + e.name + "'";
+    *problem =
+        all.empty() ? "no experiment to start" : "name the experiment to start (" + names + ")";
+    return std::nullopt;
+  }
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    if (all[i].name == name) return i;
+  }
+  // The name comes from a command: shown with anything unprintable (a newline) as '?'.
+  std::string shown(name.substr(0, 64));
+  for (char& ch : shown) {
+    if (static_cast<unsigned char>(ch) < 0x20 || static_cast<unsigned char>(ch) > 0x7e) ch = '?';
+  }
+  *problem = "no experiment '" + shown + "' for this reach";
+  return std::nullopt;
+}
+
+bool ReachController::Install(std::size_t index) {
+  if (installed_ == index) return true;
+  if (index >= plans_.size() || !plans_[index]) return false;
+  if (!pipeline_.SetExperimentPlan(*plans_[index])) return false;
+  installed_ = index;
+  return true;
 }
 
 std::string ReachController::ApplyRestart(const RestartDecision& decision) {
@@ -71,24 +120,49 @@ ReachPollOutcome ReachController::OnPoll(const ReachReadings& r) {
 }
 
 std::optional<ReachActions> ReachController::StartIfDue(bool status_ok, bool allowed) {
-  if (!options_.start_experiment_on_start || started_ || !nominal_known_ || !status_ok ||
-      !allowed || !excitation_allowed()) {
+  if (started_ || !nominal_known_ || !status_ok || !allowed || !excitation_allowed()) {
     return std::nullopt;
   }
+  const auto& all = options_.experiments;
+  const auto on_start = std::find_if(all.begin(), all.end(),
+                                     [](const ReachExperiment& e) { return e.start_on_start; });
+  if (on_start == all.end()) return std::nullopt;
   started_ = true;
+  if (!Install(static_cast<std::size_t>(on_start - all.begin()))) return std::nullopt;
   return Track(pipeline_.StartExperiment());
 }
 
-std::string ReachController::StartRefusal() const {
-  if (!pipeline_.experiment_plan()) return "no experiment to start";
-  if (!excitation_allowed()) {
-    return "experiment refused: an interrupted experiment's nominal is not restored (see the "
-           "start-up log)";
+std::string ReachController::StartRefusal(std::string_view name) const {
+  if (refused_) {
+    return "refused at start-up: an interrupted experiment's guard needs an operator (check the "
+           "actuator, remove the guard, restart; see the start-up log)";
+  }
+  std::string problem;
+  const std::optional<std::size_t> index = FindExperiment(name, &problem);
+  if (!index) return problem;
+  const std::string& found = options_.experiments[*index].name;
+  if (*index >= plans_.size() || !plans_[*index]) {
+    return nominal_known_ ? "experiment '" + found +
+                                "' has no room around the nominal (see the "
+                                "start-up log)"
+                          : "experiment '" + found + "' waits for the nominal setpoint";
+  }
+  if (held_)
+    return "an interrupted experiment's nominal is not restored yet (see the start-up log)";
+  const ExperimentPhase phase = pipeline_.experiment_state().phase;
+  if (phase == ExperimentPhase::kSettling || phase == ExperimentPhase::kExciting ||
+      phase == ExperimentPhase::kIdentifying) {
+    return "experiment '" + experiment_name() + "' is running";
   }
   return {};
 }
 
-ReachActions ReachController::Start() { return Track(pipeline_.StartExperiment()); }
+ReachActions ReachController::Start(std::string_view name) {
+  std::string problem;
+  const std::optional<std::size_t> index = FindExperiment(name, &problem);
+  if (!index || !Install(*index)) return {};
+  return Track(pipeline_.StartExperiment());
+}
 
 ReachActions ReachController::Stop() { return Track(pipeline_.StopExperiment()); }
 

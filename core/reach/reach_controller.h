@@ -4,6 +4,8 @@
 #include <limits>
 #include <optional>
 #include <string>
+#include <string_view>
+#include <vector>
 
 #include "core/experiment/experiment_guard.h"
 #include "core/reach/reach_sample_processor.h"
@@ -21,19 +23,25 @@ struct ReachChannels {
   int scheduling = -1;  ///< the lpv model's scheduling variable
 };
 
+/// One experiment a reach may run.
+struct ReachExperiment {
+  std::string name;  ///< unique among the reach's experiments; operators' commands name it
+  /// The experiment's plan around a nominal setpoint.
+  /// @throws std::invalid_argument when the nominal leaves no room for it inside the limits.
+  std::function<ExperimentPlan(double nominal_setpoint)> plan_for_nominal;
+  bool start_on_start = false;  ///< started by itself at the first complete poll (at most one)
+};
+
 /// Everything a reach runs, derived from the configuration (daemon/config/plan_from_config.h builds
 /// it).
 struct ReachControllerOptions {
   std::string name;
   ReachChannels channels;
-  ReachSampleProcessorOptions pipeline;  ///< no experiment: it comes from experiment_for_nominal
+  ReachSampleProcessorOptions pipeline;  ///< no experiment: they come from `experiments`
   /// The actuator's nominal setpoint; none: its first valid reading.
   std::optional<double> nominal_setpoint;
-  /// The reach's experiment for a nominal setpoint (empty: the reach is never excited).
-  /// @throws std::invalid_argument when the nominal leaves no room for the PRBS inside the limits.
-  std::function<ExperimentPlan(double nominal_setpoint)> experiment_for_nominal;
-  bool start_experiment_on_start = false;
-  std::string experiment_name;  ///< the reach's experiment (empty: none), for its guard
+  /// The experiments the reach may run, in the configuration's order (none: never excited).
+  std::vector<ReachExperiment> experiments;
 };
 
 /// One poll of a reach's PLC as the reach reads it: the channel values (engineering units) with
@@ -92,7 +100,7 @@ struct ReachPollOutcome {
   ReachActions actions;
   /// The nominal setpoint was read from this poll (the actuator's first valid reading).
   std::optional<double> nominal_read;
-  /// Why the reach has no experiment around that nominal (empty: it has one, or none planned).
+  /// Which experiments have no plan around that nominal, and why (empty: all have one).
   std::string plan_error;
 };
 
@@ -112,7 +120,8 @@ struct ReachPollOutcome {
 /// - after a restart that restores first, no experiment starts by itself (StartIfDue) or is
 ///   accepted from an operator (StartRefusal) before that restore is confirmed.
 /// Every event that can change the actuator goes through this class, never the pipeline
-/// directly. Pure and deterministic; allocates only when a plan is installed (once).
+/// directly. Pure and deterministic; allocates only when the nominal is set (every experiment's
+/// plan) and when an experiment is installed in the pipeline (its record), never per poll.
 class ReachController final {
  public:
   /// @throws std::invalid_argument on bad pipeline options.
@@ -127,11 +136,13 @@ class ReachController final {
   /// actions, or none.
   std::optional<ReachActions> StartIfDue(bool status_ok, bool allowed);
 
-  /// Why an operator's start would be refused now (empty: it would start).
-  std::string StartRefusal() const;
-  /// Starts the experiment now, without the checks of StartRefusal() (an operator's command checks
-  /// it first; a replay follows the live run's start).
-  ReachActions Start();
+  /// Why an operator's start of experiment `name` would be refused now (empty: it would start).
+  /// An empty name means the reach's only experiment (refused when it has several).
+  std::string StartRefusal(std::string_view name = {}) const;
+  /// Starts experiment `name` (empty: the reach's only one) now, without the other checks of
+  /// StartRefusal() (an operator's command checks it first; a replay follows the live run's
+  /// start). Nothing happens when the name has no plan or an experiment is running.
+  ReachActions Start(std::string_view name = {});
   /// An operator's stop, or the daemon's: aborts a running experiment, restoring the nominal.
   ReachActions Stop();
   /// The link to the PLC is down between polls: aborts a running experiment.
@@ -165,9 +176,13 @@ class ReachController final {
   /// The nominal setpoint being restored and not yet confirmed by the PLC (none: nothing pending).
   const std::optional<double>& restore_pending() const { return restore_pending_; }
 
-  /// Sets the nominal setpoint and installs the experiment around it; returns why there is no
-  /// experiment (empty when there is one or none is planned).
+  /// Sets the nominal setpoint and plans every experiment around it; returns why some have no
+  /// plan (each named; empty when all have one or none is configured).  The on_start experiment
+  /// (else the first with a plan) is installed in the pipeline.
   std::string SetNominal(double nominal);
+  /// The experiment installed in the pipeline: running, last run, or next to start by itself
+  /// (empty: none has a plan).
+  const std::string& experiment_name() const;
 
   const ReachSampleProcessor& pipeline() const { return pipeline_; }
   const ReachControllerOptions& options() const { return options_; }
@@ -180,6 +195,10 @@ class ReachController final {
  private:
   /// Notes the restore `actions` ask for (pending until confirmed); returns them.
   ReachActions Track(ReachActions actions);
+  /// The index of experiment `name` (empty: the only one), or why there is none.
+  std::optional<std::size_t> FindExperiment(std::string_view name, std::string* problem) const;
+  /// Installs experiment `index`'s plan in the pipeline (false: it has none, or one is running).
+  bool Install(std::size_t index);
 
   ReachControllerOptions options_;
   ReachSampleProcessor pipeline_;
@@ -195,6 +214,9 @@ class ReachController final {
   bool guard_on_disk_ = false;  ///< written by this run, or left by an interrupted one
   bool keep_guard_ = false;     ///< a refused start-up: the guard stays for an operator
   std::string initial_plan_error_;
+  /// Each experiment's plan around the nominal (none: it does not fit, see SetNominal's errors).
+  std::vector<std::optional<ExperimentPlan>> plans_;
+  std::optional<std::size_t> installed_;  ///< the experiment in the pipeline
 };
 
 }  // namespace canalid::core

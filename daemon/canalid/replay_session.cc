@@ -201,7 +201,12 @@ void ReplaySession::OnExperiment(const canalid::experiment_state_t& live,
     const double t = first_utime_ ? static_cast<double>(live.utime - *first_utime_) * 1e-6 : 0.0;
     if (LiveRunning(live.state) && !Running(ours)) {
       // Started by an operator command between two polls.
-      Step(*reach, runner.Start(), t);
+      Step(*reach, runner.Start(live.experiment), t);
+      if (!Running(runner.pipeline().experiment_state().phase)) {
+        on_warning_(At(options_.log_path, event) + ": reach " + live.reach + ": the live run " +
+                    "started experiment '" + live.experiment + "', which the replay cannot (" +
+                    runner.StartRefusal(live.experiment) + ")");
+      }
     } else if (live.state == canalid::experiment_state_t::STATE_ABORTED && Running(ours)) {
       // Ended by something the samples do not carry.
       if (live.reason == core::AbortReasonName(core::AbortReason::kLinkLost)) {

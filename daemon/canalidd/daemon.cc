@@ -186,7 +186,8 @@ void Daemon::OnPoll(int index, const drivers::PollSample& s) {
     Handle(reach, outcome.actions, s.time_s);
     if (outcome.actions.online_updated) PublishOnlineModels(reach, outcome.actions, s.time_s);
     if (const auto start = reach.runner.StartIfDue(s.status.ok(), !stopping_)) {
-      LogInfo("reach " + reach.name() + ": starting the experiment");
+      LogInfo("reach " + reach.name() + ": starting the experiment " +
+              reach.runner.experiment_name());
       Handle(reach, *start, s.time_s);
     }
   }
@@ -259,7 +260,8 @@ void Daemon::Handle(ReachRuntime& reach, const core::ReachActions& actions, doub
   const auto& plan = reach.pipeline().experiment_plan();
   if (actions.experiment_phase_changed && plan) {
     const core::ExperimentState& state = reach.pipeline().experiment_state();
-    publisher_.PublishExperiment(name, state, *plan, ActuatorName(plcs_, reach), time_s);
+    publisher_.PublishExperiment(name, reach.runner.experiment_name(), state, *plan,
+                                 ActuatorName(plcs_, reach), time_s);
     std::string message =
         "reach " + name + ": experiment " + core::ExperimentPhaseName(state.phase);
     if (state.phase == core::ExperimentPhase::kAborted)
@@ -375,10 +377,14 @@ void Daemon::OnCommand(const drivers::AcceptedCommand& command) {
     LogInfo("command from " + command.sender + " for reach " + command.reach);
     switch (command.kind) {
       case drivers::CommandKind::kStartExperiment:
-        if (const std::string refusal = reach->runner.StartRefusal(); !refusal.empty()) {
-          LogWarning("reach " + command.reach + ": " + refusal);
+        if (const std::string refusal = reach->runner.StartRefusal(command.argument);
+            !refusal.empty()) {
+          LogWarning("reach " + command.reach + ": start refused: " + refusal);
         } else if (!stopping_) {
-          Handle(*reach, reach->runner.Start(), reach->last_time_s);
+          const core::ReachActions start = reach->runner.Start(command.argument);
+          LogInfo("reach " + command.reach + ": starting the experiment " +
+                  reach->runner.experiment_name());
+          Handle(*reach, start, reach->last_time_s);
         }
         break;
       case drivers::CommandKind::kAbortExperiment:
@@ -416,7 +422,8 @@ void Daemon::PublishHealth() {
   for (const auto& reach : reaches_) {
     publisher_.PublishHealth(ReachHealth(reach->name(), reach->pipeline()), uptime, wall);
     if (const auto& plan = reach->pipeline().experiment_plan()) {
-      publisher_.PublishExperiment(reach->name(), reach->pipeline().experiment_state(), *plan,
+      publisher_.PublishExperiment(reach->name(), reach->runner.experiment_name(),
+                                   reach->pipeline().experiment_state(), *plan,
                                    ActuatorName(plcs_, *reach), wall);
     }
   }

@@ -188,11 +188,13 @@ void LcmPublisher::PublishModelJson(const std::string& reach, const nlohmann::js
   Send(Channel(model_channels_, "MODEL_", reach), model_);
 }
 
-void LcmPublisher::PublishExperiment(const std::string& reach, const core::ExperimentState& state,
+void LcmPublisher::PublishExperiment(const std::string& reach, const std::string& experiment,
+                                     const core::ExperimentState& state,
                                      const core::ExperimentPlan& plan, const std::string& actuator,
                                      double time_s) {
   experiment_.utime = ToUtime(time_s);
   experiment_.reach = reach;
+  experiment_.experiment = experiment;
   experiment_.state = ExperimentStateCode(state.phase);
   const bool exciting = state.phase == core::ExperimentPhase::kExciting;
   experiment_.step = exciting ? static_cast<int32_t>(state.samples_in_phase) : 0;
@@ -209,6 +211,7 @@ void LcmPublisher::PublishRestart(const std::string& reach, const std::string& a
                                   double setpoint, const std::string& reason, double time_s) {
   experiment_.utime = ToUtime(time_s);
   experiment_.reach = reach;
+  experiment_.experiment.clear();  // the interrupted run's experiment is in its guard
   experiment_.state = canalid::experiment_state_t::STATE_ABORTED;
   experiment_.step = 0;
   experiment_.num_steps = 0;

@@ -52,9 +52,10 @@ class LcmPublisher final {
   void PublishModelJson(const std::string& reach, const nlohmann::json& model, double time_s,
                         const char* estimator = "persisted", std::int64_t samples = 0,
                         std::int32_t flags = 0);
-  void PublishExperiment(const std::string& reach, const core::ExperimentState& state,
-                         const core::ExperimentPlan& plan, const std::string& actuator,
-                         double time_s);
+  /// The state of `reach`'s experiment named `experiment` (the controller's experiment_name()).
+  void PublishExperiment(const std::string& reach, const std::string& experiment,
+                         const core::ExperimentState& state, const core::ExperimentPlan& plan,
+                         const std::string& actuator, double time_s);
   /// The start-up decision on an interrupted experiment (state aborted, `reason` one of
   /// core::kRestartRestoreReason / kRestartRefusedReason and details, `setpoint` the value restored
   /// first, NaN when none).

@@ -53,7 +53,7 @@ bool PersistGuard(ReachRuntime& reach, const std::string& actuator, StateStore* 
   core::ExperimentGuard guard;
   guard.reach = reach.name();
   guard.actuator = actuator;
-  guard.experiment = reach.wiring.runner.experiment_name;
+  guard.experiment = reach.runner.experiment_name();
   guard.nominal_setpoint = nominal;
   guard.started_utime_us = ToUtime(WallNowS());
   try {

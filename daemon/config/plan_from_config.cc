@@ -173,12 +173,12 @@ ReachControllerOptions BuildReachControllerOptions(
   options.nominal_setpoint = reach.nominal_setpoint;
   for (const ExperimentConfig& experiment : config->experiments) {
     if (experiment.reach != reach.name) continue;
-    options.start_experiment_on_start = experiment.start == ExperimentStart::kOnStart;
-    options.experiment_name = experiment.name;
-    options.experiment_for_nominal = [config, name = experiment.name](double nominal) {
+    core::ReachExperiment& e = options.experiments.emplace_back();
+    e.name = experiment.name;
+    e.start_on_start = experiment.start == ExperimentStart::kOnStart;
+    e.plan_for_nominal = [config, name = experiment.name](double nominal) {
       return BuildExperimentPlan(*config, *config->FindExperiment(name), nominal);
     };
-    break;
   }
   return options;
 }

@@ -59,8 +59,8 @@ OnlineIntegratorDelayOptions BuildOnlineIntegratorDelayOptions(const DaemonConfi
 /// sample time, online estimators (online_models: id, then the process models arx, frac-foptd,
 /// lpv in the configured order, with the actuator_position and lpv_scheduling channels), batch
 /// options (delay range of the bank, closed-loop setting),
-/// nominal setpoint, and its experiment factory (the first experiment of the reach; the factory
-/// keeps `config` alive).
+/// nominal setpoint, and every [[experiment]] of the reach in file order (their plan factories
+/// keep `config` alive).
 /// @throws std::invalid_argument when the reach does not resolve.
 ReachControllerOptions BuildReachControllerOptions(
     const std::shared_ptr<const DaemonConfig>& config, const ReachConfig& reach,

@@ -127,18 +127,19 @@ ReachControllerOptions RunnerOptions() {
   o.channels = {0, 1, 2, 3};
   o.pipeline.sample_time_s = 60.0;
   o.pipeline.online_id_enabled = false;
-  o.start_experiment_on_start = true;
-  o.experiment_for_nominal = [](double nominal) {
-    ExperimentPlan plan;
-    plan.prbs.nominal = nominal;
-    plan.prbs.amplitude = 0.05;
-    plan.prbs.clock_period_samples = 2;
-    plan.prbs.order = 4;
-    plan.excite_samples = 30;
-    plan.level_min_m = 1.5;
-    plan.level_max_m = 2.7;
-    return plan;
-  };
+  o.experiments.push_back({"pool2-prbs",
+                           [](double nominal) {
+                             ExperimentPlan plan;
+                             plan.prbs.nominal = nominal;
+                             plan.prbs.amplitude = 0.05;
+                             plan.prbs.clock_period_samples = 2;
+                             plan.prbs.order = 4;
+                             plan.excite_samples = 30;
+                             plan.level_min_m = 1.5;
+                             plan.level_max_m = 2.7;
+                             return plan;
+                           },
+                           true});
   return o;
 }
 
@@ -228,9 +229,9 @@ class WriteIds {
 // RunnerOptions with `settle_samples` of settling before each experiment's excitation.
 ReachControllerOptions SettlingOptions(std::int64_t settle_samples) {
   ReachControllerOptions options = RunnerOptions();
-  options.experiment_for_nominal = [settle_samples,
-                                    plan_for = options.experiment_for_nominal](double nominal) {
-    ExperimentPlan plan = plan_for(nominal);
+  auto& plan_for = options.experiments.front().plan_for_nominal;
+  plan_for = [settle_samples, first = plan_for](double nominal) {
+    ExperimentPlan plan = first(nominal);
     plan.settle_samples = settle_samples;
     return plan;
   };
@@ -416,7 +417,7 @@ TEST(ReachControllerRestoreSafety, ARefusedStartUpRestoresTheConfiguredNominalAn
 
 TEST(ReachControllerRestoreSafety, AnOperatorsStartIsRefusedWithoutAPlanOrBeforeTheRestore) {
   ReachControllerOptions none = RunnerOptions();
-  none.experiment_for_nominal = nullptr;
+  none.experiments.clear();
   ReachController no_plan(none);
   no_plan.OnPoll(Readings(1.2));
   EXPECT_EQ(no_plan.StartRefusal(), "no experiment to start");

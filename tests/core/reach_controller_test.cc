@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -81,9 +82,7 @@ ReachControllerOptions Options(std::optional<double> nominal, bool on_start = tr
   o.pipeline.batch.fit.min_nk = 1;
   o.pipeline.batch.fit.max_nk = 5;
   o.nominal_setpoint = nominal;
-  o.experiment_for_nominal = PlanFor;
-  o.start_experiment_on_start = on_start;
-  o.experiment_name = "pool1-prbs";
+  o.experiments = {{"pool1-prbs", PlanFor, on_start}};
   return o;
 }
 
@@ -375,6 +374,120 @@ TEST(ReachControllerOnStart, AManualExperimentNeverStartsByItself) {
   EXPECT_TRUE(h.started_at.empty());
   EXPECT_TRUE(h.writes.empty());
   EXPECT_EQ(h.phase(), ExperimentPhase::kIdle);
+}
+
+// ----- several experiments on one reach ---------------------------------------------------------
+
+// PlanFor as a step of `amplitude` held `hold` samples: a second experiment told from the first by
+// its writes (nominal + amplitude, never nominal - amplitude).
+ExperimentPlan StepFor(double nominal, double amplitude, std::int64_t hold) {
+  if (nominal + amplitude > kSetpointMax) throw std::invalid_argument("no room for the step");
+  ExperimentPlan plan = PlanFor(nominal);
+  plan.prbs.amplitude = amplitude;
+  plan.step_hold_samples = hold;
+  plan.excite_samples = 2 * hold;
+  return plan;
+}
+
+// Options(nominal) with a PRBS "prbs" and a step "step" (+0.2 for 4 samples, then 4 back).
+ReachControllerOptions TwoExperiments(std::optional<double> nominal, bool step_on_start) {
+  ReachControllerOptions o = Options(nominal, /*on_start=*/false);
+  o.experiments = {{"prbs", PlanFor, false},
+                   {"step", [](double n) { return StepFor(n, 0.2, 4); }, step_on_start}};
+  return o;
+}
+
+TEST(ReachControllerExperiments, TheOnStartExperimentIsTheOneThatStartsNotTheFirst) {
+  Harness h(TwoExperiments(1.0, /*step_on_start=*/true));
+  EXPECT_EQ(h.controller.experiment_name(), "step");
+  h.Steps(static_cast<int>(kSettle) + 9);
+  ASSERT_EQ(h.started_at, std::vector<int>{0});
+  // Settling at 1.0, then 4 samples at 1.2 and 4 back at 1.0, then the restore: a step, no PRBS.
+  ASSERT_GE(h.writes.size(), 3U);
+  EXPECT_EQ(h.writes.front().value, 1.0);
+  int high = 0;
+  for (const Write& w : h.writes) {
+    EXPECT_TRUE(w.value == 1.0 || std::abs(w.value - 1.2) < 1e-12) << "poll " << w.poll;
+    high += w.value > 1.1 ? 1 : 0;
+  }
+  EXPECT_EQ(high, 4);
+  const auto first_high =
+      std::find_if(h.writes.begin(), h.writes.end(), [](const Write& w) { return w.value > 1.1; });
+  EXPECT_EQ(first_high->poll, kSettle);
+  EXPECT_TRUE(h.writes.back().record_complete);
+  EXPECT_EQ(h.controller.pipeline().recorded_samples(), 8);
+}
+
+TEST(ReachControllerExperiments, AnOperatorNamesTheExperimentAndAnUnknownNameIsRefused) {
+  Harness h(TwoExperiments(1.0, /*step_on_start=*/false));
+  h.Steps(2);
+  EXPECT_TRUE(h.started_at.empty());
+  // With two experiments an unnamed start is ambiguous; an unknown name is no experiment.
+  EXPECT_EQ(h.controller.StartRefusal(), "name the experiment to start ('prbs', 'step')");
+  EXPECT_EQ(h.controller.StartRefusal("flush"), "no experiment 'flush' for this reach");
+  // A name from a command is shown printable (no log line injection).
+  EXPECT_EQ(h.controller.StartRefusal("a\nb"), "no experiment 'a?b' for this reach");
+  EXPECT_FALSE(h.controller.Start("flush").write_setpoint);
+  EXPECT_FALSE(h.controller.Start().write_setpoint);
+  EXPECT_EQ(h.phase(), ExperimentPhase::kIdle);
+
+  // "step" by name, although "prbs" comes first.
+  EXPECT_EQ(h.controller.StartRefusal("step"), "");
+  const ReachActions start = h.controller.Start("step");
+  ASSERT_TRUE(start.write_setpoint);
+  EXPECT_EQ(h.controller.experiment_name(), "step");
+  h.Steps(static_cast<int>(kSettle) + 1);
+  EXPECT_NEAR(h.writes.back().value, 1.2, 1e-12);
+  // While it runs, no other experiment starts, and neither does it again.
+  EXPECT_EQ(h.controller.StartRefusal("prbs"), "experiment 'step' is running");
+  EXPECT_EQ(h.controller.StartRefusal("step"), "experiment 'step' is running");
+  EXPECT_FALSE(h.controller.Start("prbs").write_setpoint);
+  EXPECT_EQ(h.controller.experiment_name(), "step");
+
+  // Stopped, "prbs" may start: its first exciting write is nominal +- the PRBS amplitude.
+  h.controller.Stop();
+  EXPECT_EQ(h.controller.StartRefusal("prbs"), "");
+  ASSERT_TRUE(h.controller.Start("prbs").write_setpoint);
+  EXPECT_EQ(h.controller.experiment_name(), "prbs");
+  const std::size_t before = h.writes.size();
+  h.Steps(static_cast<int>(kSettle) + 1);
+  ASSERT_GT(h.writes.size(), before);
+  EXPECT_NEAR(std::abs(h.writes.back().value - 1.0), kAmplitude, 1e-12);
+}
+
+TEST(ReachControllerExperiments, AnOnStartExperimentWithoutRoomNeverStartsNorWrites) {
+  // Around 1.35 the on_start step (+0.2) leaves [0.5, 1.5]: nothing starts by itself, and a start
+  // by its name (as a replay's, which skips StartRefusal) writes nothing.
+  Harness h(TwoExperiments(1.35, /*step_on_start=*/true));
+  h.Steps(5);
+  EXPECT_TRUE(h.started_at.empty());
+  EXPECT_TRUE(h.writes.empty());
+  EXPECT_FALSE(h.controller.Start("step").write_setpoint);
+  EXPECT_EQ(h.phase(), ExperimentPhase::kIdle);
+}
+
+TEST(ReachControllerExperiments, AStartWhileIdentifyingChangesNothing) {
+  Harness h(TwoExperiments(1.0, /*step_on_start=*/true));
+  h.Steps(static_cast<int>(kSettle) + 9);
+  ASSERT_EQ(h.phase(), ExperimentPhase::kIdentifying);
+  EXPECT_EQ(h.controller.StartRefusal("prbs"), "experiment 'step' is running");
+  EXPECT_FALSE(h.controller.Start("prbs").write_setpoint);
+  EXPECT_FALSE(h.controller.Start("step").write_setpoint);
+  EXPECT_EQ(h.controller.experiment_name(), "step");
+  EXPECT_EQ(h.phase(), ExperimentPhase::kIdentifying);
+  EXPECT_EQ(h.controller.pipeline().recorded_samples(), 8);
+}
+
+TEST(ReachControllerExperiments, AnExperimentWithoutRoomIsNamedAndTheOtherStillRuns) {
+  // Around 1.35 the step (+0.2) leaves [0.5, 1.5]; the PRBS (+-0.1) fits.
+  ReachController c(TwoExperiments(1.35, /*step_on_start=*/false));
+  EXPECT_NE(c.initial_plan_error().find("experiment 'step': "), std::string::npos)
+      << c.initial_plan_error();
+  EXPECT_EQ(c.initial_plan_error().find("'prbs'"), std::string::npos) << c.initial_plan_error();
+  EXPECT_EQ(c.experiment_name(), "prbs");
+  EXPECT_NE(c.StartRefusal("step").find("has no room"), std::string::npos)
+      << c.StartRefusal("step");
+  EXPECT_EQ(c.StartRefusal("prbs"), "");
 }
 
 // ----- the setpoints of a complete experiment ---------------------------------------------------

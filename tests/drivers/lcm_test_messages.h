@@ -87,6 +87,7 @@ inline canalid::experiment_state_t MakeExperiment() {
   canalid::experiment_state_t m;
   m.utime = 1763700000200000;
   m.reach = "pool2";
+  m.experiment = "pool2_prbs";
   m.state = canalid::experiment_state_t::STATE_EXCITING;
   m.step = 17;
   m.num_steps = 63;
@@ -100,6 +101,7 @@ inline void ExpectEqual(const canalid::experiment_state_t& a,
                         const canalid::experiment_state_t& b) {
   EXPECT_EQ(a.utime, b.utime);
   EXPECT_EQ(a.reach, b.reach);
+  EXPECT_EQ(a.experiment, b.experiment);
   EXPECT_EQ(a.state, b.state);
   EXPECT_EQ(a.step, b.step);
   EXPECT_EQ(a.num_steps, b.num_steps);
