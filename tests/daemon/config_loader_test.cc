@@ -332,7 +332,8 @@ config::DaemonConfig LoadShipped(const char* name) {
 }
 
 TEST(ConfigLoaderTest, ShippedConfigsLoadAndRoundTrip) {
-  for (const char* name : {"canalidd.example.toml", "canalidd-asce2.toml"}) {
+  for (const char* name :
+       {"canalidd.example.toml", "canalidd-asce2.toml", "canalidd-lab-flume.toml"}) {
     SCOPED_TRACE(name);
     config::DaemonConfig c;
     try {

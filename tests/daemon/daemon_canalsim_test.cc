@@ -31,6 +31,7 @@
 
 #include "tests/sim/serve_process.h"
 #include "tests/support/child_process.h"
+#include "tests/support/json_after.h"
 #include "tests/support/private_network.h"
 #include "tests/support/run_program.h"
 
@@ -124,20 +125,7 @@ std::string ExplicitExperiment(double amplitude_m, int order, const std::string&
   return s.str();
 }
 
-double ReadSetpoint(Master& master) {
-  const std::vector<std::uint16_t> r = master.Holdings(kSetpointAddress, 2);
-  const std::uint32_t bits = (static_cast<std::uint32_t>(r[0]) << 16) | r[1];
-  float value = 0.0F;
-  std::memcpy(&value, &bits, sizeof value);
-  return value;
-}
-
-// The JSON after `marker` on a log line.
-nlohmann::json JsonAfter(const std::string& line, const std::string& marker) {
-  const std::size_t at = line.find(marker);
-  if (at == std::string::npos) return {};
-  return nlohmann::json::parse(line.substr(at + marker.size()), nullptr, false);
-}
+double ReadSetpoint(Master& master) { return master.HoldingFloatAbcd(kSetpointAddress); }
 
 // Every number of `expected` (recursively) equals the one at the same place in `actual` to
 // `relative`; returns the first difference, empty when none.

@@ -7,6 +7,7 @@
 
 #include <cerrno>
 #include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <stdexcept>
 #include <string>
@@ -106,6 +107,15 @@ class Master {
     return r;
   }
   std::uint16_t Holding(int address) { return Holdings(address, 1)[0]; }
+  /// The float32 of holding registers address, address + 1, high word first ("abcd"), decoded
+  /// here with memcpy, not with canalid's register codec.
+  float HoldingFloatAbcd(int address) {
+    const std::vector<std::uint16_t> r = Holdings(address, 2);
+    const std::uint32_t bits = (static_cast<std::uint32_t>(r[0]) << 16) | r[1];
+    float value = 0.0F;
+    std::memcpy(&value, &bits, sizeof value);
+    return value;
+  }
   void Write(int address, std::uint16_t value) {
     EXPECT_EQ(modbus_write_register(ctx_, address, value), 1)
         << "write " << address << ": " << modbus_strerror(errno);
