@@ -112,6 +112,14 @@ class Reader {
     out = static_cast<Int>(v);
   }
 
+  void OptionalBool(const toml::table& t, const std::string& path, std::string_view key,
+                    std::optional<bool>& out) {
+    if (t.get(key) == nullptr) return;
+    bool value = false;
+    Bool(t, path, key, value);
+    out = value;
+  }
+
   void Bool(const toml::table& t, const std::string& path, std::string_view key, bool& out) {
     const toml::node* node = Get(t, path, key, false);
     if (node == nullptr) return;
@@ -371,6 +379,7 @@ void ReadReach(Reader& r, const toml::table& t, const std::string& at, ReachConf
           "forgetting",
           "rls_method",
           "closed_loop",
+          "id_wave_front",
           "batch_models",
           "idz_p22_s_per_m2",
           "idz_p22_std_s_per_m2",
@@ -403,6 +412,7 @@ void ReadReach(Reader& r, const toml::table& t, const std::string& at, ReachConf
   r.Double(t, at, "forgetting", reach.forgetting);
   r.Enum(t, at, "rls_method", reach.rls_method);
   r.Enum(t, at, "closed_loop", reach.closed_loop);
+  r.OptionalBool(t, at, "id_wave_front", reach.id_wave_front);
   r.EnumList(t, at, "batch_models", reach.batch_models);
   r.OptionalDouble(t, at, "idz_p22_s_per_m2", reach.idz_p22_s_per_m2);
   r.OptionalDouble(t, at, "idz_p22_std_s_per_m2", reach.idz_p22_std_s_per_m2);

@@ -152,6 +152,7 @@ std::string RenderDaemonConfig(const config::DaemonConfig& c) {
     w.Key("forgetting", r.forgetting);
     w.Key("rls_method", config::EnumName(r.rls_method));
     w.Key("closed_loop", config::EnumName(r.closed_loop));
+    if (r.id_wave_front) w.Bool("id_wave_front", *r.id_wave_front);
     w.List("batch_models", r.batch_models);
     if (r.idz_p22_s_per_m2) w.Key("idz_p22_s_per_m2", *r.idz_p22_s_per_m2);
     if (r.idz_p22_std_s_per_m2) w.Key("idz_p22_std_s_per_m2", *r.idz_p22_std_s_per_m2);

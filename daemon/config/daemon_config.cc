@@ -316,6 +316,10 @@ void ValidateReachModels(const DaemonConfig& c, const ReachConfig& r, const Chan
                                    BatchModel::kIdz) != r.batch_models.end();
   const bool idz = batch_idz || std::find(r.online_models.begin(), r.online_models.end(),
                                           OnlineModel::kIdz) != r.online_models.end();
+  if (r.id_wave_front && std::find(r.online_models.begin(), r.online_models.end(),
+                                   OnlineModel::kIntegratorDelay) == r.online_models.end()) {
+    out.Add(at + "id_wave_front", "has no effect: online_models has no \"id\"");
+  }
   if (r.idz_p22_s_per_m2) {
     if (!idz) {
       out.Add(at + "idz_p22_s_per_m2",

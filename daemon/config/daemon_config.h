@@ -157,6 +157,9 @@ struct ReachConfig {
   /// Batch identification at the end of an experiment: "auto" decides from the data whether the
   /// outflow follows the level (three-step closed-loop method), "on"/"off" force it.
   ClosedLoopMode closed_loop = ClosedLoopMode::kAuto;
+  /// Online id: the bank fits the wave front's direct gain p21 >= 0 beside the integrator (as the
+  /// batch id fit and `canalid identify --online --model id` do). Absent: true.
+  std::optional<bool> id_wave_front;
   bool operator==(const ReachConfig&) const = default;
 };
 

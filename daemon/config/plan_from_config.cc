@@ -103,6 +103,7 @@ core::OnlineModelSettings BuildOnlineModelSettings(const DaemonConfig& config,
   settings.lpv_nb = reach.lpv_nb;
   settings.lpv_delay_s = reach.lpv_delay_s;
   settings.idz_p22_s_per_m2 = reach.idz_p22_s_per_m2.value_or(0.0);
+  settings.wave_front_term = reach.id_wave_front.value_or(true);
   return settings;
 }
 

@@ -136,6 +136,27 @@ TEST(OnlineModelsConfig, OrdersGridAndDelaysReachTheEstimators) {
 // The input of the process models: the actuator's reading, or actuator_position's; lpv's
 // scheduling variable from lpv_scheduling.  Seen in the operating points the models take from
 // the first poll.
+// id_wave_front: the online id bank's p21 term, on by default as in the batch fit and the CLI.
+TEST(OnlineModelsConfig, IdWaveFrontSwitchesTheBanksP21Term) {
+  // The parameter names the daemon publishes for its online id model.
+  auto names = [](const std::string& toml) {
+    const core::ReachController reach(Build(toml));
+    core::OnlineModelSnapshot snapshot;
+    reach.pipeline().online_models().front()->FillSnapshot(snapshot);
+    return std::vector<std::string>(snapshot.names.begin(), snapshot.names.end());
+  };
+  EXPECT_TRUE(Build("").pipeline.online_id.wave_front_term);
+  EXPECT_TRUE(Build("").pipeline.online_id.wave_front_non_negative);
+  EXPECT_THAT(names(""), ::testing::Contains("p21_s_per_m2"));
+  EXPECT_FALSE(Build("id_wave_front = false\n").pipeline.online_id.wave_front_term);
+  EXPECT_THAT(names("id_wave_front = false\n"),
+              ::testing::Not(::testing::Contains("p21_s_per_m2")));
+  EXPECT_EQ(names("").size(), names("id_wave_front = false\n").size() + 1);
+  EXPECT_THAT(Issues("online_models = [\"arx\"]\nid_wave_front = false\n"),
+              ::testing::Contains(
+                  HasSubstr("reach[0].id_wave_front: has no effect: online_models has no \"id\"")));
+}
+
 TEST(OnlineModelsConfig, ActuatorPositionAndSchedulingChannelsFeedTheProcessModels) {
   auto first_operating_point = [](const std::string& keys) {
     core::ReachController reach(Build(keys));
