@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "tests/support/child_process.h"
+#include "tests/support/loopback_port.h"
 #include "tests/support/notify_waiter.h"
 
 #include <array>
@@ -37,29 +38,8 @@ using enum RegisterKind;
 
 const char* const kPython = "/usr/bin/python3";
 
-int FreeLoopbackPort() {
-  const int fd = socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in addr{};
-  addr.sin_family = AF_INET;
-  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  addr.sin_port = 0;
-  socklen_t len = sizeof addr;
-  const bool bound = bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) == 0 &&
-                     getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len) == 0;
-  close(fd);
-  return bound ? ntohs(addr.sin_port) : 0;
-}
-
-bool Accepts(int port) {
-  const int fd = socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in addr{};
-  addr.sin_family = AF_INET;
-  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  addr.sin_port = htons(static_cast<uint16_t>(port));
-  const bool ok = connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) == 0;
-  close(fd);
-  return ok;
-}
+using canalid::testing::AcceptsOnLoopback;
+using canalid::testing::FreeLoopbackPort;
 
 /// The pymodbus server child process.
 class PymodbusServer {
@@ -77,7 +57,7 @@ class PymodbusServer {
                     std::to_string(port_)};
     options.stderr_path = dir / ("server-" + std::to_string(port_) + ".log");
     child_ = std::make_unique<canalid::testing::ChildProcess>(options);
-    if (child_->WaitUntil([&] { return Accepts(port_); }, 30000)) {
+    if (child_->WaitUntil([&] { return AcceptsOnLoopback(port_); }, 30000)) {
       return ::testing::AssertionSuccess();
     }
     if (!child_->Running()) {
