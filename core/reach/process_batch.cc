@@ -1,5 +1,6 @@
 #include "core/reach/process_batch.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -21,7 +22,15 @@ std::string BoundsProblem(double gain, double time_constant_s, double delay_s, d
 }  // namespace
 
 std::string_view ProcessBatchKindName(ProcessBatchKind kind) {
-  return kind == ProcessBatchKind::kFoptd ? "foptd" : "frac-foptd";
+  switch (kind) {
+    case ProcessBatchKind::kFoptd:
+      return "foptd";
+    case ProcessBatchKind::kFractionalFoptd:
+      return "frac-foptd";
+    case ProcessBatchKind::kSoptd:
+      return "soptd";
+  }
+  return "?";
 }
 
 ProcessBatchResult FitProcessBatch(ProcessBatchKind kind,
@@ -37,6 +46,14 @@ ProcessBatchResult FitProcessBatch(ProcessBatchKind kind,
       result.foptd = FitFoptd(u, y, sample_time_s, options);
       const FoptdModel& m = result.foptd->model;
       result.problem = BoundsProblem(m.gain, m.time_constant_s, m.delay_s, max_delay_s);
+    } else if (kind == ProcessBatchKind::kSoptd) {
+      ProcessFitOptions options;
+      options.max_delay_s = max_delay_s;
+      result.soptd = FitSoptd(u, y, sample_time_s, options);
+      const SoptdModel& m = result.soptd->model;
+      // T1 >= T2 (FitSoptd): the smaller one must be > 0.
+      result.problem = BoundsProblem(m.gain, std::min(m.time_constants_s[0], m.time_constants_s[1]),
+                                     m.delay_s, max_delay_s);
     } else {
       FractionalFoptdFitOptions options;
       options.max_delay_s = max_delay_s;
@@ -47,6 +64,7 @@ ProcessBatchResult FitProcessBatch(ProcessBatchKind kind,
     }
   } catch (const std::invalid_argument& e) {
     result.foptd.reset();
+    result.soptd.reset();
     result.fractional.reset();
     result.problem = e.what();
   }

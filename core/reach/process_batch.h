@@ -16,9 +16,10 @@ namespace canalid::core {
 enum class ProcessBatchKind : std::uint8_t {
   kFoptd,            ///< "foptd": K e^{-tau s} / (1 + T s)  (FitFoptd)
   kFractionalFoptd,  ///< "frac-foptd": K e^{-tau s} / (1 + T s^alpha)  (FitFractionalFoptd)
+  kSoptd,            ///< "soptd": K e^{-tau s} / ((1 + T1 s)(1 + T2 s))  (FitSoptd)
 };
-inline constexpr std::array kProcessBatchKinds{ProcessBatchKind::kFoptd,
-                                               ProcessBatchKind::kFractionalFoptd};
+inline constexpr std::array kProcessBatchKinds{
+    ProcessBatchKind::kFoptd, ProcessBatchKind::kFractionalFoptd, ProcessBatchKind::kSoptd};
 /// The kind's name in configurations and model JSON.
 std::string_view ProcessBatchKindName(ProcessBatchKind kind);
 
@@ -26,6 +27,7 @@ std::string_view ProcessBatchKindName(ProcessBatchKind kind);
 struct ProcessBatchResult {
   ProcessBatchKind kind = ProcessBatchKind::kFoptd;
   std::optional<FoptdFit> foptd;                       ///< kFoptd
+  std::optional<SoptdFit> soptd;                       ///< kSoptd
   std::optional<FractionalFoptdFitResult> fractional;  ///< kFractionalFoptd
   OustaloupOptions band;  ///< kFractionalFoptd: the band the fit simulated with
   /// Empty when the model is the reach's: fitted, finite, T > 0, delay inside [0, max_delay_s].

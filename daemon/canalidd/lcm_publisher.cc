@@ -166,7 +166,12 @@ void LcmPublisher::PublishModelJson(const std::string& reach, const nlohmann::js
   auto number = [&](const char* key) {
     return key != nullptr && model.contains(key) && model[key].is_number();
   };
-  std::size_t n = 0;
+  // soptd's two time constants (an array in its JSON), T1 >= T2.
+  const nlohmann::json* pair =
+      model.contains("time_constants_s") ? &model["time_constants_s"] : nullptr;
+  const bool two_lags = pair != nullptr && pair->is_array() && pair->size() == 2 &&
+                        (*pair)[0].is_number() && (*pair)[1].is_number();
+  std::size_t n = two_lags ? 2U : 0U;
   for (const auto& [key, std_key] : kKeys) n += number(key) ? 1U : 0U;
   SetParamCount(model_, n);
   std::size_t i = 0;
@@ -175,6 +180,13 @@ void LcmPublisher::PublishModelJson(const std::string& reach, const nlohmann::js
     model_.param_names[i] = key;
     model_.param_values[i] = model[key].get<double>();
     model_.param_std_devs[i++] = number(std_key) ? model[std_key].get<double>() : kNan;
+  }
+  if (two_lags) {
+    for (std::size_t lag = 0; lag < 2; ++lag) {
+      model_.param_names[i] = lag == 0 ? "time_constant_1_s" : "time_constant_2_s";
+      model_.param_values[i] = (*pair)[lag].get<double>();
+      model_.param_std_devs[i++] = kNan;
+    }
   }
   model_.trace_p = kNan;
   model_.condition_number = kNan;

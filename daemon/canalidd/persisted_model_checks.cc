@@ -65,12 +65,17 @@ std::string PersistedProcessModelProblem(const PersistedModel& persisted, double
       const auto record = drivers::FoptdFromJson(j, "model");
       gain = record.model.gain;
       delay_s = record.model.delay_s;
+    } else if (persisted.model_kind == "soptd") {
+      const auto record = drivers::SoptdFromJson(j, "model");
+      gain = record.model.gain;
+      delay_s = record.model.delay_s;
     } else if (persisted.model_kind == "frac-foptd") {
       const auto record = drivers::FractionalFoptdFromJson(j, "model");
       gain = record.params.model.gain;
       delay_s = record.params.model.delay_s;
     } else {
-      return "model kind '" + persisted.model_kind + "' is not a process model (foptd, frac-foptd)";
+      return "model kind '" + persisted.model_kind +
+             "' is not a process model (foptd, soptd, frac-foptd)";
     }
   } catch (const std::exception& e) {
     return e.what();

@@ -162,6 +162,9 @@ ReachControllerOptions BuildReachControllerOptions(
       case BatchModel::kFracFoptd:
         pipeline.batch_process_models.push_back(core::ProcessBatchKind::kFractionalFoptd);
         break;
+      case BatchModel::kSoptd:
+        pipeline.batch_process_models.push_back(core::ProcessBatchKind::kSoptd);
+        break;
     }
   }
   pipeline.batch.fit.min_nk = pipeline.online_id.min_delay_samples;

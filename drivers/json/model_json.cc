@@ -267,6 +267,8 @@ std::optional<nlohmann::json> ProcessBatchJson(const core::ProcessBatchResult& r
   nlohmann::json json;
   if (result.foptd) {
     json = ToJson(*result.foptd);
+  } else if (result.soptd) {
+    json = ToJson(*result.soptd);
   } else if (result.fractional) {
     json = ToJson(*result.fractional, result.band);
   } else {

@@ -41,7 +41,8 @@ ReachSampleProcessorOptions FlumeOptions(bool batch_id) {
   o.online_id_enabled = false;
   o.online_id.max_delay_samples = 60;  // delays up to 9 s
   o.batch_id = batch_id;
-  o.batch_process_models = {ProcessBatchKind::kFoptd, ProcessBatchKind::kFractionalFoptd};
+  o.batch_process_models = {ProcessBatchKind::kFoptd, ProcessBatchKind::kFractionalFoptd,
+                            ProcessBatchKind::kSoptd};
   ExperimentPlan plan;
   plan.prbs.nominal = 0.015;
   plan.prbs.amplitude = 0.002;
@@ -80,7 +81,7 @@ TEST(ProcessBatch, AnExperimentGivesTheFoptdOfTheFlumeFromBothKinds) {
   EXPECT_FALSE(reach.IdentifyRecord(&done).has_value());  // no integrator-delay fit asked
   EXPECT_EQ(reach.experiment_state().phase, ExperimentPhase::kDone);
   const auto& results = reach.process_batch_results();
-  ASSERT_EQ(results.size(), 2U);
+  ASSERT_EQ(results.size(), 3U);
   ASSERT_TRUE(results[0].ok()) << results[0].problem;
   ASSERT_TRUE(results[0].foptd.has_value());
   const FoptdModel& m = results[0].foptd->model;
@@ -95,6 +96,15 @@ TEST(ProcessBatch, AnExperimentGivesTheFoptdOfTheFlumeFromBothKinds) {
   EXPECT_NEAR(f.gain, kGain, 0.02 * kGain);
   EXPECT_NEAR(f.time_constant_s, kTime, 0.15 * kTime);
   EXPECT_NEAR(f.delay_s, static_cast<double>(kDelaySamples) * kTs, 2.0 * kTs);
+  // A first-order lag is the second-order one with a vanishing second time constant (FitSoptd
+  // keeps T1 >= T2): the gain and T1 are the lag's, and the fit follows the record.
+  ASSERT_TRUE(results[2].ok()) << results[2].problem;
+  ASSERT_TRUE(results[2].soptd.has_value());
+  const SoptdModel& s = results[2].soptd->model;
+  EXPECT_NEAR(s.gain, kGain, 1e-2 * kGain);
+  EXPECT_GE(s.time_constants_s[0], s.time_constants_s[1]);
+  EXPECT_NEAR(s.time_constants_s[0], kTime, 0.15 * kTime);
+  EXPECT_GT(results[2].soptd->metrics.fit_percent, 99.0);
 }
 
 TEST(ProcessBatch, WithoutAnyModelTheExperimentFailsAndSaysWhy) {

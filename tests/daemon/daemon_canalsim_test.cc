@@ -431,7 +431,7 @@ TEST(DaemonCanalsim, ModelPublishPeriodThinsTheOnlineModels) {
   }
 }
 
-// batch_models = ["id", "idz", "foptd", "frac-foptd"] on pool 2, live: at the end of the
+// batch_models = ["id", "idz", "foptd", "frac-foptd", "soptd"] on pool 2, live: at the end of the
 // experiment the idz model and each process model are logged, published on MODEL_pool2 with
 // estimator "batch" and persisted when inside their bounds; `canalid replay` of the log gives the
 // same models (the same fits on the same record); the next daemon resumes the persisted ones from
@@ -440,11 +440,12 @@ TEST(DaemonCanalsim, BatchProcessModelsArePublishedPersistedReplayedAndResumed) 
   const fs::path dir = TestDir();
   Canal canal(dir);
   std::string config;
-  auto daemon = RunPool2Experiment(dir, canal, "batch_models",
-                                   "[\"id\", \"idz\", \"foptd\", \"frac-foptd\"]", &config);
+  auto daemon =
+      RunPool2Experiment(dir, canal, "batch_models",
+                         "[\"id\", \"idz\", \"foptd\", \"frac-foptd\", \"soptd\"]", &config);
   ASSERT_FALSE(::testing::Test::HasFailure());
   std::map<std::string, nlohmann::json> live;  // kind -> the JSON logged
-  for (const char* kind : {"idz", "foptd", "frac-foptd"}) {
+  for (const char* kind : {"idz", "foptd", "frac-foptd", "soptd"}) {
     const std::string line =
         daemon->WaitForLine("reach pool2: identified " + std::string(kind) + " ", 20000);
     ASSERT_FALSE(line.empty()) << kind << "\n" << daemon->output();
@@ -470,6 +471,16 @@ TEST(DaemonCanalsim, BatchProcessModelsArePublishedPersistedReplayedAndResumed) 
     ASSERT_EQ(published.count(kind), 1U) << kind;
     int compared = 0;
     EXPECT_EQ(SameParameters(published[kind], json, &compared), "");
+    if (kind == "soptd") {
+      // Its two time constants are an array in the JSON, two parameters in the snapshot.
+      nlohmann::json lags;
+      lags["time_constant_1_s"] = json.at("time_constants_s").at(0);
+      lags["time_constant_2_s"] = json.at("time_constants_s").at(1);
+      int lags_compared = 0;
+      EXPECT_EQ(SameParameters(published[kind], lags, &lags_compared), "");
+      EXPECT_EQ(lags_compared, 2);
+      compared += lags_compared;
+    }
     EXPECT_GE(compared, 3) << kind;
     EXPECT_TRUE(fs::exists(dir / "state" / ("pool2." + kind + ".json"))) << kind;
   }

@@ -78,6 +78,21 @@ void ExpectBatchOfTheFlume(const DaemonExperimentRun& run) {
   const nlohmann::json& g = run.batch.at("frac-foptd");
   EXPECT_GT(g.at("delay_s").get<double>(), 2.25) << g;
   EXPECT_LT(g.at("delay_s").get<double>(), 5.7) << g;
+  ASSERT_EQ(run.batch.count("soptd"), 1U) << run.output;
+  const nlohmann::json& s = run.batch.at("soptd");
+  EXPECT_GT(s.at("gain").get<double>(), 0.086) << s;
+  EXPECT_LT(s.at("gain").get<double>(), 0.775) << s;
+  EXPECT_GT(s.at("delay_s").get<double>(), 0.0) << s;
+  EXPECT_LT(s.at("delay_s").get<double>(), 5.7) << s;
+  // The replay fits the same three models to the same record, to the last bit.
+  for (const char* kind : {"foptd", "soptd"}) {
+    EXPECT_NE(run.replay_err.find(std::string("batch ") + kind +
+                                  " model vs the last one published live: largest relative "
+                                  "difference 0\n"),
+              std::string::npos)
+        << kind << "\n"
+        << run.replay_err;
+  }
   ASSERT_EQ(run.replayed.count("frac-foptd"), 1U) << run.replay_err;
   for (const char* key : {"gain", "time_constant_s", "alpha", "delay_s"}) {
     EXPECT_EQ(run.replayed.at("frac-foptd").at(key).get<double>(), g.at(key).get<double>()) << key;

@@ -219,19 +219,20 @@ TEST(OnlineModelsConfig, BatchModelsChooseTheEndOfExperimentFits) {
   EXPECT_TRUE(defaults.batch_id);
   EXPECT_TRUE(defaults.batch_process_models.empty());
   const core::ReachSampleProcessorOptions set =
-      Build("batch_models = [\"frac-foptd\", \"foptd\"]\n").pipeline;
+      Build("batch_models = [\"frac-foptd\", \"soptd\", \"foptd\"]\n").pipeline;
   EXPECT_FALSE(set.batch_id);
   EXPECT_EQ(set.batch_process_models,
             (std::vector<core::ProcessBatchKind>{core::ProcessBatchKind::kFractionalFoptd,
+                                                 core::ProcessBatchKind::kSoptd,
                                                  core::ProcessBatchKind::kFoptd}));
   EXPECT_THAT(Issues("batch_models = []\n"),
               ::testing::Contains(HasSubstr("reach[0].batch_models: is empty (allowed: at least "
-                                            "one of id, idz, foptd, frac-foptd)")));
+                                            "one of id, idz, foptd, frac-foptd, soptd)")));
   EXPECT_THAT(Issues("batch_models = [\"id\", \"id\"]\n"),
               ::testing::Contains(HasSubstr("reach[0].batch_models[1]: duplicate model \"id\"")));
   EXPECT_THAT(Issues("batch_models = [\"arx\"]\n"),
               ::testing::Contains(HasSubstr("\"arx\" is not allowed (allowed: id, idz, foptd, "
-                                            "frac-foptd)")));
+                                            "frac-foptd, soptd)")));
 }
 
 // idz at the end of experiments, with the p22 prior of the geometry (the fit: idz_fit_plant_test).
