@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
+
+#include "core/linear/arx_delay_scan.h"
 
 namespace canalid::core {
 namespace {
@@ -29,6 +32,8 @@ std::string_view ProcessBatchKindName(ProcessBatchKind kind) {
       return "frac-foptd";
     case ProcessBatchKind::kSoptd:
       return "soptd";
+    case ProcessBatchKind::kArx:
+      return "arx";
   }
   return "?";
 }
@@ -36,7 +41,8 @@ std::string_view ProcessBatchKindName(ProcessBatchKind kind) {
 ProcessBatchResult FitProcessBatch(ProcessBatchKind kind,
                                    const Eigen::Ref<const Eigen::VectorXd>& u,
                                    const Eigen::Ref<const Eigen::VectorXd>& y, double sample_time_s,
-                                   double max_delay_s) {
+                                   const ProcessBatchOptions& batch) {
+  const double max_delay_s = batch.max_delay_s;
   ProcessBatchResult result;
   result.kind = kind;
   try {
@@ -46,6 +52,25 @@ ProcessBatchResult FitProcessBatch(ProcessBatchKind kind,
       result.foptd = FitFoptd(u, y, sample_time_s, options);
       const FoptdModel& m = result.foptd->model;
       result.problem = BoundsProblem(m.gain, m.time_constant_s, m.delay_s, max_delay_s);
+    } else if (kind == ProcessBatchKind::kArx) {
+      result.input_offset = u.size() > 0 ? u(0) : 0.0;
+      result.output_offset = y.size() > 0 ? y(0) : 0.0;
+      const Eigen::VectorXd du = u.array() - result.input_offset;
+      const Eigen::VectorXd dy = y.array() - result.output_offset;
+      // Delays the record can hold: at most a third of it, as the id fit's default.
+      const int max_nk = std::min(static_cast<int>(std::floor(max_delay_s / sample_time_s + 1e-9)),
+                                  static_cast<int>(u.size() / 3));
+      const int min_nk = std::max(batch.min_delay_samples, 1);
+      if (max_nk < min_nk) {
+        result.problem = "the record (" + std::to_string(u.size()) +
+                         " samples) is too short for delays of " + std::to_string(min_nk) +
+                         " samples and more";
+        return result;
+      }
+      result.arx = FitArxOverDelays(dy, du, batch.arx_na, batch.arx_nb, min_nk, max_nk);
+      if (!result.arx->a.allFinite() || !result.arx->b.front().allFinite()) {
+        result.problem = "the ARX coefficients are not finite";
+      }
     } else if (kind == ProcessBatchKind::kSoptd) {
       ProcessFitOptions options;
       options.max_delay_s = max_delay_s;
@@ -65,6 +90,7 @@ ProcessBatchResult FitProcessBatch(ProcessBatchKind kind,
   } catch (const std::invalid_argument& e) {
     result.foptd.reset();
     result.soptd.reset();
+    result.arx.reset();
     result.fractional.reset();
     result.problem = e.what();
   }

@@ -7,6 +7,7 @@
 #include <string_view>
 
 #include "core/fractional/fractional_foptd_fit.h"
+#include "core/linear/arx.h"
 #include "core/linear/process_model_fit.h"
 
 namespace canalid::core {
@@ -17,17 +18,30 @@ enum class ProcessBatchKind : std::uint8_t {
   kFoptd,            ///< "foptd": K e^{-tau s} / (1 + T s)  (FitFoptd)
   kFractionalFoptd,  ///< "frac-foptd": K e^{-tau s} / (1 + T s^alpha)  (FitFractionalFoptd)
   kSoptd,            ///< "soptd": K e^{-tau s} / ((1 + T1 s)(1 + T2 s))  (FitSoptd)
+  kArx,              ///< "arx": A(q) y = B(q) q^-nk u, nk scanned (FitArxOverDelays)
 };
-inline constexpr std::array kProcessBatchKinds{
-    ProcessBatchKind::kFoptd, ProcessBatchKind::kFractionalFoptd, ProcessBatchKind::kSoptd};
+inline constexpr std::array kProcessBatchKinds{ProcessBatchKind::kFoptd,
+                                               ProcessBatchKind::kFractionalFoptd,
+                                               ProcessBatchKind::kSoptd, ProcessBatchKind::kArx};
 /// The kind's name in configurations and model JSON.
 std::string_view ProcessBatchKindName(ProcessBatchKind kind);
+
+/// What the end-of-experiment fits of a reach may use.
+struct ProcessBatchOptions {
+  double max_delay_s = 0.0;   ///< > 0: the longest delay tried
+  int min_delay_samples = 1;  ///< arx: the shortest delay tried (at least 1 sample)
+  int arx_na = 2;             ///< arx: output lags (the reach's arx_na)
+  int arx_nb = 2;             ///< arx: input lags (the reach's arx_nb)
+};
 
 /// One end-of-experiment fit: the kind's result, or why there is none.
 struct ProcessBatchResult {
   ProcessBatchKind kind = ProcessBatchKind::kFoptd;
-  std::optional<FoptdFit> foptd;                       ///< kFoptd
-  std::optional<SoptdFit> soptd;                       ///< kSoptd
+  std::optional<FoptdFit> foptd;  ///< kFoptd
+  std::optional<SoptdFit> soptd;  ///< kSoptd
+  std::optional<ArxModel> arx;    ///< kArx: of the deviations from the record's first sample
+  double input_offset = 0.0;      ///< kArx: the record's first input (the rest point)
+  double output_offset = 0.0;     ///< kArx: the record's first level
   std::optional<FractionalFoptdFitResult> fractional;  ///< kFractionalFoptd
   OustaloupOptions band;  ///< kFractionalFoptd: the band the fit simulated with
   /// Empty when the model is the reach's: fitted, finite, T > 0, delay inside [0, max_delay_s].
@@ -36,11 +50,12 @@ struct ProcessBatchResult {
   bool ok() const { return problem.empty(); }
 };
 
-/// Fits `kind` to the record of input u (the actuator) and level y sampled every Ts, with delays
-/// up to max_delay_s (> 0).  Never throws for bad data: the fit's error becomes `problem`.
+/// Fits `kind` to the record of input u (the actuator) and level y sampled every Ts (the first
+/// sample the rest point), with delays up to options.max_delay_s.  Never throws for bad data: the
+/// fit's error becomes `problem`.
 ProcessBatchResult FitProcessBatch(ProcessBatchKind kind,
                                    const Eigen::Ref<const Eigen::VectorXd>& u,
                                    const Eigen::Ref<const Eigen::VectorXd>& y, double sample_time_s,
-                                   double max_delay_s);
+                                   const ProcessBatchOptions& options);
 
 }  // namespace canalid::core

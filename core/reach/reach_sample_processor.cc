@@ -1,5 +1,6 @@
 #include "core/reach/reach_sample_processor.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -174,7 +175,9 @@ std::optional<IntegratorDelayIdentification> ReachSampleProcessor::IdentifyRecor
     }
   }
   process_results_.clear();
-  const double max_delay_s = options_.online_id.max_delay_samples * options_.sample_time_s;
+  ProcessBatchOptions batch = options_.batch_process;
+  batch.max_delay_s = options_.online_id.max_delay_samples * options_.sample_time_s;
+  batch.min_delay_samples = std::max(options_.online_id.min_delay_samples, 1);
   bool process_ok = false;
   // The record with its rest point (the sample before it, at the nominal setpoint) first: the
   // fits take the first sample as the state of rest the input moves from.
@@ -191,8 +194,7 @@ std::optional<IntegratorDelayIdentification> ReachSampleProcessor::IdentifyRecor
       process_results_.push_back(none);
       continue;
     }
-    process_results_.push_back(
-        FitProcessBatch(kind, input, level, options_.sample_time_s, max_delay_s));
+    process_results_.push_back(FitProcessBatch(kind, input, level, options_.sample_time_s, batch));
     process_ok = process_ok || process_results_.back().ok();
   }
   const bool idz_ok = idz_result_.has_value() && idz_problem_.empty();

@@ -51,6 +51,8 @@ struct ReachSampleProcessorOptions {
   /// The process models identified at the end of experiments too, from the recorded input (the
   /// actuator, as the process models' online input) and level, delays up to the bank's largest.
   std::vector<ProcessBatchKind> batch_process_models;
+  /// Their settings: the arx orders (the delay range is the online id bank's).
+  ProcessBatchOptions batch_process;
 };
 
 /// What the daemon must do after a sample or a command.

@@ -1,5 +1,6 @@
 #include "daemon/canalidd/lcm_publisher.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
@@ -171,7 +172,19 @@ void LcmPublisher::PublishModelJson(const std::string& reach, const nlohmann::js
       model.contains("time_constants_s") ? &model["time_constants_s"] : nullptr;
   const bool two_lags = pair != nullptr && pair->is_array() && pair->size() == 2 &&
                         (*pair)[0].is_number() && (*pair)[1].is_number();
-  std::size_t n = two_lags ? 2U : 0U;
+  // arx's coefficients (arrays in its JSON), named as the online arx kind names them.
+  auto numbers = [](const nlohmann::json* v) {
+    return v != nullptr && v->is_array() &&
+           std::all_of(v->begin(), v->end(), [](const nlohmann::json& x) { return x.is_number(); });
+  };
+  const nlohmann::json* a = model.contains("a") ? &model["a"] : nullptr;
+  const nlohmann::json* b =
+      model.contains("b_coeffs") && model["b_coeffs"].is_array() && model["b_coeffs"].size() == 1
+          ? &model["b_coeffs"][0]
+          : nullptr;
+  const std::size_t na = numbers(a) ? a->size() : 0U;
+  const std::size_t nb = numbers(b) ? b->size() : 0U;
+  std::size_t n = (two_lags ? 2U : 0U) + na + nb;
   for (const auto& [key, std_key] : kKeys) n += number(key) ? 1U : 0U;
   SetParamCount(model_, n);
   std::size_t i = 0;
@@ -180,6 +193,13 @@ void LcmPublisher::PublishModelJson(const std::string& reach, const nlohmann::js
     model_.param_names[i] = key;
     model_.param_values[i] = model[key].get<double>();
     model_.param_std_devs[i++] = number(std_key) ? model[std_key].get<double>() : kNan;
+  }
+  for (std::size_t j = 0; j < na + nb; ++j) {
+    const bool is_a = j < na;
+    const std::size_t k = is_a ? j : j - na;
+    model_.param_names[i] = (is_a ? "a" : "b") + std::to_string(k + 1);
+    model_.param_values[i] = (is_a ? (*a)[k] : (*b)[k]).get<double>();
+    model_.param_std_devs[i++] = kNan;
   }
   if (two_lags) {
     for (std::size_t lag = 0; lag < 2; ++lag) {

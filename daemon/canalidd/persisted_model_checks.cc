@@ -65,6 +65,13 @@ std::string PersistedProcessModelProblem(const PersistedModel& persisted, double
       const auto record = drivers::FoptdFromJson(j, "model");
       gain = record.model.gain;
       delay_s = record.model.delay_s;
+    } else if (persisted.model_kind == "arx") {
+      const core::ArxModel model = drivers::ArxModelFromJson(j, "model");
+      if (model.orders.nk.size() != 1) return "arx: one input expected";
+      if (!model.a.allFinite() || !model.b.front().allFinite())
+        return "arx: coefficients not finite";
+      if (!j.contains("delay_s") || !j.at("delay_s").is_number()) return "arx: no delay_s";
+      delay_s = j.at("delay_s").get<double>();
     } else if (persisted.model_kind == "soptd") {
       const auto record = drivers::SoptdFromJson(j, "model");
       gain = record.model.gain;
@@ -75,7 +82,7 @@ std::string PersistedProcessModelProblem(const PersistedModel& persisted, double
       delay_s = record.params.model.delay_s;
     } else {
       return "model kind '" + persisted.model_kind +
-             "' is not a process model (foptd, soptd, frac-foptd)";
+             "' is not a process model (foptd, soptd, frac-foptd, arx)";
     }
   } catch (const std::exception& e) {
     return e.what();

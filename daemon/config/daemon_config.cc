@@ -26,8 +26,8 @@ constexpr std::array kTables{RegisterTable::kInput, RegisterTable::kHolding};
 constexpr std::array kTypes{RegisterType::kU16, RegisterType::kI16, RegisterType::kU32,
                             RegisterType::kI32, RegisterType::kF32};
 constexpr std::array kWordOrders{WordOrder::kHighWordFirst, WordOrder::kLowWordFirst};
-constexpr std::array kBatchModels{BatchModel::kId, BatchModel::kIdz, BatchModel::kFoptd,
-                                  BatchModel::kFracFoptd, BatchModel::kSoptd};
+constexpr std::array kBatchModels{BatchModel::kId,        BatchModel::kIdz,   BatchModel::kFoptd,
+                                  BatchModel::kFracFoptd, BatchModel::kSoptd, BatchModel::kArx};
 constexpr std::array kClosedLoopModes{ClosedLoopMode::kAuto, ClosedLoopMode::kOn,
                                       ClosedLoopMode::kOff};
 constexpr std::array kRlsMethods{RlsMethod::kUdDirectional, RlsMethod::kUdExponential,
@@ -632,7 +632,7 @@ const char* EnumName(RegisterType v) {
 }
 const char* EnumName(WordOrder v) { return NameIn(v, kWordOrders, {"high_first", "low_first"}); }
 const char* EnumName(BatchModel v) {
-  return NameIn(v, kBatchModels, {"id", "idz", "foptd", "frac-foptd", "soptd"});
+  return NameIn(v, kBatchModels, {"id", "idz", "foptd", "frac-foptd", "soptd", "arx"});
 }
 // A string_view of a literal: null-terminated.
 const char* EnumName(OnlineModel v) { return core::OnlineModelKindName(v).data(); }

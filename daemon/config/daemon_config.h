@@ -36,7 +36,7 @@ enum class RegisterTable { kInput, kHolding };
 /// The online model kinds are core's registry's (the names of core::OnlineModelKindName).
 using OnlineModel = core::OnlineModelKind;
 /// The models identified at the end of an experiment.
-enum class BatchModel { kId, kIdz, kFoptd, kFracFoptd, kSoptd };
+enum class BatchModel { kId, kIdz, kFoptd, kFracFoptd, kSoptd, kArx };
 enum class ExperimentMode { kDesign, kExplicit, kStep };
 enum class ExperimentStart { kManual, kOnStart };
 

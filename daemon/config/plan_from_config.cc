@@ -165,8 +165,13 @@ ReachControllerOptions BuildReachControllerOptions(
       case BatchModel::kSoptd:
         pipeline.batch_process_models.push_back(core::ProcessBatchKind::kSoptd);
         break;
+      case BatchModel::kArx:
+        pipeline.batch_process_models.push_back(core::ProcessBatchKind::kArx);
+        break;
     }
   }
+  pipeline.batch_process.arx_na = reach.arx_na;
+  pipeline.batch_process.arx_nb = reach.arx_nb;
   pipeline.batch.fit.min_nk = pipeline.online_id.min_delay_samples;
   pipeline.batch.fit.max_nk = pipeline.online_id.max_delay_samples;
   pipeline.batch.fit.closed_loop = reach.closed_loop;

@@ -269,6 +269,14 @@ std::optional<nlohmann::json> ProcessBatchJson(const core::ProcessBatchResult& r
     json = ToJson(*result.foptd);
   } else if (result.soptd) {
     json = ToJson(*result.soptd);
+  } else if (result.arx) {
+    // The model of the deviations from the record's rest point, with its delay in seconds and
+    // the rest point as the offsets (as the process fits give them).
+    json = ToJson(*result.arx);
+    if (!std::isfinite(result.arx->aic)) json.erase("aic");
+    json["delay_s"] = result.arx->orders.nk.front() * sample_time_s;
+    json["input_offset"] = result.input_offset;
+    json["output_offset"] = result.output_offset;
   } else if (result.fractional) {
     json = ToJson(*result.fractional, result.band);
   } else {

@@ -42,7 +42,9 @@ ReachSampleProcessorOptions FlumeOptions(bool batch_id) {
   o.online_id.max_delay_samples = 60;  // delays up to 9 s
   o.batch_id = batch_id;
   o.batch_process_models = {ProcessBatchKind::kFoptd, ProcessBatchKind::kFractionalFoptd,
-                            ProcessBatchKind::kSoptd};
+                            ProcessBatchKind::kSoptd, ProcessBatchKind::kArx};
+  o.batch_process.arx_na = 1;  // the flume's FOPTD sampled is a first-order ARX
+  o.batch_process.arx_nb = 1;
   ExperimentPlan plan;
   plan.prbs.nominal = 0.015;
   plan.prbs.amplitude = 0.002;
@@ -81,7 +83,7 @@ TEST(ProcessBatch, AnExperimentGivesTheFoptdOfTheFlumeFromBothKinds) {
   EXPECT_FALSE(reach.IdentifyRecord(&done).has_value());  // no integrator-delay fit asked
   EXPECT_EQ(reach.experiment_state().phase, ExperimentPhase::kDone);
   const auto& results = reach.process_batch_results();
-  ASSERT_EQ(results.size(), 3U);
+  ASSERT_EQ(results.size(), 4U);
   ASSERT_TRUE(results[0].ok()) << results[0].problem;
   ASSERT_TRUE(results[0].foptd.has_value());
   const FoptdModel& m = results[0].foptd->model;
@@ -105,6 +107,16 @@ TEST(ProcessBatch, AnExperimentGivesTheFoptdOfTheFlumeFromBothKinds) {
   EXPECT_GE(s.time_constants_s[0], s.time_constants_s[1]);
   EXPECT_NEAR(s.time_constants_s[0], kTime, 0.15 * kTime);
   EXPECT_GT(results[2].soptd->metrics.fit_percent, 99.0);
+  // The flume sampled with the gate held over each sample is exactly y(t) = a y(t-1) + K (1 - a)
+  // u(t - 1 - kDelaySamples), a = e^{-Ts/T}: the arx scan finds that delay and those coefficients.
+  ASSERT_TRUE(results[3].ok()) << results[3].problem;
+  ASSERT_TRUE(results[3].arx.has_value());
+  const ArxModel& arx = *results[3].arx;
+  const double a = std::exp(-kTs / kTime);
+  EXPECT_EQ(arx.orders.nk.front(), static_cast<int>(kDelaySamples) + 1);
+  EXPECT_NEAR(arx.a(0), -a, 1e-9);
+  EXPECT_NEAR(arx.b.front()(0), kGain * (1.0 - a), 1e-9);
+  EXPECT_EQ(results[3].input_offset, 0.015);
 }
 
 TEST(ProcessBatch, WithoutAnyModelTheExperimentFailsAndSaysWhy) {
@@ -122,7 +134,7 @@ TEST(ProcessBatch, AFitThatCannotRunIsAProblemNotAThrow) {
   const Eigen::VectorXd still = Eigen::VectorXd::Constant(100, 0.015);
   const Eigen::VectorXd level = Eigen::VectorXd::Constant(100, 0.05);
   for (const ProcessBatchKind kind : kProcessBatchKinds) {
-    const ProcessBatchResult r = FitProcessBatch(kind, still, level, kTs, 9.0);
+    const ProcessBatchResult r = FitProcessBatch(kind, still, level, kTs, ProcessBatchOptions{9.0});
     EXPECT_FALSE(r.ok()) << ProcessBatchKindName(kind);
     EXPECT_FALSE(r.foptd.has_value() || r.fractional.has_value());
   }

@@ -431,8 +431,8 @@ TEST(DaemonCanalsim, ModelPublishPeriodThinsTheOnlineModels) {
   }
 }
 
-// batch_models = ["id", "idz", "foptd", "frac-foptd", "soptd"] on pool 2, live: at the end of the
-// experiment the idz model and each process model are logged, published on MODEL_pool2 with
+// batch_models = ["id", "idz", "foptd", "frac-foptd", "soptd", "arx"] on pool 2, live: at the end
+// of the experiment the idz model and each process model are logged, published on MODEL_pool2 with
 // estimator "batch" and persisted when inside their bounds; `canalid replay` of the log gives the
 // same models (the same fits on the same record); the next daemon resumes the persisted ones from
 // the state directory.
@@ -440,12 +440,12 @@ TEST(DaemonCanalsim, BatchProcessModelsArePublishedPersistedReplayedAndResumed) 
   const fs::path dir = TestDir();
   Canal canal(dir);
   std::string config;
-  auto daemon =
-      RunPool2Experiment(dir, canal, "batch_models",
-                         "[\"id\", \"idz\", \"foptd\", \"frac-foptd\", \"soptd\"]", &config);
+  auto daemon = RunPool2Experiment(
+      dir, canal, "batch_models",
+      "[\"id\", \"idz\", \"foptd\", \"frac-foptd\", \"soptd\", \"arx\"]", &config);
   ASSERT_FALSE(::testing::Test::HasFailure());
   std::map<std::string, nlohmann::json> live;  // kind -> the JSON logged
-  for (const char* kind : {"idz", "foptd", "frac-foptd", "soptd"}) {
+  for (const char* kind : {"idz", "foptd", "frac-foptd", "soptd", "arx"}) {
     const std::string line =
         daemon->WaitForLine("reach pool2: identified " + std::string(kind) + " ", 20000);
     ASSERT_FALSE(line.empty()) << kind << "\n" << daemon->output();
@@ -456,6 +456,11 @@ TEST(DaemonCanalsim, BatchProcessModelsArePublishedPersistedReplayedAndResumed) 
       // Pool 2 ends at a fixed gate: p22 is the configured prior, the area that of the pool.
       EXPECT_EQ(live[kind].value("p22_source", ""), "prior") << line;
       EXPECT_GT(live[kind].at("area_m2").get<double>(), 0.0) << line;
+    } else if (std::string(kind) == "arx") {
+      // The reach's orders (arx_na = arx_nb = 2 by default), a delay inside the id bank's range.
+      EXPECT_EQ(live[kind].at("a").size(), 2U) << line;
+      EXPECT_EQ(live[kind].at("b_coeffs").at(0).size(), 2U) << line;
+      EXPECT_GT(live[kind].at("delay_s").get<double>(), 0.0) << line;
     } else {
       EXPECT_GT(live[kind].at("gain").get<double>(), 0.0) << line;  // the gate raises the level
     }
@@ -471,6 +476,18 @@ TEST(DaemonCanalsim, BatchProcessModelsArePublishedPersistedReplayedAndResumed) 
     ASSERT_EQ(published.count(kind), 1U) << kind;
     int compared = 0;
     EXPECT_EQ(SameParameters(published[kind], json, &compared), "");
+    if (kind == "arx") {
+      // Its coefficients are arrays in the JSON, a1, a2, b1, b2 in the snapshot.
+      nlohmann::json coefficients;
+      for (std::size_t j = 0; j < 2; ++j) {
+        coefficients["a" + std::to_string(j + 1)] = json.at("a").at(j);
+        coefficients["b" + std::to_string(j + 1)] = json.at("b_coeffs").at(0).at(j);
+      }
+      int coefficients_compared = 0;
+      EXPECT_EQ(SameParameters(published[kind], coefficients, &coefficients_compared), "");
+      EXPECT_EQ(coefficients_compared, 4);
+      compared += coefficients_compared;
+    }
     if (kind == "soptd") {
       // Its two time constants are an array in the JSON, two parameters in the snapshot.
       nlohmann::json lags;

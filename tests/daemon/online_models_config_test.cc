@@ -227,12 +227,19 @@ TEST(OnlineModelsConfig, BatchModelsChooseTheEndOfExperimentFits) {
                                                  core::ProcessBatchKind::kFoptd}));
   EXPECT_THAT(Issues("batch_models = []\n"),
               ::testing::Contains(HasSubstr("reach[0].batch_models: is empty (allowed: at least "
-                                            "one of id, idz, foptd, frac-foptd, soptd)")));
+                                            "one of id, idz, foptd, frac-foptd, soptd, arx)")));
   EXPECT_THAT(Issues("batch_models = [\"id\", \"id\"]\n"),
               ::testing::Contains(HasSubstr("reach[0].batch_models[1]: duplicate model \"id\"")));
-  EXPECT_THAT(Issues("batch_models = [\"arx\"]\n"),
-              ::testing::Contains(HasSubstr("\"arx\" is not allowed (allowed: id, idz, foptd, "
-                                            "frac-foptd, soptd)")));
+  EXPECT_THAT(Issues("batch_models = [\"lpv\"]\n"),
+              ::testing::Contains(HasSubstr("\"lpv\" is not allowed (allowed: id, idz, foptd, "
+                                            "frac-foptd, soptd, arx)")));
+  // arx: the reach's arx orders.
+  const core::ReachSampleProcessorOptions arx =
+      Build("batch_models = [\"arx\"]\narx_na = 1\narx_nb = 3\n").pipeline;
+  EXPECT_EQ(arx.batch_process_models,
+            std::vector<core::ProcessBatchKind>{core::ProcessBatchKind::kArx});
+  EXPECT_EQ(arx.batch_process.arx_na, 1);
+  EXPECT_EQ(arx.batch_process.arx_nb, 3);
 }
 
 // idz at the end of experiments, with the p22 prior of the geometry (the fit: idz_fit_plant_test).

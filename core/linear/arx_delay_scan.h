@@ -1,0 +1,17 @@
+#pragma once
+#include <Eigen/Core>
+
+#include "core/linear/arx.h"
+
+namespace canalid::core {
+
+/// The single-input ARX model of orders na, nb (ArxOrders) whose delay nk in [min_nk, max_nk]
+/// gives the smallest loss V.  Every candidate is fitted on the same equations (from the first
+/// sample the largest delay allows), so their losses compare.  Ties keep the smaller delay.
+/// @throws std::invalid_argument for bad orders or range (1 <= min_nk <= max_nk), sizes that
+///         differ, or a record too short for max_nk (FitArx's errors otherwise).
+ArxModel FitArxOverDelays(const Eigen::Ref<const Eigen::VectorXd>& y,
+                          const Eigen::Ref<const Eigen::VectorXd>& u, int na, int nb, int min_nk,
+                          int max_nk);
+
+}  // namespace canalid::core
