@@ -76,9 +76,11 @@ ProcessBatchResult FitProcessBatch(ProcessBatchKind kind,
       options.max_delay_s = max_delay_s;
       result.soptd = FitSoptd(u, y, sample_time_s, options);
       const SoptdModel& m = result.soptd->model;
-      // T1 >= T2 (FitSoptd): the smaller one must be > 0.
-      result.problem = BoundsProblem(m.gain, std::min(m.time_constants_s[0], m.time_constants_s[1]),
-                                     m.delay_s, max_delay_s);
+      // Both time constants > 0 (a NaN one fails too).
+      result.problem = BoundsProblem(m.gain, m.time_constants_s[0], m.delay_s, max_delay_s);
+      if (result.problem.empty()) {
+        result.problem = BoundsProblem(m.gain, m.time_constants_s[1], m.delay_s, max_delay_s);
+      }
     } else {
       FractionalFoptdFitOptions options;
       options.max_delay_s = max_delay_s;

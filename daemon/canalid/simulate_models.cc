@@ -117,11 +117,22 @@ SimulatedOutput SimulateArxModel(const nlohmann::json& model, const std::string&
   if (output.empty() && model.contains("output") && model.at("output").is_string()) {
     output = model.at("output").get<std::string>();
   }
+  // A model of deviations from a rest point (the daemon's batch arx): input_offset and
+  // output_offset, one input; absent, 0 (the CLI's arx of the raw columns).
+  const double input_offset = model.value("input_offset", 0.0);
+  const double output_offset = model.value("output_offset", 0.0);
+  if ((input_offset != 0.0 || output_offset != 0.0) && u.cols() != 1) {
+    throw InputError(source + ": input_offset/output_offset need a one-input model");
+  }
+  u.array() -= input_offset;
+  // The first outputs are the measured ones when the record has them, else the rest point.
   Eigen::VectorXd initial = Eigen::VectorXd::Zero(warmup);
-  if (!output.empty() && table.HasColumn(output)) initial = table.Column(output).head(warmup);
+  if (!output.empty() && table.HasColumn(output)) {
+    initial = table.Column(output).head(warmup).array() - output_offset;
+  }
   SimulatedOutput out;
   out.first_row = warmup;
-  out.y = core::SimulateArx(arx, u, initial).tail(table.rows() - warmup);
+  out.y = core::SimulateArx(arx, u, initial).tail(table.rows() - warmup).array() + output_offset;
   return out;
 }
 

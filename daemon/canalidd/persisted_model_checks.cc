@@ -72,6 +72,9 @@ std::string PersistedProcessModelProblem(const PersistedModel& persisted, double
         return "arx: coefficients not finite";
       if (!j.contains("delay_s") || !j.at("delay_s").is_number()) return "arx: no delay_s";
       delay_s = j.at("delay_s").get<double>();
+      if (Differs(delay_s, model.orders.nk.front() * sample_time_s)) {
+        return "arx: delay_s " + j.at("delay_s").dump() + " is not nk x the reach's sample time";
+      }
     } else if (persisted.model_kind == "soptd") {
       const auto record = drivers::SoptdFromJson(j, "model");
       gain = record.model.gain;

@@ -15,11 +15,11 @@ namespace canalid::daemon {
 std::string PersistedIntegratorDelayProblem(const PersistedModel& model,
                                             const core::OnlineIntegratorDelayOptions& bank);
 
-/// Why a persisted process model ("foptd", "soptd", "frac-foptd") cannot be resumed as the model of
-/// a reach sampled every `sample_time_s` with delays up to `max_delay_s`: readable by its drivers
-/// reader (drivers::FoptdFromJson, FractionalFoptdFromJson: finite, T > 0, 0 < alpha < 2 ...),
-/// sample_time_s present and equal to the reach's (to 1e-6), gain finite, delay in
-/// [0, max_delay_s].  Pure.
+/// Why a persisted process model ("foptd", "soptd", "frac-foptd", "arx") cannot be resumed as the
+/// model of a reach sampled every `sample_time_s` with delays up to `max_delay_s`: readable by its
+/// drivers reader (drivers::FoptdFromJson, FractionalFoptdFromJson: finite, T > 0, 0 < alpha < 2
+/// ...), sample_time_s present and equal to the reach's (to 1e-6), gain finite, delay in [0,
+/// max_delay_s].  Pure.
 std::string PersistedProcessModelProblem(const PersistedModel& model, double sample_time_s,
                                          double max_delay_s);
 

@@ -103,6 +103,12 @@ std::unique_ptr<SampledPlant> PlantFromModelJson(
   }
   if (kind == "arx") {
     const core::ArxModel arx = drivers::ArxModelFromJson(json, source);
+    if (json.value("input_offset", 0.0) != 0.0 || json.value("output_offset", 0.0) != 0.0) {
+      throw std::invalid_argument(source +
+                                  ": input_offset/output_offset: an arx model of deviations from "
+                                  "a rest point (the daemon's batch arx) is not a plant here; "
+                                  "fit the raw columns with canalid identify --model arx");
+    }
     if (json.contains("sample_time_s") && json.at("sample_time_s").is_number()) {
       RequireSampleTime(json.at("sample_time_s").get<double>(), sample_time_s, source);
     }

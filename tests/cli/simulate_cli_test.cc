@@ -254,6 +254,32 @@ TEST_F(SimulateCli, HandWrittenMinimalFoptdMatchesTheClosedForm) {
   }
 }
 
+// The daemon's batch arx is a model of deviations from the record's rest point: simulate takes
+// them from input_offset and output_offset. y - 2 = 0.9 (y(k-1) - 2) + 0.1 (u(k-1) - 1) from
+// rest: with u = 0 before row 10 and 1 after, y(k) = 2 - (1 - 0.9^k) up to row 10, then
+// y(10) - 2 decays by 0.9 a row.
+TEST_F(SimulateCli, ArxWithOffsetsSimulatesAroundItsRestPoint) {
+  constexpr int kStepRow = 10;
+  WriteFile(dir_ / "step.csv", UnitStepCsv(60, kStepRow, 1.0));
+  const nlohmann::json model = {{"model", "arx"},      {"na", 1},
+                                {"nb", {1}},           {"nk", {1}},
+                                {"a", {-0.9}},         {"b_coeffs", {{0.1}}},
+                                {"input_offset", 1.0}, {"output_offset", 2.0},
+                                {"inputs", {"u"}}};
+  WriteFile(dir_ / "arx.json", model.dump());
+  const ProgramRun run = Simulate(dir_ / "arx.json", "step.csv");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const Eigen::VectorXd y = drivers::CsvTable::Read((dir_ / "out.csv").string()).Column("y");
+  // The rows after the one-row warm-up (the initial output, at rest): rows 1..59.
+  ASSERT_EQ(y.size(), 59);
+  for (int k = 1; k < 60; ++k) {
+    const double at_step = -(1.0 - std::pow(0.9, kStepRow));
+    const double truth =
+        2.0 + (k <= kStepRow ? -(1.0 - std::pow(0.9, k)) : at_step * std::pow(0.9, k - kStepRow));
+    EXPECT_NEAR(y(k - 1), truth, 1e-12) << "k " << k;
+  }
+}
+
 TEST_F(SimulateCli, MinimalFilesSimulateAsTheFullFilesWithTheDefaultsWrittenOut) {
   // Each full file is what identify wrote; `minimal` drops every optional key, `with_defaults`
   // writes the documented defaults into the full file.  The two must give the same CSV, byte
