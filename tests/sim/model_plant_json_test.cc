@@ -452,6 +452,19 @@ TEST_F(ModelPlantJson, RejectsKindsWithoutPlantAndWrongSampling) {
   // The record is sampled every 60 s; nk means nothing at 30 s.
   EXPECT_THROW(PlantFromModelJson(model, "m.json", 30.0, Eigen::VectorXd::Constant(1, 10.0)),
                std::invalid_argument);
+  // The daemon's batch arx models deviations from a rest point: refused by name, not run as if
+  // its offsets were 0.
+  const nlohmann::json deviations = {{"model", "arx"},      {"na", 1},
+                                     {"nb", {1}},           {"nk", {1}},
+                                     {"a", {-0.9}},         {"b_coeffs", {{0.1}}},
+                                     {"input_offset", 0.5}, {"output_offset", 2.0}};
+  try {
+    PlantFromModelJson(deviations, "m.json", 1.0, Eigen::VectorXd::Zero(1));
+    ADD_FAILURE() << "an arx model with offsets was accepted as a plant";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("m.json: input_offset/output_offset"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(FractionalFoptdPlant, HandWrittenMinimalModelFollowsTheMittagLefflerStep) {
