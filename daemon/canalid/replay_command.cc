@@ -1,6 +1,7 @@
 #include "daemon/canalid/replay_command.h"
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <iostream>
@@ -12,6 +13,7 @@
 #include "daemon/canalid/replay_session.h"
 #include "daemon/canalid/terminal_progress.h"
 #include "daemon/config/config_loader.h"
+#include "drivers/json/model_json_params.h"
 
 namespace canalid::cli {
 namespace {
@@ -45,11 +47,23 @@ void CompareWithLive(const ReplaySession& session, const ReplayModel& model) {
   if (reach == session.live_models().end()) return;
   const auto live = reach->second.find(ReplaySession::LiveKey(model.kind, model.estimator));
   if (live == reach->second.end()) return;
+  // A parameter is a top-level number of the replayed JSON (every online kind's), else one the
+  // daemon flattened out of a batch model's arrays (arx's a1.., soptd's time_constant_1_s..).
+  const std::vector<drivers::ModelJsonParam> flattened = drivers::ModelJsonParams(model.json);
   double worst = 0.0;
   for (std::size_t i = 0; i < live->second.param_names.size(); ++i) {
     const std::string& name = live->second.param_names[i];
-    if (!model.json.contains(name) || !model.json[name].is_number()) continue;
-    const double a = model.json[name].get<double>();
+    double a = 0.0;
+    if (model.json.contains(name) && model.json[name].is_number()) {
+      a = model.json[name].get<double>();
+    } else if (const auto it =
+                   std::find_if(flattened.begin(), flattened.end(),
+                                [&](const drivers::ModelJsonParam& p) { return p.name == name; });
+               it != flattened.end()) {
+      a = it->value;
+    } else {
+      continue;
+    }
     const double b = live->second.param_values[i];
     worst = std::max(worst, std::abs(a - b) / std::max(std::abs(b), 1e-300));
   }

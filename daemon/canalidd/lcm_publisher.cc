@@ -1,9 +1,10 @@
 #include "daemon/canalidd/lcm_publisher.h"
 
-#include <algorithm>
-#include <array>
 #include <cmath>
 #include <limits>
+#include <vector>
+
+#include "drivers/json/model_json_params.h"
 
 namespace canalid::daemon {
 namespace {
@@ -152,61 +153,12 @@ void LcmPublisher::PublishModelJson(const std::string& reach, const nlohmann::js
   model_.model_kind = model.value("model", std::string("unknown"));
   model_.estimator = estimator;
   model_.samples_used = samples;
-  // The parameters a batch or persisted model JSON may carry, each with the key of its standard
-  // deviation where the fit gives one (idz).
-  static constexpr std::array<std::array<const char*, 2>, 9> kKeys{
-      {{"delay_s", nullptr},
-       {"area_m2", "area_std_m2"},
-       {"b", nullptr},
-       {"p21_s_per_m2", "p21_std_s_per_m2"},
-       {"p22_s_per_m2", "p22_std_s_per_m2"},
-       {"offset_m", nullptr},
-       {"gain", nullptr},
-       {"time_constant_s", nullptr},
-       {"alpha", nullptr}}};
-  auto number = [&](const char* key) {
-    return key != nullptr && model.contains(key) && model[key].is_number();
-  };
-  // soptd's two time constants (an array in its JSON), T1 >= T2.
-  const nlohmann::json* pair =
-      model.contains("time_constants_s") ? &model["time_constants_s"] : nullptr;
-  const bool two_lags = pair != nullptr && pair->is_array() && pair->size() == 2 &&
-                        (*pair)[0].is_number() && (*pair)[1].is_number();
-  // arx's coefficients (arrays in its JSON), named as the online arx kind names them.
-  auto numbers = [](const nlohmann::json* v) {
-    return v != nullptr && v->is_array() &&
-           std::all_of(v->begin(), v->end(), [](const nlohmann::json& x) { return x.is_number(); });
-  };
-  const nlohmann::json* a = model.contains("a") ? &model["a"] : nullptr;
-  const nlohmann::json* b =
-      model.contains("b_coeffs") && model["b_coeffs"].is_array() && model["b_coeffs"].size() == 1
-          ? &model["b_coeffs"][0]
-          : nullptr;
-  const std::size_t na = numbers(a) ? a->size() : 0U;
-  const std::size_t nb = numbers(b) ? b->size() : 0U;
-  std::size_t n = (two_lags ? 2U : 0U) + na + nb;
-  for (const auto& [key, std_key] : kKeys) n += number(key) ? 1U : 0U;
-  SetParamCount(model_, n);
-  std::size_t i = 0;
-  for (const auto& [key, std_key] : kKeys) {
-    if (!number(key)) continue;
-    model_.param_names[i] = key;
-    model_.param_values[i] = model[key].get<double>();
-    model_.param_std_devs[i++] = number(std_key) ? model[std_key].get<double>() : kNan;
-  }
-  for (std::size_t j = 0; j < na + nb; ++j) {
-    const bool is_a = j < na;
-    const std::size_t k = is_a ? j : j - na;
-    model_.param_names[i] = (is_a ? "a" : "b") + std::to_string(k + 1);
-    model_.param_values[i] = (is_a ? (*a)[k] : (*b)[k]).get<double>();
-    model_.param_std_devs[i++] = kNan;
-  }
-  if (two_lags) {
-    for (std::size_t lag = 0; lag < 2; ++lag) {
-      model_.param_names[i] = lag == 0 ? "time_constant_1_s" : "time_constant_2_s";
-      model_.param_values[i] = (*pair)[lag].get<double>();
-      model_.param_std_devs[i++] = kNan;
-    }
+  const std::vector<drivers::ModelJsonParam> params = drivers::ModelJsonParams(model);
+  SetParamCount(model_, params.size());
+  for (std::size_t i = 0; i < params.size(); ++i) {
+    model_.param_names[i] = params[i].name;
+    model_.param_values[i] = params[i].value;
+    model_.param_std_devs[i] = params[i].std_dev;
   }
   model_.trace_p = kNan;
   model_.condition_number = kNan;
