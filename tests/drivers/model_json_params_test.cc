@@ -13,6 +13,7 @@ namespace {
 
 std::vector<std::string> Names(const std::vector<ModelJsonParam>& params) {
   std::vector<std::string> names;
+  names.reserve(params.size());
   for (const ModelJsonParam& p : params) names.push_back(p.name);
   return names;
 }
