@@ -46,6 +46,7 @@ OnlineModelSettings PoolSettings() {
   s.max_delay_s = 1400.0;
   s.fractional_delay_s = 660.0;
   s.lpv_delay_s = 660.0;
+  s.frac_ss_delay_s = 660.0;
   return s;
 }
 
@@ -64,7 +65,7 @@ void BM_OnlineModelSample(benchmark::State& state) {
   }
   state.SetLabel(std::string(OnlineModelKindName(kind)) + " (registry, update + snapshot)");
 }
-BENCHMARK(BM_OnlineModelSample)->DenseRange(0, 3);
+BENCHMARK(BM_OnlineModelSample)->DenseRange(0, static_cast<int>(kOnlineModelKinds.size()) - 1);
 
 // The peers: the same banks without the registry (same options, deviations done by hand).
 // `step(sample)` updates the bank and returns a snapshot value.
@@ -108,14 +109,14 @@ void BM_DirectFractionalBank(benchmark::State& state) {
 }
 BENCHMARK(BM_DirectFractionalBank);
 
-// One reach running id, arx, frac-foptd and lpv: the daemon's per-poll estimator cost.
+// One reach running id, arx, frac-foptd, lpv and frac-ss: the daemon's per-poll estimator cost.
 void BM_ReachEveryKind(benchmark::State& state) {
   const OnlineModelSettings settings = PoolSettings();
   ReachSampleProcessorOptions options;
   options.sample_time_s = settings.sample_time_s;
   options.online_id = OnlineModelOptionsFor(OnlineModelKind::kIntegratorDelay, settings).id;
-  for (const OnlineModelKind kind :
-       {OnlineModelKind::kArx, OnlineModelKind::kFractionalFoptd, OnlineModelKind::kLpvArx}) {
+  for (const OnlineModelKind kind : {OnlineModelKind::kArx, OnlineModelKind::kFractionalFoptd,
+                                     OnlineModelKind::kLpvArx, OnlineModelKind::kFracSs}) {
     options.process_models.push_back(OnlineModelOptionsFor(kind, settings));
   }
   ReachSampleProcessor reach(options);

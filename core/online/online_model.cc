@@ -12,7 +12,7 @@ namespace canalid::core {
 namespace {
 
 constexpr std::array<std::string_view, kOnlineModelKinds.size()> kKindNames{
-    "id", "arx", "frac-foptd", "lpv", "idz"};
+    "id", "arx", "frac-foptd", "lpv", "idz", "frac-ss"};
 
 // Largest delay or memory a setting may ask for, in samples (the banks allocate per sample).
 constexpr double kMaxSettingSamples = 1e6;
@@ -108,6 +108,15 @@ OnlineModelOptions OnlineModelOptionsFor(OnlineModelKind kind, const OnlineModel
       o.lpv.delay_samples = Samples("lpv_delay_s", s.lpv_delay_s, s.sample_time_s);
       o.lpv.rls = RlsFor(s, 3 * (s.lpv_na + s.lpv_nb));
       break;
+    case OnlineModelKind::kFracSs:
+      o.frac_ss.q = s.frac_ss_q;
+      o.frac_ss.delay_samples = Samples("frac_ss_delay_s", s.frac_ss_delay_s, s.sample_time_s);
+      if (s.fractional_memory_s != 0.0) {
+        o.frac_ss.memory_samples =
+            Samples("fractional_memory_s", s.fractional_memory_s, s.sample_time_s);
+      }
+      o.frac_ss.rls = RlsFor(s, o.frac_ss.num_params());
+      break;
   }
   o.Validate();
   return o;
@@ -134,6 +143,9 @@ void OnlineModelOptions::Validate() const {
     case OnlineModelKind::kLpvArx:
       lpv.Validate();
       break;
+    case OnlineModelKind::kFracSs:
+      frac_ss.Validate();
+      break;
   }
 }
 
@@ -156,6 +168,8 @@ std::unique_ptr<OnlineModel> MakeOnlineModel(const OnlineModelOptions& options) 
       return MakeOnlineFractionalModel(options);
     case OnlineModelKind::kLpvArx:
       return MakeOnlineLpvModel(options);
+    case OnlineModelKind::kFracSs:
+      return MakeOnlineFracSsModel(options);
   }
   throw std::invalid_argument("MakeOnlineModel: unknown kind");
 }

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/online/online_arx.h"
+#include "core/online/online_commensurate.h"
 #include "core/online/online_fractional.h"
 #include "core/online/online_integrator_delay.h"
 #include "core/online/online_lpv.h"
@@ -26,18 +27,20 @@ enum class OnlineModelKind : std::uint8_t {
   /// its prior (the theory's low-frequency p22): IDZ, whose area is right where the outflow
   /// follows the level (docs/closed-loop.md)
   kIdz,
+  /// "frac-ss": the commensurate fractional state space (alpha = 1/q) at a known delay
+  kFracSs,
 };
 inline constexpr std::array kOnlineModelKinds{
     OnlineModelKind::kIntegratorDelay, OnlineModelKind::kArx, OnlineModelKind::kFractionalFoptd,
-    OnlineModelKind::kLpvArx, OnlineModelKind::kIdz};
+    OnlineModelKind::kLpvArx,          OnlineModelKind::kIdz, OnlineModelKind::kFracSs};
 /// The kind's name in configurations, CLI options, model JSON and LCM messages.
 std::string_view OnlineModelKindName(OnlineModelKind kind);
 std::optional<OnlineModelKind> OnlineModelKindFromName(std::string_view name);
 
 /// One sample as a reach's online estimators see it, engineering units; NaN marks an invalid
 /// value.  The integrator-delay model uses the flows and the level; the process models (arx,
-/// frac-foptd, lpv) use `input` (the actuator: its measured position or its setpoint) and the
-/// level as output, lpv also `scheduling`.
+/// frac-foptd, lpv, frac-ss) use `input` (the actuator: its measured position or its setpoint) and
+/// the level as output, lpv also `scheduling`.
 struct OnlineSample {
   double q_in_m3s = 0.0;
   double q_out_m3s = 0.0;
@@ -70,7 +73,10 @@ struct OnlineModelSettings {
   // frac-foptd
   std::vector<double> fractional_alphas{0.5, 0.6, 0.7, 0.8, 0.9, 1.0, 1.2, 1.4};
   double fractional_delay_s = 0.0;   ///< known delay (rounded to whole samples)
-  double fractional_memory_s = 0.0;  ///< GL short memory; 0: 200 samples
+  double fractional_memory_s = 0.0;  ///< GL short memory (frac-foptd, frac-ss); 0: 200 samples
+  // frac-ss
+  int frac_ss_q = 2;             ///< alpha = 1/q, 1..4
+  double frac_ss_delay_s = 0.0;  ///< known delay (rounded to whole samples)
   // lpv
   int lpv_na = 1;
   int lpv_nb = 1;
@@ -85,6 +91,7 @@ struct OnlineModelOptions {
   OnlineArxOptions arx;
   OnlineFractionalOptions fractional;
   OnlineLpvArxOptions lpv;
+  OnlineCommensurateOptions frac_ss;
   /// FLAG_ILL_CONDITIONED above it (the kinds other than id use RlsHealth's condition estimate).
   double condition_max = 1e12;
 

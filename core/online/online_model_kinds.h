@@ -17,6 +17,7 @@ std::unique_ptr<OnlineModel> MakeOnlineIntegratorDelayModel(const OnlineModelOpt
 std::unique_ptr<OnlineModel> MakeOnlineArxModel(const OnlineModelOptions& options);
 std::unique_ptr<OnlineModel> MakeOnlineFractionalModel(const OnlineModelOptions& options);
 std::unique_ptr<OnlineModel> MakeOnlineLpvModel(const OnlineModelOptions& options);
+std::unique_ptr<OnlineModel> MakeOnlineFracSsModel(const OnlineModelOptions& options);
 
 /// The flags every recursive estimator's health gives: kFlagNan when `values_finite` is false or
 /// trace(P) is not finite, kFlagWindup, kFlagFrozen, kFlagIllConditioned above condition_max.
@@ -41,9 +42,9 @@ class SnapshotWriter final {
   bool finite_ = true;
 };
 
-/// What the process models (arx, frac-foptd, lpv: actuator to level) share: the operating point
-/// their deviations are taken from, their parameter names (the kind's, then the operating point's
-/// two), Ts and the conditioning bound.
+/// What the process models (arx, frac-foptd, lpv, frac-ss: actuator to level) share: the operating
+/// point their deviations are taken from, their parameter names (the kind's, then the operating
+/// point's two), Ts and the conditioning bound.
 class ProcessOnlineModel : public OnlineModel {
  protected:
   /// `names`: the kind's own parameters; "input_operating_point" and "level_operating_point_m"

@@ -34,6 +34,8 @@ std::string_view ProcessBatchKindName(ProcessBatchKind kind) {
       return "soptd";
     case ProcessBatchKind::kArx:
       return "arx";
+    case ProcessBatchKind::kFracSs:
+      return "frac-ss";
   }
   return "?";
 }
@@ -71,6 +73,30 @@ ProcessBatchResult FitProcessBatch(ProcessBatchKind kind,
       if (!result.arx->a.allFinite() || !result.arx->b.front().allFinite()) {
         result.problem = "the ARX coefficients are not finite";
       }
+    } else if (kind == ProcessBatchKind::kFracSs) {
+      // Delays the record can hold, as for arx; the fit needs 20 q samples beyond the delay.
+      const int max_nk = std::min(static_cast<int>(std::floor(max_delay_s / sample_time_s + 1e-9)),
+                                  static_cast<int>(u.size()) - 20 * batch.frac_ss_q);
+      if (max_nk < 0) {
+        result.problem =
+            "the record (" + std::to_string(u.size()) +
+            " samples) is too short for frac-ss with q = " + std::to_string(batch.frac_ss_q);
+        return result;
+      }
+      if ((u.array() == u(0)).all()) {
+        result.problem = "the input never moves from its first value";
+        return result;
+      }
+      CommensurateFitOptions options;
+      options.memory_length = batch.frac_ss_memory_samples;
+      result.memory_samples = batch.frac_ss_memory_samples;
+      result.commensurate =
+          FitCommensurateScanDelay(u, y, batch.frac_ss_q, max_nk, sample_time_s, options);
+      const CommensurateModel& m = result.commensurate->model;
+      if (!m.a.allFinite() || !m.c.allFinite() || m.a(m.order() - 1) == 0.0 ||
+          !result.commensurate->simulated.allFinite()) {
+        result.problem = "the frac-ss model is not finite or its simulation diverges";
+      }
     } else if (kind == ProcessBatchKind::kSoptd) {
       ProcessFitOptions options;
       options.max_delay_s = max_delay_s;
@@ -94,6 +120,7 @@ ProcessBatchResult FitProcessBatch(ProcessBatchKind kind,
     result.soptd.reset();
     result.arx.reset();
     result.fractional.reset();
+    result.commensurate.reset();
     result.problem = e.what();
   }
   return result;

@@ -6,6 +6,7 @@
 #include <string>
 #include <string_view>
 
+#include "core/fractional/commensurate_state_space.h"
 #include "core/fractional/fractional_foptd_fit.h"
 #include "core/linear/arx.h"
 #include "core/linear/process_model_fit.h"
@@ -19,10 +20,13 @@ enum class ProcessBatchKind : std::uint8_t {
   kFractionalFoptd,  ///< "frac-foptd": K e^{-tau s} / (1 + T s^alpha)  (FitFractionalFoptd)
   kSoptd,            ///< "soptd": K e^{-tau s} / ((1 + T1 s)(1 + T2 s))  (FitSoptd)
   kArx,              ///< "arx": A(q) y = B(q) q^-nk u, nk scanned (FitArxOverDelays)
+  /// "frac-ss": the commensurate fractional state space, alpha = 1/q, nk scanned
+  /// (FitCommensurateScanDelay)
+  kFracSs,
 };
-inline constexpr std::array kProcessBatchKinds{ProcessBatchKind::kFoptd,
-                                               ProcessBatchKind::kFractionalFoptd,
-                                               ProcessBatchKind::kSoptd, ProcessBatchKind::kArx};
+inline constexpr std::array kProcessBatchKinds{
+    ProcessBatchKind::kFoptd, ProcessBatchKind::kFractionalFoptd, ProcessBatchKind::kSoptd,
+    ProcessBatchKind::kArx, ProcessBatchKind::kFracSs};
 /// The kind's name in configurations and model JSON.
 std::string_view ProcessBatchKindName(ProcessBatchKind kind);
 
@@ -32,6 +36,10 @@ struct ProcessBatchOptions {
   int min_delay_samples = 1;  ///< arx: the shortest delay tried (at least 1 sample)
   int arx_na = 2;             ///< arx: output lags (the reach's arx_na)
   int arx_nb = 2;             ///< arx: input lags (the reach's arx_nb)
+  int frac_ss_q = 2;          ///< frac-ss: alpha = 1/q (the reach's frac_ss_q)
+  /// frac-ss: the GL memory of the refinement's simulations (samples, >= 1; the whole record
+  /// costs O(N^2) per simulation)
+  int frac_ss_memory_samples = 200;
 };
 
 /// One end-of-experiment fit: the kind's result, or why there is none.
@@ -43,6 +51,8 @@ struct ProcessBatchResult {
   double input_offset = 0.0;      ///< kArx: the record's first input (the rest point)
   double output_offset = 0.0;     ///< kArx: the record's first level
   std::optional<FractionalFoptdFitResult> fractional;  ///< kFractionalFoptd
+  std::optional<CommensurateFitResult> commensurate;   ///< kFracSs (its own rest point)
+  int memory_samples = 0;                              ///< kFracSs: the GL memory it used
   OustaloupOptions band;  ///< kFractionalFoptd: the band the fit simulated with
   /// Empty when the model is the reach's: fitted, finite, T > 0, delay inside [0, max_delay_s].
   std::string problem;

@@ -192,8 +192,8 @@ void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code)
   cmd->add_option("--out", options.out, "Also write the model JSON to this file");
   cmd->add_flag("--pretty", options.pretty, "Indent the JSON");
   AddIdentifyModelOptions(*cmd, options);
-  auto* online =
-      cmd->add_option_group("Online estimation (--model id|arx|frac-foptd|lpv --online)");
+  auto* online = cmd->add_option_group(
+      "Online estimation (--model id|arx|frac-foptd|lpv|idz|frac-ss --online)");
   online->add_flag("--online", options.online,
                    "Run the recursive estimator sample by sample; print its final snapshot");
   online->add_option("--forgetting", options.forgetting, "Forgetting factor lambda, 0 < L <= 1")

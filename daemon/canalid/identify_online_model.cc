@@ -81,8 +81,15 @@ core::OnlineModelSettings SettingsFromFlags(const IdentifyOptions& o,
   c.input = RequireMovingColumn(table, o.u);
   c.level = RequireColumn(table, o.y);
   if (o.model == "frac-foptd") {
+    if (o.q > 0) throw InputError("--q applies to --model frac-ss, not frac-foptd");
     if (o.alpha > 0.0) s.fractional_alphas = {o.alpha};
     s.fractional_delay_s = nk * s.sample_time_s;
+  } else if (o.model == "frac-ss") {
+    if (o.alpha > 0.0) {
+      throw InputError("--alpha applies to --model frac-foptd; frac-ss takes --q (alpha = 1/q)");
+    }
+    s.frac_ss_q = o.q > 0 ? o.q : 2;  // the batch fit's default
+    s.frac_ss_delay_s = nk * s.sample_time_s;
   } else {
     if (o.schedule.empty()) throw InputError("--model lpv --online: give --schedule COLUMN");
     c.scheduling = RequireColumn(table, o.schedule);
@@ -133,7 +140,7 @@ nlohmann::json IdentifyOnlineModel(const IdentifyOptions& options, const drivers
   const auto kind = core::OnlineModelKindFromName(options.model);
   if (!kind) {
     throw InputError("--online: --model " + options.model +
-                     " has no online estimator (online: id, arx, frac-foptd, lpv, idz)");
+                     " has no online estimator (online: id, arx, frac-foptd, lpv, idz, frac-ss)");
   }
   OnlineColumns columns;
   const core::OnlineModelSettings settings = options.config.empty()

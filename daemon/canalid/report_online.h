@@ -11,7 +11,7 @@ namespace canalid::cli {
 
 /// One online model of a reach over a log, as the daemon published it on MODEL_<reach>.
 struct OnlineTrajectory {
-  std::string kind;                ///< "id", "arx", "frac-foptd", "lpv"
+  std::string kind;                ///< an online kind: "id", "arx", "frac-foptd", "lpv", ...
   std::vector<std::string> names;  ///< its parameters (the constant operating points left out)
   Eigen::VectorXd time_s;          ///< of each snapshot, s since the log's first sample
   Eigen::MatrixXd values;          ///< one row per snapshot, one column per name

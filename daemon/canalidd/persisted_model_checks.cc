@@ -83,9 +83,18 @@ std::string PersistedProcessModelProblem(const PersistedModel& persisted, double
       const auto record = drivers::FractionalFoptdFromJson(j, "model");
       gain = record.params.model.gain;
       delay_s = record.params.model.delay_s;
+    } else if (persisted.model_kind == "frac-ss") {
+      const auto record = drivers::CommensurateFromJson(j, "model");
+      const core::CommensurateModel& m = record.model.model;
+      if (m.a(m.order() - 1) == 0.0) return "frac-ss: a_n is 0";
+      delay_s = m.delay_samples * sample_time_s;
+      if (!j.contains("delay_s") || !j.at("delay_s").is_number() ||
+          Differs(j.at("delay_s").get<double>(), delay_s)) {
+        return "frac-ss: delay_s is not delay_samples x the reach's sample time";
+      }
     } else {
       return "model kind '" + persisted.model_kind +
-             "' is not a process model (foptd, soptd, frac-foptd, arx)";
+             "' is not a process model (foptd, soptd, frac-foptd, arx, frac-ss)";
     }
   } catch (const std::exception& e) {
     return e.what();

@@ -392,7 +392,9 @@ void ReadReach(Reader& r, const toml::table& t, const std::string& at, ReachConf
           "lpv_na",
           "lpv_nb",
           "model_publish_period_s",
-          "lpv_delay_s"});
+          "lpv_delay_s",
+          "frac_ss_q",
+          "frac_ss_delay_s"});
   r.String(t, at, "name", reach.name, true);
   r.String(t, at, "inflow", reach.inflow, true);
   r.String(t, at, "outflow", reach.outflow, true);
@@ -428,6 +430,9 @@ void ReadReach(Reader& r, const toml::table& t, const std::string& at, ReachConf
   r.Integer(t, at, "lpv_nb", reach.lpv_nb);
   reach.lpv_delay_s = reach.expected_delay_s;
   r.Double(t, at, "lpv_delay_s", reach.lpv_delay_s);
+  r.Integer(t, at, "frac_ss_q", reach.frac_ss_q);
+  reach.frac_ss_delay_s = reach.expected_delay_s;
+  r.Double(t, at, "frac_ss_delay_s", reach.frac_ss_delay_s);
   r.Double(t, at, "model_publish_period_s", reach.model_publish_period_s);
 }
 

@@ -165,6 +165,8 @@ std::string RenderDaemonConfig(const config::DaemonConfig& c) {
     w.Int("lpv_na", r.lpv_na);
     w.Int("lpv_nb", r.lpv_nb);
     w.Key("lpv_delay_s", r.lpv_delay_s);
+    w.Int("frac_ss_q", r.frac_ss_q);
+    w.Key("frac_ss_delay_s", r.frac_ss_delay_s);
     w.Key("model_publish_period_s", r.model_publish_period_s);
   }
   for (const config::ExperimentConfig& e : c.experiments) {

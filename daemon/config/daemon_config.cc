@@ -27,7 +27,8 @@ constexpr std::array kTypes{RegisterType::kU16, RegisterType::kI16, RegisterType
                             RegisterType::kI32, RegisterType::kF32};
 constexpr std::array kWordOrders{WordOrder::kHighWordFirst, WordOrder::kLowWordFirst};
 constexpr std::array kBatchModels{BatchModel::kId,        BatchModel::kIdz,   BatchModel::kFoptd,
-                                  BatchModel::kFracFoptd, BatchModel::kSoptd, BatchModel::kArx};
+                                  BatchModel::kFracFoptd, BatchModel::kSoptd, BatchModel::kArx,
+                                  BatchModel::kFracSs};
 constexpr std::array kClosedLoopModes{ClosedLoopMode::kAuto, ClosedLoopMode::kOn,
                                       ClosedLoopMode::kOff};
 constexpr std::array kRlsMethods{RlsMethod::kUdDirectional, RlsMethod::kUdExponential,
@@ -374,6 +375,11 @@ void ValidateReachModels(const DaemonConfig& c, const ReachConfig& r, const Chan
     out.Range(at + "fractional_delay_s", r.fractional_delay_s, 0.0, hi);
   }
   if (lpv) out.Range(at + "lpv_delay_s", r.lpv_delay_s, 0.0, hi);
+  if (runs(OnlineModel::kFracSs)) out.Range(at + "frac_ss_delay_s", r.frac_ss_delay_s, 0.0, hi);
+  // The orders `canalid identify --model frac-ss --q` takes.
+  if (r.frac_ss_q != 1 && r.frac_ss_q != 2 && r.frac_ss_q != 4) {
+    out.Add(at + "frac_ss_q", Num(r.frac_ss_q) + " is out of range (allowed: 1, 2 or 4)");
+  }
 }
 
 void ValidateReaches(const DaemonConfig& c, Collector& out) {
@@ -632,7 +638,7 @@ const char* EnumName(RegisterType v) {
 }
 const char* EnumName(WordOrder v) { return NameIn(v, kWordOrders, {"high_first", "low_first"}); }
 const char* EnumName(BatchModel v) {
-  return NameIn(v, kBatchModels, {"id", "idz", "foptd", "frac-foptd", "soptd", "arx"});
+  return NameIn(v, kBatchModels, {"id", "idz", "foptd", "frac-foptd", "soptd", "arx", "frac-ss"});
 }
 // A string_view of a literal: null-terminated.
 const char* EnumName(OnlineModel v) { return core::OnlineModelKindName(v).data(); }

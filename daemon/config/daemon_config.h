@@ -36,7 +36,7 @@ enum class RegisterTable { kInput, kHolding };
 /// The online model kinds are core's registry's (the names of core::OnlineModelKindName).
 using OnlineModel = core::OnlineModelKind;
 /// The models identified at the end of an experiment.
-enum class BatchModel { kId, kIdz, kFoptd, kFracFoptd, kSoptd, kArx };
+enum class BatchModel { kId, kIdz, kFoptd, kFracFoptd, kSoptd, kArx, kFracSs };
 enum class ExperimentMode { kDesign, kExplicit, kStep };
 enum class ExperimentStart { kManual, kOnStart };
 
@@ -147,6 +147,8 @@ struct ReachConfig {
   int lpv_na = 1;                   ///< lpv: as arx_na
   int lpv_nb = 1;                   ///< lpv: as arx_nb
   double lpv_delay_s = 0.0;         ///< lpv: known delay (default expected_delay_s)
+  int frac_ss_q = 2;                ///< frac-ss (online and batch): alpha = 1/q, 1, 2 or 4
+  double frac_ss_delay_s = 0.0;     ///< online frac-ss: known delay (default expected_delay_s)
   /// Each online model is published at most once per this many plant s (rounded to whole
   /// samples; 0: on every update), [0, 1e6].
   double model_publish_period_s = 0.0;

@@ -102,6 +102,8 @@ core::OnlineModelSettings BuildOnlineModelSettings(const DaemonConfig& config,
   settings.lpv_na = reach.lpv_na;
   settings.lpv_nb = reach.lpv_nb;
   settings.lpv_delay_s = reach.lpv_delay_s;
+  settings.frac_ss_q = reach.frac_ss_q;
+  settings.frac_ss_delay_s = reach.frac_ss_delay_s;
   settings.idz_p22_s_per_m2 = reach.idz_p22_s_per_m2.value_or(0.0);
   settings.wave_front_term = reach.id_wave_front.value_or(true);
   return settings;
@@ -168,10 +170,14 @@ ReachControllerOptions BuildReachControllerOptions(
       case BatchModel::kArx:
         pipeline.batch_process_models.push_back(core::ProcessBatchKind::kArx);
         break;
+      case BatchModel::kFracSs:
+        pipeline.batch_process_models.push_back(core::ProcessBatchKind::kFracSs);
+        break;
     }
   }
   pipeline.batch_process.arx_na = reach.arx_na;
   pipeline.batch_process.arx_nb = reach.arx_nb;
+  pipeline.batch_process.frac_ss_q = reach.frac_ss_q;
   pipeline.batch.fit.min_nk = pipeline.online_id.min_delay_samples;
   pipeline.batch.fit.max_nk = pipeline.online_id.max_delay_samples;
   pipeline.batch.fit.closed_loop = reach.closed_loop;

@@ -279,6 +279,8 @@ std::optional<nlohmann::json> ProcessBatchJson(const core::ProcessBatchResult& r
     json["output_offset"] = result.output_offset;
   } else if (result.fractional) {
     json = ToJson(*result.fractional, result.band);
+  } else if (result.commensurate) {
+    json = ToJson(*result.commensurate, sample_time_s, result.memory_samples);
   } else {
     return std::nullopt;
   }

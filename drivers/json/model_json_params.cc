@@ -54,6 +54,25 @@ std::vector<ModelJsonParam> ModelJsonParams(const nlohmann::json& model) {
     params.push_back({"time_constant_1_s", model["time_constants_s"][0].get<double>(), kNan});
     params.push_back({"time_constant_2_s", model["time_constants_s"][1].get<double>(), kNan});
   }
+  // frac-ss's coefficients from its companion form (A's last row is -[a_n, ..., a_1], C is
+  // [1, c_1, ..., c_{n-1}]), named as the online frac-ss kind names them.
+  if (model.value("model", "") == "frac-ss" && model.contains("A") && model["A"].is_array() &&
+      !model["A"].empty() && AllNumbers(model["A"].back()) && model.contains("C") &&
+      AllNumbers(model["C"]) && model["C"].size() == model["A"].back().size() &&
+      !model["C"].empty()) {
+    const nlohmann::json& last_row = model["A"].back();
+    const std::size_t n = last_row.size();
+    for (std::size_t i = 1; i <= n; ++i)
+      params.push_back({"a" + std::to_string(i), -last_row[n - i].get<double>(), kNan});
+    for (std::size_t i = 1; i < n; ++i)
+      params.push_back({"c" + std::to_string(i), model["C"][i].get<double>(), kNan});
+  }
+  // The process models' rest point (their deviations are taken from it), named as the online
+  // process kinds name their operating point.
+  if (number("input_offset") && number("output_offset")) {
+    params.push_back({"input_operating_point", model["input_offset"].get<double>(), 0.0});
+    params.push_back({"level_operating_point_m", model["output_offset"].get<double>(), 0.0});
+  }
   return params;
 }
 

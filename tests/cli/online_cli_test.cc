@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <nlohmann/json.hpp>
+#include <random>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -232,6 +233,60 @@ TEST(OnlineCli, ArxTraceLastRowEqualsThePrintedParameters) {
   EXPECT_DOUBLE_EQ(std::stod(values[6]), model["prediction_error"].get<double>());
 }
 
+// An integer second-order plant (frac-ss with q = 1, alpha = 1: Delta x(k+1) = x(k+1) - x(k)),
+// stepped here as x(k+1) = (I + A) x(k) + B u(k - 3) around a rest point (u 1.5, level 2.0):
+// online frac-ss at the known delay finds its a and c and its rest point; the batch fit (its
+// delay scanned) finds the same model.
+TEST(OnlineCli, FracSsFindsACommensuratePlantAsTheBatchFitDoes) {
+  const auto dir = TestDirectory("online-frac-ss-plant");
+  constexpr double a1 = 0.5, a2 = 0.1, c1 = 0.5;
+  constexpr int kDelay = 3;
+  std::mt19937 rng(3);
+  std::ostringstream csv;
+  csv.precision(17);
+  csv << "time_s,gate,level\n";
+  std::vector<double> du(400, 0.0);
+  double x1 = 0.0, x2 = 0.0, held = 0.0;
+  for (std::size_t k = 0; k < du.size(); ++k) {
+    if (k > 0 && k % 5 == 1) held = (rng() & 1U) != 0U ? 0.1 : -0.1;
+    du[k] = k == 0 ? 0.0 : held;
+    csv << 2.0 * static_cast<double>(k) << "," << 1.5 + du[k] << "," << 2.0 + x1 + c1 * x2 << "\n";
+    const double u_delayed = k >= kDelay ? du[k - kDelay] : 0.0;
+    const double next2 = x2 - a2 * x1 - a1 * x2 + a2 * u_delayed;  // last row -[a2, a1], B = a2
+    x1 += x2;
+    x2 = next2;
+  }
+  WriteFile(dir / "plant.csv", csv.str());
+  const std::string input = " --u gate --y level --q 1 --input " + (dir / "plant.csv").string();
+  const nlohmann::json online =
+      Identify("frac-ss", "--model frac-ss --online --nk " + std::to_string(kDelay) + input);
+  ASSERT_FALSE(online.empty());
+  EXPECT_EQ(online["model"], "frac-ss");
+  EXPECT_EQ(online["delay_s"].get<double>(), 6.0);
+  EXPECT_EQ(online["alpha"].get<double>(), 1.0);
+  EXPECT_NEAR(online["a1"].get<double>(), a1, 1e-6) << online.dump();
+  EXPECT_NEAR(online["a2"].get<double>(), a2, 1e-6) << online.dump();
+  EXPECT_NEAR(online["c1"].get<double>(), c1, 1e-5) << online.dump();
+  EXPECT_EQ(online["input_operating_point"].get<double>(), 1.5);
+  EXPECT_EQ(online["level_operating_point_m"].get<double>(), 2.0);
+  const nlohmann::json batch =
+      Identify("frac-ss-batch", "--model frac-ss --max-delay-s 20" + input);
+  ASSERT_FALSE(batch.empty());
+  EXPECT_EQ(batch["delay_samples"], kDelay);
+  EXPECT_NEAR(-batch["A"][1][0].get<double>(), online["a2"].get<double>(), 1e-6);
+  EXPECT_NEAR(-batch["A"][1][1].get<double>(), online["a1"].get<double>(), 1e-6);
+  EXPECT_NEAR(batch["C"][1].get<double>(), online["c1"].get<double>(), 1e-5);
+
+  // --alpha is frac-foptd's; frac-ss takes --q.
+  const ProgramRun alpha =
+      RunProgram(CanalidProgram() + " identify --model frac-ss --online --nk 3 " +
+                     "--alpha 0.5 --u gate --y level --input " + (dir / "plant.csv").string(),
+                 dir);
+  EXPECT_EQ(alpha.exit_code, 2);
+  EXPECT_NE(alpha.err.find("--alpha applies to --model frac-foptd"), std::string::npos)
+      << alpha.err;
+}
+
 TEST(OnlineCli, EveryMethodRuns) {
   for (const char* method : {"ud_directional", "ud_exponential", "exponential", "directional",
                              "constant_trace", "stabilised", "kalman", "nlms"}) {
@@ -260,7 +315,8 @@ TEST(OnlineCli, BadOptionsExitTwoWithAClearMessage) {
   ExpectBadInput("method", "--model arx --u q_in --y level --online --method fast" + csv,
                  "--method fast: unknown (allowed: ud_directional");
   ExpectBadInput("kind", "--model foptd --u q_in --y level --online" + csv,
-                 "--model foptd has no online estimator (online: id, arx, frac-foptd, lpv, idz)");
+                 "--model foptd has no online estimator (online: id, arx, frac-foptd, lpv, idz, "
+                 "frac-ss)");
 }
 
 }  // namespace

@@ -252,15 +252,16 @@ TEST(OnlineAllocation, AReachRunningEveryKindDoesNotAllocatePerSample) {
   settings.max_delay_s = 20 * 60.0;
   settings.fractional_delay_s = 120.0;
   settings.lpv_delay_s = 120.0;
+  settings.frac_ss_delay_s = 120.0;
   ReachSampleProcessorOptions options;
   options.sample_time_s = 60.0;
   options.online_id = OnlineModelOptionsFor(OnlineModelKind::kIntegratorDelay, settings).id;
-  for (const OnlineModelKind kind :
-       {OnlineModelKind::kArx, OnlineModelKind::kFractionalFoptd, OnlineModelKind::kLpvArx}) {
+  for (const OnlineModelKind kind : {OnlineModelKind::kArx, OnlineModelKind::kFractionalFoptd,
+                                     OnlineModelKind::kLpvArx, OnlineModelKind::kFracSs}) {
     options.process_models.push_back(OnlineModelOptionsFor(kind, settings));
   }
   ReachSampleProcessor reach(options);
-  ASSERT_EQ(reach.online_models().size(), 4U);
+  ASSERT_EQ(reach.online_models().size(), 5U);
   testdata::PoolSpec spec;
   spec.samples = 600;
   const testdata::PoolData d = testdata::MakePool(spec);
@@ -278,7 +279,7 @@ TEST(OnlineAllocation, AReachRunningEveryKindDoesNotAllocatePerSample) {
     updated |= reach.OnSample(s).online_models_updated;
   }
   EXPECT_EQ(g_allocations - before, 0);
-  EXPECT_EQ(updated, 0xFU);  // every model moved
+  EXPECT_EQ(updated, 0x1FU);  // every model moved
 }
 
 }  // namespace

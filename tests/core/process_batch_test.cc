@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <random>
 #include <vector>
 
 #include "core/reach/reach_sample_processor.h"
@@ -119,6 +120,54 @@ TEST(ProcessBatch, AnExperimentGivesTheFoptdOfTheFlumeFromBothKinds) {
   EXPECT_EQ(results[3].input_offset, 0.015);
 }
 
+// A plant that is the LPV paper's commensurate model (alpha = 0.5, Table 3's P1 OP1, its delay of
+// 17 samples), simulated by SimulateCommensurate around a rest point: frac-ss finds the delay by
+// its scan and the coefficients (the record at rest before the input moves, full GL memory).
+TEST(ProcessBatch, FracSsFindsTheDelayAndCoefficientsOfACommensuratePlant) {
+  CommensurateModel m;
+  m.q = 2;
+  m.a.resize(4);
+  m.a << -0.1313, 0.0370, 0.0019, 0.0995e-3;
+  m.c.resize(3);
+  m.c << 55.082, -345.72, 633.48;
+  m.delay_samples = 17;
+  const int samples = 700;
+  // A random binary input held 7 samples, at rest (0) at the first sample.
+  Eigen::VectorXd du(samples);
+  std::mt19937 rng(11);
+  double level = 0.1;
+  for (int k = 0; k < samples; ++k) {
+    if (k % 7 == 1) level = (rng() & 1U) != 0U ? 0.1 : -0.1;
+    du(k) = k == 0 ? 0.0 : level;
+  }
+  const Eigen::VectorXd dy = SimulateCommensurate(m, du);
+  const Eigen::VectorXd u = du.array() + 1.5;
+  const Eigen::VectorXd y = dy.array() + 2.0;
+  ProcessBatchOptions options;
+  options.max_delay_s = 30 * kTs;
+  options.frac_ss_q = 2;
+  options.frac_ss_memory_samples = samples;
+  const ProcessBatchResult r = FitProcessBatch(ProcessBatchKind::kFracSs, u, y, kTs, options);
+  ASSERT_TRUE(r.ok()) << r.problem;
+  ASSERT_TRUE(r.commensurate.has_value());
+  EXPECT_EQ(r.commensurate->model.delay_samples, 17);
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_NEAR(r.commensurate->model.a(i), m.a(i), 1e-5 * (1e-3 + std::abs(m.a(i)))) << i;
+  }
+  EXPECT_NEAR(r.commensurate->model.c(0), m.c(0), 1e-3 * std::abs(m.c(0)));
+  EXPECT_EQ(r.commensurate->input_offset, 1.5);
+  EXPECT_EQ(r.commensurate->output_offset, 2.0);
+  EXPECT_EQ(r.memory_samples, samples);
+  EXPECT_EQ(ProcessBatchKindName(ProcessBatchKind::kFracSs), "frac-ss");
+
+  options.max_delay_s = 10 * kTs;  // the true delay outside the scan: a worse model
+  const ProcessBatchResult short_scan =
+      FitProcessBatch(ProcessBatchKind::kFracSs, u, y, kTs, options);
+  ASSERT_TRUE(short_scan.commensurate.has_value());
+  EXPECT_LE(short_scan.commensurate->model.delay_samples, 10);
+  EXPECT_LT(short_scan.commensurate->metrics.fit_percent, r.commensurate->metrics.fit_percent);
+}
+
 TEST(ProcessBatch, WithoutAnyModelTheExperimentFailsAndSaysWhy) {
   ReachSampleProcessorOptions o = FlumeOptions(false);
   o.batch_process_models.clear();
@@ -136,7 +185,7 @@ TEST(ProcessBatch, AFitThatCannotRunIsAProblemNotAThrow) {
   for (const ProcessBatchKind kind : kProcessBatchKinds) {
     const ProcessBatchResult r = FitProcessBatch(kind, still, level, kTs, ProcessBatchOptions{9.0});
     EXPECT_FALSE(r.ok()) << ProcessBatchKindName(kind);
-    EXPECT_FALSE(r.foptd.has_value() || r.fractional.has_value());
+    EXPECT_FALSE(r.foptd.has_value() || r.fractional.has_value() || r.commensurate.has_value());
   }
   EXPECT_EQ(ProcessBatchKindName(ProcessBatchKind::kFractionalFoptd), "frac-foptd");
 }

@@ -168,7 +168,7 @@ amplitude = 0.1
                           "t.toml:19:12: reach[0].actuator: channel \"level\" is not writable "
                           "(allowed: writable = true)",
                           "t.toml:24:24: reach[0].online_models[1]: \"ar\" is not allowed "
-                          "(allowed: id, arx, frac-foptd, lpv, idz)",
+                          "(allowed: id, arx, frac-foptd, lpv, idz, frac-ss)",
                           "t.toml:28:9: experiment[0].reach: unknown reach \"r2\" (allowed: a "
                           "[[reach]] name)",
                           "t.toml:29:1: experiment[0].amplitude: only allowed when mode = "

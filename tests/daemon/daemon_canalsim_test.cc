@@ -323,7 +323,7 @@ std::map<std::string, nlohmann::json> ReplayedModels(const fs::path& dir, const 
 }
 
 // Every online kind the daemon runs on pool 2 (id, arx, frac-foptd, idz with the demo file's
-// p22 prior), live over Modbus: the last
+// p22 prior, frac-ss, lpv scheduled on the inflow), live over Modbus: the last
 // snapshot of each that it published equals, bit for bit, the final one of `canalid replay` of
 // its log and that of `canalid identify --online --config` on the record `canalid export` wrote
 // (the same registry, settings and samples); each kind was published.
@@ -331,18 +331,23 @@ TEST(DaemonCanalsim, EveryOnlineKindIsReproducedByReplayAndIdentify) {
   const fs::path dir = TestDir();
   Canal canal(dir);
   std::string config;
-  auto daemon = RunPool2Experiment(dir, canal, "online_models",
-                                   "[\"id\", \"arx\", \"frac-foptd\", \"idz\"]", &config);
+  auto daemon = RunPool2Experiment(
+      dir, canal, "online_models",
+      "[\"id\", \"arx\", \"frac-foptd\", \"idz\", \"frac-ss\", \"lpv\"]\n"
+      "lpv_scheduling = \"pool2_inflow\"",
+      &config);
   ASSERT_FALSE(::testing::Test::HasFailure());
   EXPECT_EQ(daemon->Stop(SIGTERM), 0) << daemon->output();
 
   const auto live = LastOnlineModels(dir, "CANALID_ASCE2_MODEL_pool2");
-  ASSERT_EQ(live.size(), 4U);
-  for (const char* kind : {"id", "arx", "frac-foptd", "idz"}) {
+  ASSERT_EQ(live.size(), 6U);
+  for (const char* kind : {"id", "arx", "frac-foptd", "idz", "frac-ss", "lpv"}) {
     ASSERT_EQ(live.count(kind), 1U) << kind;
     EXPECT_GT(live.at(kind).samples_used, 100) << kind;
   }
   EXPECT_EQ(live.at("frac-foptd").num_params, 6);
+  EXPECT_EQ(live.at("frac-ss").num_params, 2 + 4 + 3 + 2);  // q = 2: a1..a4, c1..c3
+  EXPECT_EQ(live.at("lpv").num_params, 1 + 6 + 2);          // na = nb = 1, quadratics
   // idz: the id bank's parameters, the wave front, and the prior held (the demo file's).
   const canalid::model_snapshot_t& idz = live.at("idz");
   ASSERT_EQ(idz.num_params, 7);
@@ -442,10 +447,10 @@ TEST(DaemonCanalsim, BatchProcessModelsArePublishedPersistedReplayedAndResumed) 
   std::string config;
   auto daemon = RunPool2Experiment(
       dir, canal, "batch_models",
-      "[\"id\", \"idz\", \"foptd\", \"frac-foptd\", \"soptd\", \"arx\"]", &config);
+      "[\"id\", \"idz\", \"foptd\", \"frac-foptd\", \"soptd\", \"arx\", \"frac-ss\"]", &config);
   ASSERT_FALSE(::testing::Test::HasFailure());
   std::map<std::string, nlohmann::json> live;  // kind -> the JSON logged
-  for (const char* kind : {"idz", "foptd", "frac-foptd", "soptd", "arx"}) {
+  for (const char* kind : {"idz", "foptd", "frac-foptd", "soptd", "arx", "frac-ss"}) {
     const std::string line =
         daemon->WaitForLine("reach pool2: identified " + std::string(kind) + " ", 20000);
     ASSERT_FALSE(line.empty()) << kind << "\n" << daemon->output();
@@ -461,6 +466,10 @@ TEST(DaemonCanalsim, BatchProcessModelsArePublishedPersistedReplayedAndResumed) 
       EXPECT_EQ(live[kind].at("a").size(), 2U) << line;
       EXPECT_EQ(live[kind].at("b_coeffs").at(0).size(), 2U) << line;
       EXPECT_GT(live[kind].at("delay_s").get<double>(), 0.0) << line;
+    } else if (std::string(kind) == "frac-ss") {
+      // The reach's frac_ss_q (2 by default): n = 4 states.
+      EXPECT_EQ(live[kind].at("q"), 2) << line;
+      EXPECT_EQ(live[kind].at("A").size(), 4U) << line;
     } else {
       EXPECT_GT(live[kind].at("gain").get<double>(), 0.0) << line;  // the gate raises the level
     }
@@ -498,6 +507,28 @@ TEST(DaemonCanalsim, BatchProcessModelsArePublishedPersistedReplayedAndResumed) 
       EXPECT_EQ(lags_compared, 2);
       compared += lags_compared;
     }
+    if (kind == "frac-ss") {
+      // Its coefficients come from the companion form: A's last row -[a4..a1], C [1, c1..c3].
+      nlohmann::json coefficients;
+      for (std::size_t i = 1; i <= 4; ++i) {
+        coefficients["a" + std::to_string(i)] = -json.at("A").at(3).at(4 - i).get<double>();
+      }
+      for (std::size_t i = 1; i <= 3; ++i)
+        coefficients["c" + std::to_string(i)] = json.at("C").at(i);
+      int coefficients_compared = 0;
+      EXPECT_EQ(SameParameters(published[kind], coefficients, &coefficients_compared), "");
+      EXPECT_EQ(coefficients_compared, 7);
+      compared += coefficients_compared;
+    }
+    // The rest point the model's deviations are taken from, named as the online process kinds
+    // name their operating point (idz is not a process model).
+    if (kind == "idz") continue;
+    nlohmann::json rest_point;
+    rest_point["input_operating_point"] = json.at("input_offset");
+    rest_point["level_operating_point_m"] = json.at("output_offset");
+    int rest_compared = 0;
+    EXPECT_EQ(SameParameters(published[kind], rest_point, &rest_compared), "");
+    EXPECT_EQ(rest_compared, 2) << kind;
     EXPECT_GE(compared, 3) << kind;
     EXPECT_TRUE(fs::exists(dir / "state" / ("pool2." + kind + ".json"))) << kind;
   }

@@ -133,6 +133,40 @@ TEST(OnlineModelsConfig, OrdersGridAndDelaysReachTheEstimators) {
   EXPECT_EQ(s[2].lpv.delay_samples, 0);
 }
 
+// frac-ss: frac_ss_q sets the online model's and the batch fit's order, frac_ss_delay_s the
+// online model's known delay (default expected_delay_s); q is one of the CLI's 1, 2, 4.
+TEST(OnlineModelsConfig, FracSsKeysReachTheOnlineModelAndTheBatchFit) {
+  const core::ReachControllerOptions defaults =
+      Build("online_models = [\"frac-ss\"]\nbatch_models = [\"frac-ss\"]\n");
+  ASSERT_EQ(defaults.pipeline.process_models.size(), 1U);
+  const core::OnlineModelOptions& d = defaults.pipeline.process_models[0];
+  EXPECT_EQ(d.kind, core::OnlineModelKind::kFracSs);
+  EXPECT_EQ(d.frac_ss.q, 2);
+  EXPECT_EQ(d.frac_ss.delay_samples, 10);  // expected_delay_s 600 s
+  EXPECT_EQ(defaults.pipeline.batch_process_models,
+            std::vector<core::ProcessBatchKind>{core::ProcessBatchKind::kFracSs});
+  EXPECT_EQ(defaults.pipeline.batch_process.frac_ss_q, 2);
+  const core::ReachControllerOptions set = Build(
+      "online_models = [\"frac-ss\"]\nbatch_models = [\"frac-ss\"]\nfrac_ss_q = 4\n"
+      "frac_ss_delay_s = 185.0\n");
+  EXPECT_EQ(set.pipeline.process_models[0].frac_ss.q, 4);
+  EXPECT_EQ(set.pipeline.process_models[0].frac_ss.delay_samples, 3);  // 185 / 60 = 3.08
+  EXPECT_EQ(set.pipeline.batch_process.frac_ss_q, 4);
+  const core::ReachController reach(set);
+  ASSERT_EQ(Kinds(reach), std::vector<core::OnlineModelKind>{core::OnlineModelKind::kFracSs});
+  core::OnlineModelSnapshot snapshot;
+  reach.pipeline().online_models()[0]->FillSnapshot(snapshot);
+  EXPECT_EQ(snapshot.num_params, 2 + 8 + 7 + 2);  // delay, alpha, a1..a8, c1..c7, rest point
+  EXPECT_EQ(snapshot.Value("alpha"), 0.25);
+  EXPECT_EQ(snapshot.Value("delay_s"), 180.0);
+
+  EXPECT_THAT(Issues("frac_ss_q = 3\n"),
+              ::testing::Contains(HasSubstr("reach[0].frac_ss_q: 3 is out of range (allowed: 1, "
+                                            "2 or 4)")));
+  EXPECT_THAT(Issues("online_models = [\"frac-ss\"]\nfrac_ss_delay_s = -1.0\n"),
+              ::testing::Contains(HasSubstr("reach[0].frac_ss_delay_s")));
+}
+
 // The input of the process models: the actuator's reading, or actuator_position's; lpv's
 // scheduling variable from lpv_scheduling.  Seen in the operating points the models take from
 // the first poll.
@@ -185,7 +219,7 @@ TEST(OnlineModelsConfig, BadValuesNameTheirKey) {
                                     "model \"lpv\")")));
   EXPECT_THAT(Issues("online_models = [\"frac\"]\n"),
               ::testing::Contains(HasSubstr("\"frac\" is not allowed (allowed: id, arx, "
-                                            "frac-foptd, lpv, idz)")));
+                                            "frac-foptd, lpv, idz, frac-ss)")));
   EXPECT_THAT(Issues("arx_na = 10\narx_nb = 7\n"),
               ::testing::Contains(HasSubstr("reach[0].arx_nb: 7 is out of range")));
   EXPECT_THAT(Issues("arx_nb = 0\n"), ::testing::Contains(HasSubstr("reach[0].arx_nb")));
@@ -225,14 +259,15 @@ TEST(OnlineModelsConfig, BatchModelsChooseTheEndOfExperimentFits) {
             (std::vector<core::ProcessBatchKind>{core::ProcessBatchKind::kFractionalFoptd,
                                                  core::ProcessBatchKind::kSoptd,
                                                  core::ProcessBatchKind::kFoptd}));
-  EXPECT_THAT(Issues("batch_models = []\n"),
-              ::testing::Contains(HasSubstr("reach[0].batch_models: is empty (allowed: at least "
-                                            "one of id, idz, foptd, frac-foptd, soptd, arx)")));
+  EXPECT_THAT(
+      Issues("batch_models = []\n"),
+      ::testing::Contains(HasSubstr("reach[0].batch_models: is empty (allowed: at least "
+                                    "one of id, idz, foptd, frac-foptd, soptd, arx, frac-ss)")));
   EXPECT_THAT(Issues("batch_models = [\"id\", \"id\"]\n"),
               ::testing::Contains(HasSubstr("reach[0].batch_models[1]: duplicate model \"id\"")));
   EXPECT_THAT(Issues("batch_models = [\"lpv\"]\n"),
               ::testing::Contains(HasSubstr("\"lpv\" is not allowed (allowed: id, idz, foptd, "
-                                            "frac-foptd, soptd, arx)")));
+                                            "frac-foptd, soptd, arx, frac-ss)")));
   // arx: the reach's arx orders.
   const core::ReachSampleProcessorOptions arx =
       Build("batch_models = [\"arx\"]\narx_na = 1\narx_nb = 3\n").pipeline;

@@ -45,6 +45,22 @@ TEST(ModelJsonParams, ArxAndSoptdArraysAreFlattenedByName) {
   EXPECT_EQ(ModelJsonParams(soptd)[3].value, 2.0);
 }
 
+// The rest point a process model's deviations are taken from, published as the online process
+// kinds publish their operating point (exact: standard deviation 0).
+TEST(ModelJsonParams, ProcessOffsetsAreTheOperatingPoint) {
+  const nlohmann::json arx = {{"model", "arx"},      {"delay_s", 0.3},
+                              {"a", {-0.9}},         {"b_coeffs", {{0.2}}},
+                              {"input_offset", 1.5}, {"output_offset", 2.25}};
+  const std::vector<ModelJsonParam> p = ModelJsonParams(arx);
+  EXPECT_EQ(Names(p), (std::vector<std::string>{"delay_s", "a1", "b1", "input_operating_point",
+                                                "level_operating_point_m"}));
+  EXPECT_EQ(p[3].value, 1.5);
+  EXPECT_EQ(p[4].value, 2.25);
+  EXPECT_EQ(p[4].std_dev, 0.0);
+  const nlohmann::json one_offset = {{"model", "foptd"}, {"gain", 0.5}, {"input_offset", 1.0}};
+  EXPECT_EQ(Names(ModelJsonParams(one_offset)), (std::vector<std::string>{"gain"}));
+}
+
 TEST(ModelJsonParams, MalformedOrMultiInputArraysAreLeftOut) {
   const nlohmann::json two_inputs = {{"a", {-0.9}}, {"b_coeffs", {{0.1}, {0.2}}}};
   EXPECT_TRUE(ModelJsonParams(two_inputs).empty());
