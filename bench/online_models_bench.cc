@@ -109,6 +109,16 @@ void BM_DirectFractionalBank(benchmark::State& state) {
 }
 BENCHMARK(BM_DirectFractionalBank);
 
+void BM_DirectCommensurate(benchmark::State& state) {
+  OnlineCommensurate estimator(
+      OnlineModelOptionsFor(OnlineModelKind::kFracSs, PoolSettings()).frac_ss);
+  RunDirect(state, "frac-ss (estimator direct)", [&](const OnlineSample& s) {
+    estimator.Update(s.input - 1.5, s.level_m - 2.0);
+    return estimator.a(1);
+  });
+}
+BENCHMARK(BM_DirectCommensurate);
+
 // One reach running id, arx, frac-foptd, lpv and frac-ss: the daemon's per-poll estimator cost.
 void BM_ReachEveryKind(benchmark::State& state) {
   const OnlineModelSettings settings = PoolSettings();
@@ -141,7 +151,7 @@ void BM_ReachEveryKind(benchmark::State& state) {
     benchmark::DoNotOptimize(snapshot.values[0]);
     k = (k + 1) & (kRecord - 1);
   }
-  state.SetLabel("reach: id + arx + frac-foptd + lpv");
+  state.SetLabel("reach: id + arx + frac-foptd + lpv + frac-ss");
 }
 BENCHMARK(BM_ReachEveryKind);
 

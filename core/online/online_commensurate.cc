@@ -102,18 +102,25 @@ double OnlineCommensurate::c(int m) const {
   return a_n != 0.0 ? rls_.theta()(options_.order() - 1 + m) / a_n : kNan;
 }
 
-double OnlineCommensurate::c_std(int m) const {
+void OnlineCommensurate::CStandardDeviations(std::span<double> out) const {
   const int n = options_.order();
   const double a_n = rls_.theta()(n - 1);
-  if (a_n == 0.0 || rls_.options().method == RlsMethod::kNlms) return kNan;
-  rls_.Covariance(covariance_);
-  const int g = n - 1 + m;
-  const double c_m = rls_.theta()(g) / a_n;
-  // c = g / a_n: dc/dg = 1 / a_n, dc/da_n = -c / a_n.
-  const double variance = (covariance_(g, g) - 2.0 * c_m * covariance_(g, n - 1) +
-                           c_m * c_m * covariance_(n - 1, n - 1)) /
-                          (a_n * a_n);
-  return std::sqrt(std::max(0.0, rls_.innovation_variance() * variance));
+  const bool known = a_n != 0.0 && rls_.options().method != RlsMethod::kNlms;
+  if (known) rls_.Covariance(covariance_);
+  for (int m = 1; m < n; ++m) {
+    double& out_m = out[static_cast<std::size_t>(m - 1)];
+    if (!known) {
+      out_m = kNan;
+      continue;
+    }
+    const int g = n - 1 + m;
+    const double c_m = rls_.theta()(g) / a_n;
+    // c = g / a_n: dc/dg = 1 / a_n, dc/da_n = -c / a_n.
+    const double variance = (covariance_(g, g) - 2.0 * c_m * covariance_(g, n - 1) +
+                             c_m * c_m * covariance_(n - 1, n - 1)) /
+                            (a_n * a_n);
+    out_m = std::sqrt(std::max(0.0, rls_.innovation_variance() * variance));
+  }
 }
 
 }  // namespace canalid::core

@@ -1,6 +1,7 @@
 #pragma once
 #include <Eigen/Core>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "core/numerics/ring_buffer.h"
@@ -49,10 +50,12 @@ class OnlineCommensurate final {
   /// a_i, 1 <= i <= n, and its standard deviation.
   double a(int i) const { return rls_.theta()(i - 1); }
   double a_std(int i) const { return rls_.StandardDeviation(i - 1); }
-  /// c_m = g_m / a_n, 1 <= m <= n - 1 (NaN while a_n = 0), and its first-order standard
-  /// deviation from the covariance of (a_n, g_m).  O(n^3) for the UD form; no allocation.
+  /// c_m = g_m / a_n, 1 <= m <= n - 1 (NaN while a_n = 0).
   double c(int m) const;
-  double c_std(int m) const;
+  /// The first-order standard deviations of c_1..c_{n-1} (from the covariance of (a_n, g_m))
+  /// into out[0..n-2].  One covariance, O(n^3) for the UD form; no allocation.
+  /// @pre out.size() >= n - 1.
+  void CStandardDeviations(std::span<double> out) const;
 
   const Rls<Eigen::Dynamic>& estimator() const { return rls_; }
   const OnlineCommensurateOptions& options() const { return options_; }

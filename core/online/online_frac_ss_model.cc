@@ -1,5 +1,6 @@
 // The "frac-ss" kind of the online registry: OnlineCommensurate from the actuator to the level,
 // in deviations from the operating point, for the configured q and delay.
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -41,7 +42,8 @@ class OnlineFracSsModel final : public ProcessOnlineModel {
     w.Put(1.0 / options_.q, kNan);
     const int n = options_.order();
     for (int i = 1; i <= n; ++i) w.Put(estimator_.a(i), estimator_.a_std(i));
-    for (int i = 1; i < n; ++i) w.Put(estimator_.c(i), estimator_.c_std(i));
+    estimator_.CStandardDeviations(c_std_);
+    for (int i = 1; i < n; ++i) w.Put(estimator_.c(i), c_std_[static_cast<std::size_t>(i - 1)]);
     PutOperatingPoint(w);
     w.Finish(health, health.condition_estimate, kNan, std::sqrt(rls.innovation_variance()),
              condition_max());
@@ -55,6 +57,7 @@ class OnlineFracSsModel final : public ProcessOnlineModel {
  private:
   OnlineCommensurateOptions options_;
   OnlineCommensurate estimator_;
+  mutable std::array<double, 2 * kMaxOnlineCommensurateQ - 1> c_std_{};  // work of FillSnapshot
 };
 
 }  // namespace

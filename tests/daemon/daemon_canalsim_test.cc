@@ -331,11 +331,11 @@ TEST(DaemonCanalsim, EveryOnlineKindIsReproducedByReplayAndIdentify) {
   const fs::path dir = TestDir();
   Canal canal(dir);
   std::string config;
-  auto daemon = RunPool2Experiment(
-      dir, canal, "online_models",
-      "[\"id\", \"arx\", \"frac-foptd\", \"idz\", \"frac-ss\", \"lpv\"]\n"
-      "lpv_scheduling = \"pool2_inflow\"",
-      &config);
+  auto daemon =
+      RunPool2Experiment(dir, canal, "online_models",
+                         "[\"id\", \"arx\", \"frac-foptd\", \"idz\", \"frac-ss\", \"lpv\"]\n"
+                         "lpv_scheduling = \"pool2_inflow\"",
+                         &config);
   ASSERT_FALSE(::testing::Test::HasFailure());
   EXPECT_EQ(daemon->Stop(SIGTERM), 0) << daemon->output();
 
