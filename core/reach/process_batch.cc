@@ -10,12 +10,23 @@
 namespace canalid::core {
 namespace {
 
+// Half-width of the alpha bounds that hold alpha at ProcessBatchOptions::fixed_alpha (the fit
+// needs alpha_min < alpha_max).
+constexpr double kFixedAlphaHalfWidth = 1e-9;
+
+// max_delay_s > 0 in whole samples (the nearest), else -1.
+int MaxDelaySamples(double max_delay_s, double sample_time_s) {
+  if (!(max_delay_s > 0.0)) return -1;
+  return static_cast<int>(std::min(std::round(max_delay_s / sample_time_s), 1e9));
+}
+
+// max_delay_s <= 0: no upper bound (the fit's own default bounded it).
 std::string BoundsProblem(double gain, double time_constant_s, double delay_s, double max_delay_s) {
   if (!std::isfinite(gain)) return "gain is not finite";
   if (!(time_constant_s > 0.0 && std::isfinite(time_constant_s))) {
     return "time constant " + std::to_string(time_constant_s) + " s is not > 0";
   }
-  if (!(delay_s >= 0.0 && delay_s <= max_delay_s)) {
+  if (!(delay_s >= 0.0 && (max_delay_s <= 0.0 || delay_s <= max_delay_s))) {
     return "delay " + std::to_string(delay_s) + " s is outside [0, " + std::to_string(max_delay_s) +
            "] s";
   }
@@ -60,8 +71,9 @@ ProcessBatchResult FitProcessBatch(ProcessBatchKind kind,
       const Eigen::VectorXd du = u.array() - result.input_offset;
       const Eigen::VectorXd dy = y.array() - result.output_offset;
       // Delays the record can hold: at most a third of it, as the id fit's default.
-      const int max_nk = std::min(static_cast<int>(std::floor(max_delay_s / sample_time_s + 1e-9)),
-                                  static_cast<int>(u.size() / 3));
+      const int asked = MaxDelaySamples(max_delay_s, sample_time_s);
+      const int max_nk = asked >= 0 ? std::min(asked, static_cast<int>(u.size() / 3))
+                                    : static_cast<int>(u.size() / 3);
       const int min_nk = std::max(batch.min_delay_samples, 1);
       if (max_nk < min_nk) {
         result.problem = "the record (" + std::to_string(u.size()) +
@@ -74,8 +86,11 @@ ProcessBatchResult FitProcessBatch(ProcessBatchKind kind,
         result.problem = "the ARX coefficients are not finite";
       }
     } else if (kind == ProcessBatchKind::kFracSs) {
-      // Delays the record can hold, as for arx; the fit needs 20 q samples beyond the delay.
-      const int max_nk = std::min(static_cast<int>(std::floor(max_delay_s / sample_time_s + 1e-9)),
+      // Delays the record can hold; the fit needs 20 q samples beyond the delay.  Default
+      // min(record / 10, 100 samples): each candidate costs a simulation.
+      const int asked = MaxDelaySamples(max_delay_s, sample_time_s);
+      const int fallback = static_cast<int>(std::min<Eigen::Index>(u.size() / 10, 100));
+      const int max_nk = std::min(asked >= 0 ? asked : fallback,
                                   static_cast<int>(u.size()) - 20 * batch.frac_ss_q);
       if (max_nk < 0) {
         result.problem =
@@ -110,6 +125,10 @@ ProcessBatchResult FitProcessBatch(ProcessBatchKind kind,
     } else {
       FractionalFoptdFitOptions options;
       options.max_delay_s = max_delay_s;
+      if (batch.fixed_alpha > 0.0) {
+        options.alpha_min = batch.fixed_alpha - kFixedAlphaHalfWidth;
+        options.alpha_max = batch.fixed_alpha + kFixedAlphaHalfWidth;
+      }
       result.fractional = FitFractionalFoptd(u, y, sample_time_s, options);
       const FractionalFoptdParams& p = result.fractional->params;
       result.band = FitOustaloupBand(p, sample_time_s, u.size(), options);

@@ -30,16 +30,21 @@ inline constexpr std::array kProcessBatchKinds{
 /// The kind's name in configurations and model JSON.
 std::string_view ProcessBatchKindName(ProcessBatchKind kind);
 
-/// What the end-of-experiment fits of a reach may use.
+/// What a process fit may use: one struct for the daemon's end-of-experiment fits (from the
+/// reach's keys) and `canalid identify --model foptd|soptd|frac-foptd|frac-ss` (from its flags).
 struct ProcessBatchOptions {
-  double max_delay_s = 0.0;   ///< > 0: the longest delay tried
+  /// > 0: the longest delay tried (rounded to whole samples where the fit scans samples);
+  /// <= 0: each fit's default (foptd, soptd and arx a third of the record, frac-foptd half of it,
+  /// frac-ss min(record / 10, 100 samples))
+  double max_delay_s = 0.0;
   int min_delay_samples = 1;  ///< arx: the shortest delay tried (at least 1 sample)
   int arx_na = 2;             ///< arx: output lags (the reach's arx_na)
   int arx_nb = 2;             ///< arx: input lags (the reach's arx_nb)
   int frac_ss_q = 2;          ///< frac-ss: alpha = 1/q (the reach's frac_ss_q)
-  /// frac-ss: the GL memory of the refinement's simulations (samples, >= 1; the whole record
-  /// costs O(N^2) per simulation)
+  /// frac-ss: the GL memory of the fit's simulations (samples; 0: the whole record, O(N^2) per
+  /// simulation)
   int frac_ss_memory_samples = 200;
+  double fixed_alpha = 0.0;  ///< frac-foptd: > 0 holds alpha there and fits the rest
 };
 
 /// One end-of-experiment fit: the kind's result, or why there is none.
@@ -58,6 +63,11 @@ struct ProcessBatchResult {
   std::string problem;
 
   bool ok() const { return problem.empty(); }
+  /// A model was fitted (it may still have a problem with its bounds).
+  bool fitted() const {
+    return foptd.has_value() || soptd.has_value() || arx.has_value() || fractional.has_value() ||
+           commensurate.has_value();
+  }
 };
 
 /// Fits `kind` to the record of input u (the actuator) and level y sampled every Ts (the first

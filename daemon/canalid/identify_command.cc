@@ -53,11 +53,10 @@ nlohmann::json IdentifyModel(const IdentifyOptions& options, const drivers::CsvT
     model = IdentifyIdz(options, table);
   } else if (options.model == "arx") {
     model = IdentifyArx(options, table);
-  } else if (options.model == "frac-foptd" || options.model == "frac-ss") {
-    model = IdentifyFractional(options, table);
   } else if (options.model == "lpv") {
     model = IdentifyLpv(options, table);
-  } else if (options.model == "foptd" || options.model == "soptd") {
+  } else if (options.model == "foptd" || options.model == "soptd" ||
+             options.model == "frac-foptd" || options.model == "frac-ss") {
     model = IdentifyProcessModel(options, table);
   } else {
     throw InputError("--model: unknown kind '" + options.model +

@@ -102,8 +102,8 @@ struct ArxData {
   nlohmann::json preprocessing;
 };
 ArxData ReadArxData(const IdentifyOptions& options, const drivers::CsvTable& table);
+/// foptd, soptd, frac-foptd, frac-ss: core::FitProcessBatch, as the daemon's batch_models.
 nlohmann::json IdentifyProcessModel(const IdentifyOptions& options, const drivers::CsvTable& table);
-nlohmann::json IdentifyFractional(const IdentifyOptions& options, const drivers::CsvTable& table);
 nlohmann::json IdentifyLpv(const IdentifyOptions& options, const drivers::CsvTable& table);
 /// `--online` with --model id or arx: the recursive estimator run sample by sample over the table,
 /// its final snapshot in the batch keys plus `estimator` and `health`; --trace writes every step.

@@ -192,6 +192,30 @@ TEST_F(FractionalCli, CompareShowsProgressWhenStderrIsATerminal) {
   }
 }
 
+// The process fits are the daemon's (core::FitProcessBatch): --max-delay-s bounds each one's
+// delay. The gate step of a first-order lag (alpha 1, delay 2.5 s): every kind finds the delay
+// past 2 s when allowed to (frac-ss up to 4.5 s: each candidate delay costs it a simulation of
+// the whole record), and stays at or under 1.5 s when bounded there.
+TEST_F(FractionalCli, MaxDelayBoundsEveryProcessFit) {
+  WriteFile(dir_ / "step.csv", StepCsv(kExperiments[3], 1));
+  const std::string input = " --u gate --y level --input " + (dir_ / "step.csv").string();
+  for (const std::string kind : {"foptd", "soptd", "frac-foptd", "frac-ss"}) {
+    for (const double max_delay_s : {4.5, 1.5}) {
+      const ProgramRun run = RunProgram(CanalidProgram() + " identify --model " + kind +
+                                            " --max-delay-s " + std::to_string(max_delay_s) + input,
+                                        dir_);
+      ASSERT_EQ(run.exit_code, 0) << kind << "\n" << run.err;
+      const nlohmann::json json = nlohmann::json::parse(run.out);
+      const double delay_s = json.at("delay_s").get<double>();
+      EXPECT_LE(delay_s, max_delay_s + 1e-9) << kind;
+      if (max_delay_s > 2.5) {
+        EXPECT_GT(delay_s, 2.0) << kind;
+      }
+      EXPECT_EQ(json.at("sample_time_s").get<double>(), kTs) << kind;
+    }
+  }
+}
+
 TEST_F(FractionalCli, BadInputGetsOneClearMessageAndExitCode2) {
   WriteFile(dir_ / "step.csv", StepCsv(kExperiments[0], 1));
   const std::string csv = (dir_ / "step.csv").string();
@@ -204,6 +228,10 @@ TEST_F(FractionalCli, BadInputGetsOneClearMessageAndExitCode2) {
       {"--model frac-foptd --u gate --y level --alpha 2.5 --input " + csv, "--alpha"},
       {"--model frac-ss --u gate --y level --q 3 --input " + csv, "--q"},
       {"--model frac-ss --u gate --y level --alpha 0.5 --input " + csv, "--alpha"},
+      {"--model foptd --u gate --y level --q 2 --input " + csv,
+       "--q applies to --model frac-ss, not foptd"},
+      {"--model soptd --u gate --y level --alpha 0.8 --input " + csv,
+       "--alpha applies to --model frac-foptd"},
       {"--compare foptd,id --u gate --y level --input " + csv, "'id' is not a kind"},
       {"--compare foptd --input '" + (dir_ / "none").string() + "/*.csv'", "no file matches"},
       {"--model foptd --compare foptd --input " + csv, "excludes"},
