@@ -16,6 +16,7 @@
 #include <fstream>
 #include <lcm/lcm-cpp.hpp>
 #include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
@@ -259,10 +260,11 @@ TEST(DaemonCanalsim, DesignedExperimentIdentifiesRestoresReplaysAndResumes) {
 }
 
 // Every model message on `channel` of the run's LCM log, in order.
-std::vector<canalid::model_snapshot_t> ModelMessages(const fs::path& dir,
-                                                     const std::string& channel) {
+// Every model_snapshot_t on `channel` of the LCM log `path`.
+std::vector<canalid::model_snapshot_t> ModelMessagesIn(const fs::path& path,
+                                                       const std::string& channel) {
   std::vector<canalid::model_snapshot_t> messages;
-  lcm::LogFile log((dir / "run.lcmlog").string(), "r");
+  lcm::LogFile log(path.string(), "r");
   if (!log.good()) return messages;
   while (const lcm::LogEvent* e = log.readNextEvent()) {
     if (e->channel != channel) continue;
@@ -270,6 +272,12 @@ std::vector<canalid::model_snapshot_t> ModelMessages(const fs::path& dir,
     if (m.decode(e->data, 0, e->datalen) == e->datalen) messages.push_back(m);
   }
   return messages;
+}
+
+// The same in the run's log, dir/run.lcmlog.
+std::vector<canalid::model_snapshot_t> ModelMessages(const fs::path& dir,
+                                                     const std::string& channel) {
+  return ModelMessagesIn(dir / "run.lcmlog", channel);
 }
 
 // The last online snapshot the daemon published per model kind (MODEL_<reach> messages of its
@@ -303,14 +311,18 @@ std::string SameParameters(const canalid::model_snapshot_t& live, const nlohmann
   return {};
 }
 
-// `canalid replay ARGS` of the run's log: the last model JSON line of each kind (with `estimator`
-// equal to `estimator` when it is not empty); an empty map (and a test failure) when it fails.
-std::map<std::string, nlohmann::json> ReplayedModels(const fs::path& dir, const std::string& args,
-                                                     const std::string& estimator) {
+// `canalid replay ARGS LOG`: the last model JSON line of each kind (with `estimator` equal to
+// `estimator` when it is not empty); an empty map (and a test failure) when it fails. `err`: its
+// standard error.
+std::map<std::string, nlohmann::json> ReplayedModelsOf(const fs::path& log, const fs::path& dir,
+                                                       const std::string& args,
+                                                       const std::string& estimator,
+                                                       std::string* err = nullptr) {
   std::map<std::string, nlohmann::json> last;
   const ProgramRun replay =
-      RunProgram(CanalidProgram() + " replay " + args + " " + (dir / "run.lcmlog").string(), dir);
+      RunProgram(CanalidProgram() + " replay " + args + " " + log.string(), dir);
   EXPECT_EQ(replay.exit_code, 0) << replay.err;
+  if (err != nullptr) *err = replay.err;
   std::istringstream lines(replay.out);
   std::string text;
   while (std::getline(lines, text)) {
@@ -320,6 +332,12 @@ std::map<std::string, nlohmann::json> ReplayedModels(const fs::path& dir, const 
     }
   }
   return last;
+}
+
+// The same for the run's log, dir/run.lcmlog.
+std::map<std::string, nlohmann::json> ReplayedModels(const fs::path& dir, const std::string& args,
+                                                     const std::string& estimator) {
+  return ReplayedModelsOf(dir / "run.lcmlog", dir, args, estimator);
 }
 
 // Every online kind the daemon runs on pool 2 (id, arx, frac-foptd, idz with the demo file's
@@ -1074,18 +1092,29 @@ void WriteKey(const fs::path& path, const std::string& hex) {
   ::chmod(path.c_str(), 0600);
 }
 
-// 6. Commands: a genuine start starts the experiment; a forged, a stale and a replayed command
-// are rejected and change nothing.
-TEST(DaemonCanalsim, CommandsStartOnlyWhenGenuine) {
+// canalsim (ASCE canal 2 at 600 x) in a private network namespace, canalidd with commands enabled
+// on `key` and lcm-logger recording the udpm bus (bus.lcmlog), all three in that namespace.
+struct CommandRig {
+  fs::path key;
+  fs::path bus_log;
+  std::unique_ptr<ChildProcess> canal;
+  std::unique_ptr<ChildProcess> daemon;
+  std::unique_ptr<ChildProcess> logger;
+  int probes = 0;  // publish-config commands sent until the logger recorded a configuration
+
+  pid_t network() const { return canal->pid(); }
+};
+
+// Starts the rig with `experiments` (TOML [[experiment]] tables) and the key 00 11 .. ff twice;
+// fails the test (and returns with what it started) when a part is not ready in time.
+void StartCommandRig(const fs::path& dir, const std::string& experiments, CommandRig& rig) {
   ASSERT_TRUE(fs::exists("/usr/bin/lcm-logger")) << "lcm-logger (Debian liblcm-bin) missing";
-  const fs::path dir = TestDir();
   const std::string network_problem = PrivateNetworkProblem(dir);
   ASSERT_TRUE(network_problem.empty()) << network_problem;
-  const fs::path key = dir / "command.key";
-  const fs::path wrong_key = dir / "wrong.key";
-  WriteKey(key, "00112233445566778899aabbccddeeff00112233445566778899aabbccddeeff");
-  WriteKey(wrong_key, "ffeeddccbbaa99887766554433221100ffeeddccbbaa99887766554433221100");
-  const std::string commands = "[commands]\nenabled = true\nkey_file = \"" + key.string() + "\"\n";
+  rig.key = dir / "command.key";
+  WriteKey(rig.key, "00112233445566778899aabbccddeeff00112233445566778899aabbccddeeff");
+  const std::string commands =
+      "[commands]\nenabled = true\nkey_file = \"" + rig.key.string() + "\"\n";
   // canalsim makes the namespace (its loopback is the only one the daemon can reach there); the
   // daemon and every canalid-command enter it.
   std::vector<std::string> canal_argv = InNewPrivateNetwork();
@@ -1096,41 +1125,60 @@ TEST(DaemonCanalsim, CommandsStartOnlyWhenGenuine) {
         SourcePath("config/sim/plc/asce2.toml"), std::string("--time-scale"), std::string("600")}) {
     canal_argv.push_back(a);
   }
-  ChildProcess canal(canal_argv, {}, dir / "canalsim.log");
-  const std::string ready = canal.WaitForLine("listening on 127.0.0.1:", 60000);
-  ASSERT_FALSE(ready.empty()) << canal.output();
+  rig.canal =
+      std::make_unique<ChildProcess>(canal_argv, std::vector<std::string>{}, dir / "canalsim.log");
+  const std::string ready = rig.canal->WaitForLine("listening on 127.0.0.1:", 60000);
+  ASSERT_FALSE(ready.empty()) << rig.canal->output();
   const int port = std::stoi(ready.substr(ready.find("127.0.0.1:") + 10));
-  const std::string config = WriteConfig(dir / "canalidd.toml", BaseKeys(port, dir),
-                                         ExplicitExperiment(0.05, 7, "manual", commands));
-  std::vector<std::string> daemon_argv = InPrivateNetworkOf(canal.pid());
+  const std::string config =
+      WriteConfig(dir / "canalidd.toml", BaseKeys(port, dir), experiments + "\n" + commands);
+  std::vector<std::string> daemon_argv = InPrivateNetworkOf(rig.network());
   for (const std::string& a : {DaemonProgram(), std::string("--config"), config}) {
     daemon_argv.push_back(a);
   }
-  ChildProcess daemon(daemon_argv, {kUdpmEnv}, dir / "canalidd.log");
-  ASSERT_FALSE(daemon.WaitForLine("commands enabled", 20000).empty()) << daemon.output();
-  ASSERT_FALSE(daemon.WaitForLine("answers: ready", 20000).empty()) << daemon.output();
+  rig.daemon = std::make_unique<ChildProcess>(daemon_argv, std::vector<std::string>{kUdpmEnv},
+                                              dir / "canalidd.log");
+  ASSERT_FALSE(rig.daemon->WaitForLine("commands enabled", 20000).empty()) << rig.daemon->output();
+  ASSERT_FALSE(rig.daemon->WaitForLine("answers: ready", 20000).empty()) << rig.daemon->output();
 
-  // lcm-logger in the namespace records the bus, for the verdict counts in the daemon's last
-  // health message. It is ready once a configuration the daemon republishes on a genuine
-  // publish-config command shows up in its file (bounded: 50 tries, 100 ms apart).
-  const fs::path bus_log = dir / "bus.lcmlog";
-  std::vector<std::string> logger_argv = InPrivateNetworkOf(canal.pid());
+  // lcm-logger in the namespace records the bus. It is ready once a configuration the daemon
+  // republishes on a genuine publish-config command shows up in its file (bounded: 50 tries,
+  // 100 ms apart).
+  rig.bus_log = dir / "bus.lcmlog";
+  std::vector<std::string> logger_argv = InPrivateNetworkOf(rig.network());
   for (const std::string& a :
        {std::string("/usr/bin/lcm-logger"), std::string("-f"), std::string("--flush-interval=10"),
-        std::string("--lcm-url=") + kUdpmUrl, bus_log.string()}) {
+        std::string("--lcm-url=") + kUdpmUrl, rig.bus_log.string()}) {
     logger_argv.push_back(a);
   }
-  ChildProcess logger(logger_argv, {}, dir / "lcm-logger.log");
-  int probes = 0;
-  ASSERT_TRUE(logger.WaitUntil(
+  rig.logger = std::make_unique<ChildProcess>(logger_argv, std::vector<std::string>{},
+                                              dir / "lcm-logger.log");
+  ASSERT_TRUE(rig.logger->WaitUntil(
       [&] {
-        if (ReadLcmLog(bus_log).configs > 0) return true;
-        EXPECT_EQ(SendCommand(dir, canal.pid(), key, {"publish-config"}), 0);
-        ++probes;
+        if (ReadLcmLog(rig.bus_log).configs > 0) return true;
+        EXPECT_EQ(SendCommand(dir, rig.network(), rig.key, {"publish-config"}), 0);
+        ++rig.probes;
         return false;
       },
       5000, 100))
-      << logger.output();
+      << rig.logger->output();
+}
+
+// 6. Commands: a genuine start starts the experiment; a forged, a stale and a replayed command
+// are rejected and change nothing.
+TEST(DaemonCanalsim, CommandsStartOnlyWhenGenuine) {
+  const fs::path dir = TestDir();
+  CommandRig rig;
+  StartCommandRig(dir, ExplicitExperiment(0.05, 7, "manual", ""), rig);
+  ASSERT_FALSE(::testing::Test::HasFailure());
+  const fs::path key = rig.key;
+  const fs::path wrong_key = dir / "wrong.key";
+  WriteKey(wrong_key, "ffeeddccbbaa99887766554433221100ffeeddccbbaa99887766554433221100");
+  ChildProcess& canal = *rig.canal;
+  ChildProcess& daemon = *rig.daemon;
+  ChildProcess& logger = *rig.logger;
+  const fs::path& bus_log = rig.bus_log;
+  const int probes = rig.probes;
 
   const auto now_us = std::chrono::duration_cast<std::chrono::microseconds>(
                           std::chrono::system_clock::now().time_since_epoch())
@@ -1180,6 +1228,59 @@ TEST(DaemonCanalsim, CommandsStartOnlyWhenGenuine) {
   EXPECT_EQ(verdicts.at("verdicts.stale"), 1);
   EXPECT_EQ(verdicts.at("verdicts.replayed"), 1);
   EXPECT_EQ(verdicts.at("verdicts.accepted"), 2 + probes);  // start, stop and the probes
+}
+
+// An operator starts the reach's second experiment by name over the command channel: the daemon
+// runs that one (not the first), identifies its record, and `canalid replay` of the bus log that
+// lcm-logger recorded (the configuration republished by publish-config, then the samples and the
+// experiment states naming the experiment) starts the same experiment at the same sample and
+// gives the same batch models.
+TEST(DaemonCanalsim, AnOperatorStartedExperimentReplaysFromTheBusLog) {
+  const fs::path dir = TestDir();
+  // The first experiment (pool2_short, 127 bits of 2 samples) is not the one started; the second
+  // is shorter: 63 bits of 2 samples (12.6 s at 600 x).
+  const std::string quick =
+      "[[experiment]]\nname = \"pool2_quick\"\nreach = \"pool2\"\nmode = \"explicit\"\n"
+      "amplitude = 0.05\nclock_period_s = 120.0\norder = 6\nseed = 3\nsettle_s = 0.0\n"
+      "start = \"manual\"\nmax_invalid_samples = 3\nmax_sample_gap_periods = 5.0\n";
+  CommandRig rig;
+  StartCommandRig(dir, ExplicitExperiment(0.05, 7, "manual", "") + "\n" + quick, rig);
+  ASSERT_FALSE(::testing::Test::HasFailure());
+  ChildProcess& daemon = *rig.daemon;
+  EXPECT_EQ(SendCommand(dir, rig.network(), rig.key, {"start", "--argument", "pool2_quick"}), 0);
+  // The id model's line: "identified {json}" (the other kinds name themselves).
+  const std::string identified = daemon.WaitForLine("reach pool2: identified {", 60000);
+  ASSERT_FALSE(identified.empty()) << daemon.output();
+  EXPECT_NE(daemon.output().find("starting the experiment pool2_quick"), std::string::npos)
+      << daemon.output();
+  const nlohmann::json live = JsonAfter(identified, "identified ");
+  ASSERT_TRUE(live.is_object()) << identified;
+  // The daemon keeps polling, so the batch model's message is followed by samples and written
+  // out by the logger (bounded: 100 x 100 ms).
+  const std::string model_channel = "CANALID_ASCE2_MODEL_pool2";
+  auto batch_models = [&] {
+    int n = 0;
+    for (const canalid::model_snapshot_t& m : ModelMessagesIn(rig.bus_log, model_channel)) {
+      n += m.estimator == "batch";
+    }
+    return n;
+  };
+  EXPECT_TRUE(rig.logger->WaitUntil([&] { return batch_models() > 0; }, 10000, 100));
+  EXPECT_EQ(daemon.Stop(SIGTERM), 0) << daemon.output();
+  EXPECT_EQ(rig.logger->Stop(SIGINT), 0) << rig.logger->output();
+  EXPECT_EQ(rig.canal->Stop(SIGTERM), 0) << rig.canal->output();
+
+  // Replay checks its batch models against the ones published live (and says so); the final
+  // id model it prints is the one the daemon logged.
+  std::string err;
+  std::map<std::string, nlohmann::json> replayed = ReplayedModelsOf(rig.bus_log, dir, "", "", &err);
+  EXPECT_NE(err.find("batch id model vs the last one published live: largest relative "
+                     "difference 0\n"),
+            std::string::npos)
+      << err;
+  ASSERT_EQ(replayed.count("id"), 1U) << err;
+  EXPECT_EQ(JsonNumbersDiffer(live, replayed["id"], 1e-12), "");
+  EXPECT_EQ(live.at("delay_s"), replayed["id"].at("delay_s"));
 }
 
 // Every message on the bus log by channel, and the sample_t, health_t and experiment_t ones
