@@ -72,7 +72,12 @@ std::string MakeLog(std::int64_t samples) {
     config.path = "config/canalidd-asce2.toml";
     config.text = ReadText(std::string(CANALID_BENCH_SOURCE_DIR) + "/config/canalidd-asce2.toml");
     Write(log, 0, "CANALID_ASCE2_CONFIG", config, buffer);
-    canalid::sample_t s;
+    // Every field set, as the daemon's poller sets them (lcm-gen leaves the scalars
+    // uninitialised): a good poll, so the configuration's designed experiment runs.
+    canalid::sample_t s{};
+    s.status = canalid::sample_t::STATUS_OK;
+    s.exception_code = 0;
+    s.round_trip_s = 0.004F;
     s.source = "asce2";
     s.channel_names = {"heartbeat",   "pool2_inflow",   "pool2_outflow",
                        "pool2_level", "gate1_position", "gate1_setpoint"};
