@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Whole-process comparison of issue 4: `canalid identify --model arx --online` over a 100k-sample
 # CSV against the same exponential-forgetting RLS loop in numpy (bench/peers/rls_numpy.py).
-# Checks that both give the same ARX(2,2,1) parameters (1e-6 relative), prints the median of 3
-# wall times of each (hyperfine if installed, else /usr/bin/time) and the speed ratio.
+# Checks that both give the same ARX(2,2,1) parameters (1e-6 relative), prints the median of 5
+# wall times of each (Python's perf_counter around the process) and the speed ratio.
 # Usage: bench/compare_online_numpy.sh [BUILD_DIR] [SAMPLES] [FORGETTING]
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -51,22 +51,21 @@ if worst > 1e-6:
     sys.exit("parameters differ by more than 1e-6 relative")
 PY
 
-median3() {  # prints the median of 3 wall times (s) of the command given
-  if command -v hyperfine >/dev/null 2>&1; then
-    hyperfine -N -r 3 --export-json "$work/h.json" "$(printf '%q ' "$@")" >/dev/null
-    "$python" -c 'import json,sys; print(json.load(open(sys.argv[1]))["results"][0]["median"])' \
-      "$work/h.json"
-  else
-    for _ in 1 2 3; do
-      /usr/bin/time -f %e -o "$work/t" "$@" >/dev/null
-      cat "$work/t"
-    done | sort -g | sed -n 2p
-  fi
+median5() {  # prints the median of 5 wall times (s) of the command given (perf_counter, us)
+  "$python" - "$@" <<'PY'
+import subprocess, sys, time
+times = []
+for _ in range(5):
+    t = time.perf_counter()
+    subprocess.run(sys.argv[1:], stdout=subprocess.DEVNULL, check=True)
+    times.append(time.perf_counter() - t)
+print("%.4f" % sorted(times)[2])
+PY
 }
-t_canalid=$(median3 "${canalid_cmd[@]}")
-t_numpy=$(median3 "${numpy_cmd[@]}")
+t_canalid=$(median5 "${canalid_cmd[@]}")
+t_numpy=$(median5 "${numpy_cmd[@]}")
 echo "samples: $samples, forgetting: $lambda"
-echo "canalid identify --model arx --online: ${t_canalid} s (median of 3)"
-echo "numpy RLS loop (bench/peers/rls_numpy.py): ${t_numpy} s (median of 3)"
+echo "canalid identify --model arx --online: ${t_canalid} s (median of 5)"
+echo "numpy RLS loop (bench/peers/rls_numpy.py): ${t_numpy} s (median of 5)"
 "$python" -c "import sys; c, n = float(sys.argv[1]), float(sys.argv[2]); \
-print('speed ratio numpy / canalid: %.1f x' % (n / max(c, 0.005)))" "$t_canalid" "$t_numpy"
+print('speed ratio numpy / canalid: %.1f x' % (n / c))" "$t_canalid" "$t_numpy"

@@ -1,31 +1,89 @@
 #include "drivers/csv/csv_table.h"
 
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstring>
 #include <fstream>
-#include <sstream>
+#include <string_view>
 #include <unordered_set>
+
+#include "core/system/errno_text.h"
 
 namespace canalid::drivers {
 namespace {
 
-std::string Trim(std::string_view s) {
+std::string_view TrimView(std::string_view s) {
   const auto begin = s.find_first_not_of(" \t\r");
   if (begin == std::string_view::npos) return {};
   const auto end = s.find_last_not_of(" \t\r");
-  return std::string(s.substr(begin, end - begin + 1));
+  return s.substr(begin, end - begin + 1);
 }
 
-std::vector<std::string> SplitCells(const std::string& line) {
+std::vector<std::string> SplitCells(std::string_view line) {
   std::vector<std::string> cells;
-  std::string_view rest(line);
   while (true) {
-    const auto comma = rest.find(',');
-    cells.push_back(Trim(rest.substr(0, comma)));
+    const auto comma = line.find(',');
+    cells.emplace_back(TrimView(line.substr(0, comma)));
     if (comma == std::string_view::npos) break;
-    rest.remove_prefix(comma + 1);
+    line.remove_prefix(comma + 1);
   }
   return cells;
+}
+
+// The lines of a text, without copying: Next() gives each one (without its '\n') and counts them.
+class Lines {
+ public:
+  explicit Lines(std::string_view text) : rest_(text) {}
+  bool Next(std::string_view& line) {
+    if (done_) return false;
+    ++number_;
+    const void* nl = std::memchr(rest_.data(), '\n', rest_.size());
+    if (nl == nullptr) {
+      line = rest_;
+      done_ = true;
+      return true;
+    }
+    const auto length = static_cast<std::size_t>(static_cast<const char*>(nl) - rest_.data());
+    line = rest_.substr(0, length);
+    rest_.remove_prefix(length + 1);
+    return true;
+  }
+  std::size_t number() const { return number_; }
+
+ private:
+  std::string_view rest_;
+  std::size_t number_ = 0;
+  bool done_ = false;
+};
+
+[[noreturn]] void Fail(const std::string& source, std::size_t line, const std::string& what);
+
+// Why cell `c` (starting at `cell_start` in `line`) of a row of `width` cells was refused: the
+// row has another number of cells, or the cell is not one finite number.
+[[noreturn]] void CellProblem(const std::string& source, std::size_t line_number,
+                              std::string_view line, const char* cell_start,
+                              const std::vector<std::string>& columns, std::size_t c,
+                              std::size_t width) {
+  const auto found = static_cast<std::size_t>(std::count(line.begin(), line.end(), ',')) + 1;
+  if (found != width) {
+    Fail(source, line_number,
+         "expected " + std::to_string(width) + " cells, found " + std::to_string(found));
+  }
+  std::string_view rest = line.substr(static_cast<std::size_t>(cell_start - line.data()));
+  const std::string cell(TrimView(rest.substr(0, rest.find(','))));
+  double v = 0.0;
+  const auto [ptr, ec] = std::from_chars(cell.data(), cell.data() + cell.size(), v);
+  if (cell.empty() || ec != std::errc() || ptr != cell.data() + cell.size()) {
+    Fail(source, line_number, "column '" + columns[c] + "': '" + cell + "' is not a number");
+  }
+  Fail(source, line_number, "column '" + columns[c] + "': '" + cell + "' is not finite");
 }
 
 [[noreturn]] void Fail(const std::string& source, std::size_t line, const std::string& what) {
@@ -90,67 +148,112 @@ Eigen::VectorXd CsvTable::Column(const std::string& name) const {
 }
 
 CsvTable CsvTable::Read(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw CsvError(path + ": cannot open file");
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return Parse(buffer.str(), path);
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw CsvError(path + ": cannot open file");
+  struct stat st {};
+  if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_size > 0) {
+    // A regular file is parsed where the kernel maps it: no copy, no zero-filled buffer.
+    const auto size = static_cast<std::size_t>(st.st_size);
+    void* mapped = ::mmap(nullptr, size, PROT_READ, MAP_PRIVATE, fd, 0);
+    ::close(fd);
+    if (mapped == MAP_FAILED) throw CsvError(path + ": cannot read file");
+    struct Unmap {
+      void* at;
+      std::size_t size;
+      ~Unmap() { ::munmap(at, size); }
+    } unmap{mapped, size};
+    return Parse(std::string_view(static_cast<const char*>(mapped), size), path);
+  }
+  if (S_ISDIR(st.st_mode)) {
+    ::close(fd);
+    throw CsvError(path + ": is a directory, not a CSV file");
+  }
+  // Not a regular file (a pipe, /dev/stdin) or an empty one: read from the descriptor already
+  // open (a pipe cannot be opened twice).
+  std::string text;
+  char chunk[65536];
+  while (true) {
+    const ssize_t n = ::read(fd, chunk, sizeof chunk);
+    if (n > 0) {
+      text.append(chunk, static_cast<std::size_t>(n));
+    } else if (n == 0) {
+      break;
+    } else if (errno != EINTR) {
+      const int error = errno;
+      ::close(fd);
+      throw CsvError(path + ": cannot read file (" + core::ErrnoText(error) + ")");
+    }
+  }
+  ::close(fd);
+  return Parse(text, path);
 }
 
-CsvTable CsvTable::Parse(const std::string& text, const std::string& name) {
+CsvTable CsvTable::Parse(std::string_view text, const std::string& name) {
   CsvTable table;
   table.source_ = name;
-  std::istringstream in(text);
-  std::string line;
-  std::size_t line_number = 0;
+  Lines lines(text);
+  std::string_view line;
   // Header: the first line that is not blank.
-  while (std::getline(in, line)) {
-    ++line_number;
-    if (!Trim(line).empty()) break;
+  bool header = false;
+  while (lines.Next(line)) {
+    if (!TrimView(line).empty()) {
+      header = true;
+      break;
+    }
   }
-  if (Trim(line).empty()) throw CsvError(name + ": empty file (no header row)");
+  if (!header) throw CsvError(name + ": empty file (no header row)");
   table.columns_ = SplitCells(line);
   if (const std::string problem = HeaderProblem(table.columns_); !problem.empty()) {
-    Fail(name, line_number, problem);
+    Fail(name, lines.number(), problem);
   }
   const std::size_t width = table.columns_.size();
-  std::vector<double> values;
+  // Room for every line's values at once (a row per line is the most there can be); the lines
+  // counted with memchr, which is vectorised (std::count over chars is not, at -O2).
+  std::size_t line_count = 1;
+  for (const char* p = text.data();
+       const void* nl =
+           std::memchr(p, '\n', static_cast<std::size_t>(text.data() + text.size() - p));
+       ++line_count) {
+    p = static_cast<const char*>(nl) + 1;
+  }
+  // The values go straight into their columns (column-major, as the table keeps them); the
+  // unused rows are dropped at the end.
+  Eigen::MatrixXd values(static_cast<Eigen::Index>(line_count), static_cast<Eigen::Index>(width));
   std::size_t rows = 0;
-  while (std::getline(in, line)) {
-    ++line_number;
-    if (Trim(line).empty()) continue;
-    const auto cells = SplitCells(line);
-    if (cells.size() != width) {
-      Fail(name, line_number,
-           "expected " + std::to_string(width) + " cells, found " + std::to_string(cells.size()));
-    }
+  while (lines.Next(line)) {
+    if (TrimView(line).empty()) continue;
+    // The cells in place: `width` of them, each a number parsed where it lies (from_chars
+    // stops at the comma); a cell that is not exactly one number, or a wrong cell count, is
+    // reported with the cell's text.
+    const char* at = line.data();
+    const char* const end = line.data() + line.size();
     for (std::size_t c = 0; c < width; ++c) {
+      const char* const cell_start = at;
+      while (at < end && (*at == ' ' || *at == '\t' || *at == '\r')) ++at;
       double v = 0.0;
-      const auto& cell = cells[c];
-      const auto [ptr, ec] = std::from_chars(cell.data(), cell.data() + cell.size(), v);
-      if (cell.empty() || ec != std::errc() || ptr != cell.data() + cell.size()) {
-        Fail(name, line_number,
-             "column '" + table.columns_[c] + "': '" + cell + "' is not a number");
+      const auto [ptr, ec] = std::from_chars(at, end, v);
+      const char* after = ptr;
+      while (after < end && (*after == ' ' || *after == '\t' || *after == '\r')) ++after;
+      const bool last = c + 1 == width;
+      const bool delimited = last ? after == end : (after < end && *after == ',');
+      if (ec != std::errc() || ptr == at || !delimited || !std::isfinite(v)) {
+        CellProblem(name, lines.number(), line, cell_start, table.columns_, c, width);
       }
-      if (!std::isfinite(v)) {
-        Fail(name, line_number, "column '" + table.columns_[c] + "': '" + cell + "' is not finite");
-      }
-      values.push_back(v);
+      values(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(c)) = v;
+      at = after + 1;
     }
     ++rows;
     // Time checks as rows arrive, so the message names the offending line.
-    const std::size_t base = (rows - 1) * width;
     if (rows >= 2) {
+      const auto r = static_cast<Eigen::Index>(rows - 1);
       const std::string problem =
-          TimeProblem(values[0], values[base - width], values[base], rows, table.sample_time_s_);
-      if (!problem.empty()) Fail(name, line_number, problem);
+          TimeProblem(values(0, 0), values(r - 1, 0), values(r, 0), rows, table.sample_time_s_);
+      if (!problem.empty()) Fail(name, lines.number(), problem);
     }
   }
   if (rows < 2)
     throw CsvError(name + ": needs at least 2 data rows, found " + std::to_string(rows));
-  table.data_ =
-      Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
-          values.data(), static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(width));
+  table.data_ = values.topRows(static_cast<Eigen::Index>(rows));
   return table;
 }
 

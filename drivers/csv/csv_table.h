@@ -2,6 +2,7 @@
 #include <Eigen/Core>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace canalid::drivers {
@@ -23,9 +24,10 @@ class CsvTable {
  public:
   /// @throws CsvError
   static CsvTable Read(const std::string& path);
-  /// Parses text as if it were the contents of a file called `name` (for tests and pipes).
+  /// Parses text as if it were the contents of a file called `name` (for tests and pipes), in
+  /// place: the cells are read from `text` without copies.
   /// @throws CsvError
-  static CsvTable Parse(const std::string& text, const std::string& name);
+  static CsvTable Parse(std::string_view text, const std::string& name);
   /// A table from columns in memory (e.g. decoded from a log), checked as Read checks a file;
   /// messages name `source` and the row (1-based, data rows only).  columns[0] is time_s.
   /// @throws CsvError

@@ -2,8 +2,15 @@
 
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace canalid::drivers {
@@ -105,6 +112,55 @@ TEST(CsvTable, FromColumnsRejectsWhatReadRejects) {
 
 TEST(CsvTable, MissingFileIsAnError) {
   EXPECT_THROW(CsvTable::Read("/nonexistent/x.csv"), CsvError);
+}
+
+// The parser reads cells in place: spaces and tabs around a number, blank lines and a last line
+// without its newline are as before; a cell with anything after its number is not a number.
+TEST(CsvTable, CellsAreReadInPlaceWithTheirSpaces) {
+  const CsvTable t = CsvTable::Parse("\n time_s , a\n\n0 ,\t1.5\n 1, -2e-3 \n\n2,3", "f.csv");
+  EXPECT_EQ(t.rows(), 3);
+  EXPECT_EQ(t.columns(), (std::vector<std::string>{"time_s", "a"}));
+  EXPECT_EQ(t.Column("a")(1), -2e-3);
+  EXPECT_EQ(t.Column("a")(2), 3.0);
+  EXPECT_EQ(ErrorOf("time_s,a\n0,1\n1,2 3\n"), "f.csv:3: column 'a': '2 3' is not a number");
+  EXPECT_EQ(ErrorOf("time_s,a\n0,1\n1,+2\n"), "f.csv:3: column 'a': '+2' is not a number");
+  EXPECT_EQ(ErrorOf("time_s,a\n0,1\n1,2,3\n"), "f.csv:3: expected 2 cells, found 3");
+  EXPECT_EQ(ErrorOf("time_s,a\n0,1\n,2\n"), "f.csv:3: column 'time_s': '' is not a number");
+}
+
+// Read maps a regular file and reads anything else (a pipe, /dev/stdin) as a stream, with the
+// same result; a directory is named as such.
+TEST(CsvTable, ReadsFilesAndStreamsAlikeAndRefusesADirectory) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("csv_table_test_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string text = "time_s,a\n0,1\n1,2\n2,4\n";
+  std::ofstream(dir / "f.csv") << text;
+  const CsvTable file = CsvTable::Read((dir / "f.csv").string());
+  EXPECT_EQ(file.Column("a")(2), 4.0);
+  EXPECT_EQ(file.source(), (dir / "f.csv").string());
+  ASSERT_EQ(::mkfifo((dir / "pipe").c_str(), 0600), 0);
+  std::thread writer([&] { std::ofstream(dir / "pipe") << text; });
+  Eigen::VectorXd piped;
+  try {
+    piped = CsvTable::Read((dir / "pipe").string()).Column("a");
+  } catch (const CsvError& e) {
+    ADD_FAILURE() << e.what();
+    // The writer waits for a reader: give it one, so that it ends.
+    const int fd = ::open((dir / "pipe").c_str(), O_RDONLY | O_NONBLOCK);
+    writer.join();
+    ::close(fd);
+    return;
+  }
+  writer.join();
+  EXPECT_EQ(piped, file.Column("a"));
+  try {
+    CsvTable::Read(dir.string());
+    ADD_FAILURE() << "a directory was read";
+  } catch (const CsvError& e) {
+    EXPECT_EQ(std::string(e.what()), dir.string() + ": is a directory, not a CSV file");
+  }
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
