@@ -37,7 +37,10 @@ class OnlineFracSsModel final : public ProcessOnlineModel {
   void FillSnapshot(OnlineModelSnapshot& out) const override {
     const Rls<Eigen::Dynamic>& rls = estimator_.estimator();
     const RlsHealth health = rls.health();
-    SnapshotWriter w = Writer(out, "rls", health.updates > 0, health.updates);
+    // Valid once updated and a_n moved off 0 (the g regressors can be nonzero a few samples
+    // before a_n's: c = g / a_n is undefined until then).
+    const bool valid = health.updates > 0 && estimator_.a(options_.order()) != 0.0;
+    SnapshotWriter w = Writer(out, "rls", valid, health.updates);
     w.Put(options_.delay_samples * sample_time_s(), kNan);
     w.Put(1.0 / options_.q, kNan);
     const int n = options_.order();

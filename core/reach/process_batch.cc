@@ -14,19 +14,19 @@ namespace {
 // needs alpha_min < alpha_max).
 constexpr double kFixedAlphaHalfWidth = 1e-9;
 
-// max_delay_s > 0 in whole samples (the nearest), else -1.
+// max_delay_s >= 0 in whole samples (the nearest), else -1.
 int MaxDelaySamples(double max_delay_s, double sample_time_s) {
-  if (!(max_delay_s > 0.0)) return -1;
+  if (!(max_delay_s >= 0.0)) return -1;
   return static_cast<int>(std::min(std::round(max_delay_s / sample_time_s), 1e9));
 }
 
-// max_delay_s <= 0: no upper bound (the fit's own default bounded it).
+// max_delay_s < 0: no upper bound (the fit's own default bounded it).
 std::string BoundsProblem(double gain, double time_constant_s, double delay_s, double max_delay_s) {
   if (!std::isfinite(gain)) return "gain is not finite";
   if (!(time_constant_s > 0.0 && std::isfinite(time_constant_s))) {
     return "time constant " + std::to_string(time_constant_s) + " s is not > 0";
   }
-  if (!(delay_s >= 0.0 && (max_delay_s <= 0.0 || delay_s <= max_delay_s))) {
+  if (!(delay_s >= 0.0 && (max_delay_s < 0.0 || delay_s <= max_delay_s))) {
     return "delay " + std::to_string(delay_s) + " s is outside [0, " + std::to_string(max_delay_s) +
            "] s";
   }

@@ -33,10 +33,10 @@ std::string_view ProcessBatchKindName(ProcessBatchKind kind);
 /// What a process fit may use: one struct for the daemon's end-of-experiment fits (from the
 /// reach's keys) and `canalid identify --model foptd|soptd|frac-foptd|frac-ss` (from its flags).
 struct ProcessBatchOptions {
-  /// > 0: the longest delay tried (rounded to whole samples where the fit scans samples);
-  /// <= 0: each fit's default (foptd, soptd and arx a third of the record, frac-foptd half of it,
-  /// frac-ss min(record / 10, 100 samples))
-  double max_delay_s = 0.0;
+  /// >= 0: the longest delay kept (rounded to whole samples where the fit scans samples; 0 keeps
+  /// only delay 0, as a reach with max_delay_s = 0 asks); < 0: each fit's default (foptd, soptd
+  /// and arx a third of the record, frac-foptd half of it, frac-ss min(record / 10, 100 samples))
+  double max_delay_s = -1.0;
   int min_delay_samples = 1;  ///< arx: the shortest delay tried (at least 1 sample)
   int arx_na = 2;             ///< arx: output lags (the reach's arx_na)
   int arx_nb = 2;             ///< arx: input lags (the reach's arx_nb)

@@ -93,9 +93,9 @@ void AddIdentifyModelOptions(CLI::App& cmd, IdentifyOptions& options) {
   id->add_option("--qout", options.qout, "Outflow column, m3/s")->capture_default_str();
   id->add_option("--level", options.level, "Downstream level column, m")->capture_default_str();
   id->add_option("--max-delay-s", options.max_delay_s,
-                 "Longest delay tried, s (id: a third of the record; frac-foptd: half; frac-ss: "
-                 "min(record/10, "
-                 "100 samples); lpv arx/frac-ss locals: 20 samples)")
+                 "Longest delay tried, s (id, foptd, soptd: a third of the record; frac-foptd: "
+                 "half; frac-ss: min(record/10, 100 samples); lpv arx/frac-ss locals: 20 "
+                 "samples)")
       ->check(FiniteIn(0.0, 1e9, true));
   AddClosedLoopOption(*id, options.closed_loop);
   id->add_option("--p22", options.p22,

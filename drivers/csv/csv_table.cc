@@ -1,7 +1,6 @@
 #include "drivers/csv/csv_table.h"
 
 #include <fcntl.h>
-#include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -11,6 +10,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <memory>
 #include <string_view>
 #include <unordered_set>
 
@@ -148,44 +148,42 @@ Eigen::VectorXd CsvTable::Column(const std::string& name) const {
 }
 
 CsvTable CsvTable::Read(const std::string& path) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) throw CsvError(path + ": cannot open file");
+  struct Fd {
+    int fd;
+    ~Fd() {
+      if (fd >= 0) ::close(fd);
+    }
+  } file{::open(path.c_str(), O_RDONLY | O_CLOEXEC)};
+  if (file.fd < 0) throw CsvError(path + ": cannot open file");
   struct stat st {};
-  if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_size > 0) {
-    // A regular file is parsed where the kernel maps it: no copy, no zero-filled buffer.
-    const auto size = static_cast<std::size_t>(st.st_size);
-    void* mapped = ::mmap(nullptr, size, PROT_READ, MAP_PRIVATE, fd, 0);
-    ::close(fd);
-    if (mapped == MAP_FAILED) throw CsvError(path + ": cannot read file");
-    struct Unmap {
-      void* at;
-      std::size_t size;
-      ~Unmap() { ::munmap(at, size); }
-    } unmap{mapped, size};
-    return Parse(std::string_view(static_cast<const char*>(mapped), size), path);
-  }
-  if (S_ISDIR(st.st_mode)) {
-    ::close(fd);
+  if (::fstat(file.fd, &st) == 0 && S_ISDIR(st.st_mode)) {
     throw CsvError(path + ": is a directory, not a CSV file");
   }
-  // Not a regular file (a pipe, /dev/stdin) or an empty one: read from the descriptor already
-  // open (a pipe cannot be opened twice).
-  std::string text;
-  char chunk[65536];
+  // One buffer, read from the descriptor already open (a pipe cannot be opened twice), sized
+  // from a regular file's length and grown for anything else; not zero-filled first. (Mapping
+  // the file instead saves the copy but dies of SIGBUS when another process shrinks it.)
+  std::size_t capacity = S_ISREG(st.st_mode) && st.st_size > 0
+                             ? static_cast<std::size_t>(st.st_size) + 1
+                             : std::size_t{65536};
+  auto buffer = std::make_unique_for_overwrite<char[]>(capacity);
+  std::size_t size = 0;
   while (true) {
-    const ssize_t n = ::read(fd, chunk, sizeof chunk);
+    if (size == capacity) {
+      auto bigger = std::make_unique_for_overwrite<char[]>(2 * capacity);
+      std::memcpy(bigger.get(), buffer.get(), size);
+      buffer = std::move(bigger);
+      capacity *= 2;
+    }
+    const ssize_t n = ::read(file.fd, buffer.get() + size, capacity - size);
     if (n > 0) {
-      text.append(chunk, static_cast<std::size_t>(n));
+      size += static_cast<std::size_t>(n);
     } else if (n == 0) {
       break;
     } else if (errno != EINTR) {
-      const int error = errno;
-      ::close(fd);
-      throw CsvError(path + ": cannot read file (" + core::ErrnoText(error) + ")");
+      throw CsvError(path + ": cannot read file (" + core::ErrnoText(errno) + ")");
     }
   }
-  ::close(fd);
-  return Parse(text, path);
+  return Parse(std::string_view(buffer.get(), size), path);
 }
 
 CsvTable CsvTable::Parse(std::string_view text, const std::string& name) {

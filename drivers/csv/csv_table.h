@@ -24,8 +24,8 @@ class CsvTable {
  public:
   /// @throws CsvError
   static CsvTable Read(const std::string& path);
-  /// Parses text as if it were the contents of a file called `name` (for tests and pipes), in
-  /// place: the cells are read from `text` without copies.
+  /// Parses text as if it were the contents of a file called `name` (for tests; Read reads a
+  /// file or pipe into one buffer and parses that), in place: no copies of lines or cells.
   /// @throws CsvError
   static CsvTable Parse(std::string_view text, const std::string& name);
   /// A table from columns in memory (e.g. decoded from a log), checked as Read checks a file;

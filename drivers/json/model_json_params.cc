@@ -68,10 +68,11 @@ std::vector<ModelJsonParam> ModelJsonParams(const nlohmann::json& model) {
       params.push_back({"c" + std::to_string(i), model["C"][i].get<double>(), kNan});
   }
   // The process models' rest point (their deviations are taken from it), named as the online
-  // process kinds name their operating point.
+  // process kinds name their operating point; no standard deviation (foptd, soptd and
+  // frac-foptd fit the output's).
   if (number("input_offset") && number("output_offset")) {
-    params.push_back({"input_operating_point", model["input_offset"].get<double>(), 0.0});
-    params.push_back({"level_operating_point_m", model["output_offset"].get<double>(), 0.0});
+    params.push_back({"input_operating_point", model["input_offset"].get<double>(), kNan});
+    params.push_back({"level_operating_point_m", model["output_offset"].get<double>(), kNan});
   }
   return params;
 }

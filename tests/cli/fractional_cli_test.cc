@@ -201,9 +201,10 @@ TEST_F(FractionalCli, MaxDelayBoundsEveryProcessFit) {
   const std::string input = " --u gate --y level --input " + (dir_ / "step.csv").string();
   for (const std::string kind : {"foptd", "soptd", "frac-foptd", "frac-ss"}) {
     for (const double max_delay_s : {4.5, 1.5}) {
-      const ProgramRun run = RunProgram(CanalidProgram() + " identify --model " + kind +
-                                            " --max-delay-s " + std::to_string(max_delay_s) + input,
-                                        dir_);
+      std::string command = CanalidProgram() + " identify --model " + kind;
+      command += " --max-delay-s " + std::to_string(max_delay_s);
+      command += input;
+      const ProgramRun run = RunProgram(command, dir_);
       ASSERT_EQ(run.exit_code, 0) << kind << "\n" << run.err;
       const nlohmann::json json = nlohmann::json::parse(run.out);
       const double delay_s = json.at("delay_s").get<double>();

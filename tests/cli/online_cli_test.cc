@@ -239,7 +239,7 @@ TEST(OnlineCli, ArxTraceLastRowEqualsThePrintedParameters) {
 // delay scanned) finds the same model.
 TEST(OnlineCli, FracSsFindsACommensuratePlantAsTheBatchFitDoes) {
   const auto dir = TestDirectory("online-frac-ss-plant");
-  constexpr double a1 = 0.5, a2 = 0.1, c1 = 0.5;
+  constexpr double kA1 = 0.5, kA2 = 0.1, kC1 = 0.5;
   constexpr int kDelay = 3;
   std::mt19937 rng(3);
   std::ostringstream csv;
@@ -250,9 +250,9 @@ TEST(OnlineCli, FracSsFindsACommensuratePlantAsTheBatchFitDoes) {
   for (std::size_t k = 0; k < du.size(); ++k) {
     if (k > 0 && k % 5 == 1) held = (rng() & 1U) != 0U ? 0.1 : -0.1;
     du[k] = k == 0 ? 0.0 : held;
-    csv << 2.0 * static_cast<double>(k) << "," << 1.5 + du[k] << "," << 2.0 + x1 + c1 * x2 << "\n";
+    csv << 2.0 * static_cast<double>(k) << "," << 1.5 + du[k] << "," << 2.0 + x1 + kC1 * x2 << "\n";
     const double u_delayed = k >= kDelay ? du[k - kDelay] : 0.0;
-    const double next2 = x2 - a2 * x1 - a1 * x2 + a2 * u_delayed;  // last row -[a2, a1], B = a2
+    const double next2 = x2 - kA2 * x1 - kA1 * x2 + kA2 * u_delayed;  // last row -[a2, a1], B = a2
     x1 += x2;
     x2 = next2;
   }
@@ -264,9 +264,9 @@ TEST(OnlineCli, FracSsFindsACommensuratePlantAsTheBatchFitDoes) {
   EXPECT_EQ(online["model"], "frac-ss");
   EXPECT_EQ(online["delay_s"].get<double>(), 6.0);
   EXPECT_EQ(online["alpha"].get<double>(), 1.0);
-  EXPECT_NEAR(online["a1"].get<double>(), a1, 1e-6) << online.dump();
-  EXPECT_NEAR(online["a2"].get<double>(), a2, 1e-6) << online.dump();
-  EXPECT_NEAR(online["c1"].get<double>(), c1, 1e-5) << online.dump();
+  EXPECT_NEAR(online["a1"].get<double>(), kA1, 1e-6) << online.dump();
+  EXPECT_NEAR(online["a2"].get<double>(), kA2, 1e-6) << online.dump();
+  EXPECT_NEAR(online["c1"].get<double>(), kC1, 1e-5) << online.dump();
   EXPECT_EQ(online["input_operating_point"].get<double>(), 1.5);
   EXPECT_EQ(online["level_operating_point_m"].get<double>(), 2.0);
   const nlohmann::json batch =

@@ -259,8 +259,7 @@ TEST(DaemonCanalsim, DesignedExperimentIdentifiesRestoresReplaysAndResumes) {
   EXPECT_EQ(again->Stop(SIGTERM), 0) << again->output();
 }
 
-// Every model message on `channel` of the run's LCM log, in order.
-// Every model_snapshot_t on `channel` of the LCM log `path`.
+// Every model_snapshot_t on `channel` of the LCM log `path`, in order.
 std::vector<canalid::model_snapshot_t> ModelMessagesIn(const fs::path& path,
                                                        const std::string& channel) {
   std::vector<canalid::model_snapshot_t> messages;

@@ -46,7 +46,7 @@ TEST(ModelJsonParams, ArxAndSoptdArraysAreFlattenedByName) {
 }
 
 // The rest point a process model's deviations are taken from, published as the online process
-// kinds publish their operating point (exact: standard deviation 0).
+// kinds publish their operating point (no standard deviation: some kinds fit it).
 TEST(ModelJsonParams, ProcessOffsetsAreTheOperatingPoint) {
   const nlohmann::json arx = {{"model", "arx"},      {"delay_s", 0.3},
                               {"a", {-0.9}},         {"b_coeffs", {{0.2}}},
@@ -56,9 +56,24 @@ TEST(ModelJsonParams, ProcessOffsetsAreTheOperatingPoint) {
                                                 "level_operating_point_m"}));
   EXPECT_EQ(p[3].value, 1.5);
   EXPECT_EQ(p[4].value, 2.25);
-  EXPECT_EQ(p[4].std_dev, 0.0);
+  EXPECT_TRUE(std::isnan(p[4].std_dev));
   const nlohmann::json one_offset = {{"model", "foptd"}, {"gain", 0.5}, {"input_offset", 1.0}};
   EXPECT_EQ(Names(ModelJsonParams(one_offset)), (std::vector<std::string>{"gain"}));
+}
+
+// frac-ss's coefficients from its companion form: A's last row is -[a2, a1], C is [1, c1].
+TEST(ModelJsonParams, FracSsCoefficientsComeFromItsCompanionForm) {
+  const nlohmann::json frac_ss = {
+      {"model", "frac-ss"}, {"q", 1},           {"alpha", 1.0},  {"A", {{0.0, 1.0}, {-0.1, -0.5}}},
+      {"B", {0.0, 0.1}},    {"C", {1.0, 0.25}}, {"delay_s", 6.0}};
+  const std::vector<ModelJsonParam> p = ModelJsonParams(frac_ss);
+  EXPECT_EQ(Names(p), (std::vector<std::string>{"delay_s", "alpha", "a1", "a2", "c1"}));
+  EXPECT_EQ(p[2].value, 0.5);
+  EXPECT_EQ(p[3].value, 0.1);
+  EXPECT_EQ(p[4].value, 0.25);
+  nlohmann::json ragged = frac_ss;
+  ragged["C"] = {1.0};  // not one per state: left out
+  EXPECT_EQ(Names(ModelJsonParams(ragged)), (std::vector<std::string>{"delay_s", "alpha"}));
 }
 
 TEST(ModelJsonParams, MalformedOrMultiInputArraysAreLeftOut) {
