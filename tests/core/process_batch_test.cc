@@ -168,6 +168,29 @@ TEST(ProcessBatch, FracSsFindsTheDelayAndCoefficientsOfACommensuratePlant) {
   EXPECT_LT(short_scan.commensurate->metrics.fit_percent, r.commensurate->metrics.fit_percent);
 }
 
+// max_delay_s = 0 (a reach whose delays stop at 0) keeps only delay 0: the flume's 3 s delay is
+// out of bounds, and arx has no delay to scan; a negative one is each fit's own default.
+TEST(ProcessBatch, MaxDelayZeroKeepsOnlyDelayZero) {
+  FoptdFlume flume;
+  Eigen::VectorXd u(800), y(800);
+  for (Eigen::Index k = 0; k < u.size(); ++k) {
+    u(k) = k < 100 ? 0.015 : 0.017;
+    y(k) = flume.Step(u(k));
+  }
+  ProcessBatchOptions zero;
+  zero.max_delay_s = 0.0;
+  const ProcessBatchResult foptd = FitProcessBatch(ProcessBatchKind::kFoptd, u, y, kTs, zero);
+  ASSERT_TRUE(foptd.fitted());
+  EXPECT_NE(foptd.problem.find("is outside [0, 0"), std::string::npos) << foptd.problem;
+  const ProcessBatchResult arx = FitProcessBatch(ProcessBatchKind::kArx, u, y, kTs, zero);
+  EXPECT_FALSE(arx.fitted());
+  EXPECT_NE(arx.problem.find("too short for delays of 1 samples"), std::string::npos)
+      << arx.problem;
+  const ProcessBatchResult free = FitProcessBatch(ProcessBatchKind::kFoptd, u, y, kTs, {});
+  ASSERT_TRUE(free.ok()) << free.problem;
+  EXPECT_NEAR(free.foptd->model.delay_s, static_cast<double>(kDelaySamples) * kTs, 0.5 * kTs);
+}
+
 TEST(ProcessBatch, WithoutAnyModelTheExperimentFailsAndSaysWhy) {
   ReachSampleProcessorOptions o = FlumeOptions(false);
   o.batch_process_models.clear();
