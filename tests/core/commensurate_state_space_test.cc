@@ -6,6 +6,8 @@
 #include <random>
 #include <stdexcept>
 
+#include "tests/core/commensurate_test_models.h"
+
 namespace canalid::core {
 namespace {
 
@@ -15,39 +17,9 @@ double LogGamma(double x) {
   return ::lgamma_r(x, &sign);
 }
 
-// The LPV paper, Table 3, pool P1, OP1: alpha = 0.5 (b1..b7) and alpha = 0.25 (c1..c15), nk = 17.
-CommensurateModel SeedOneHalf() {
-  CommensurateModel m;
-  m.q = 2;
-  m.a.resize(4);
-  m.a << -0.1313, 0.0370, 0.0019, 0.0995e-3;
-  m.c.resize(3);
-  m.c << 55.082, -345.72, 633.48;
-  m.delay_samples = 17;
-  return m;
-}
-
-CommensurateModel SeedOneQuarter() {
-  CommensurateModel m;
-  m.q = 4;
-  m.a.resize(8);
-  m.a << -2.1318, 2.0729, -1.1719, 0.4176, -0.0948, 0.0133, -0.0010, 0.0464e-3;
-  m.c.resize(7);
-  m.c << -3.1753, 2.1646, 2.2736, 0.3424, -1.3216, -2.0112, -1.9148;
-  m.delay_samples = 17;
-  return m;
-}
-
-CommensurateModel IntegerSecondOrder() {
-  CommensurateModel m;
-  m.q = 1;
-  m.a.resize(2);
-  m.a << 0.5, 0.1;  // x[k+1] = (I + A) x[k] + B u: poles of z^2 - 1.5 z + 0.6, inside the circle
-  m.c.resize(1);
-  m.c << 0.5;
-  m.delay_samples = 3;
-  return m;
-}
+using testdata::IntegerSecondOrder;
+using testdata::SeedOneHalf;
+using testdata::SeedOneQuarter;
 
 // Independent implementation: dense companion matrices and weights from the Gamma function,
 // w_j = Gamma(j - alpha) / (Gamma(-alpha) Gamma(j + 1)).

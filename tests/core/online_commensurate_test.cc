@@ -10,33 +10,13 @@
 #include <string>
 
 #include "core/fractional/commensurate_state_space.h"
+#include "tests/core/commensurate_test_models.h"
 
 namespace canalid::core {
 namespace {
 
-// The LPV paper, Table 3, pool P1, OP1, alpha = 0.5 (as commensurate_state_space_test), and an
-// integer second-order model (q = 1).
-CommensurateModel SeedOneHalf() {
-  CommensurateModel m;
-  m.q = 2;
-  m.a.resize(4);
-  m.a << -0.1313, 0.0370, 0.0019, 0.0995e-3;
-  m.c.resize(3);
-  m.c << 55.082, -345.72, 633.48;
-  m.delay_samples = 17;
-  return m;
-}
-
-CommensurateModel IntegerSecondOrder() {
-  CommensurateModel m;
-  m.q = 1;
-  m.a.resize(2);
-  m.a << 0.5, 0.1;
-  m.c.resize(1);
-  m.c << 0.5;
-  m.delay_samples = 3;
-  return m;
-}
+using testdata::IntegerSecondOrder;
+using testdata::SeedOneHalf;
 
 // A +-1 random binary input held `hold` samples (deterministic).
 Eigen::VectorXd Prbs(int samples, int hold, unsigned seed) {

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/reach/reach_sample_processor.h"
+#include "tests/core/commensurate_test_models.h"
 
 namespace canalid::core {
 namespace {
@@ -124,13 +125,7 @@ TEST(ProcessBatch, AnExperimentGivesTheFoptdOfTheFlumeFromBothKinds) {
 // 17 samples), simulated by SimulateCommensurate around a rest point: frac-ss finds the delay by
 // its scan and the coefficients (the record at rest before the input moves, full GL memory).
 TEST(ProcessBatch, FracSsFindsTheDelayAndCoefficientsOfACommensuratePlant) {
-  CommensurateModel m;
-  m.q = 2;
-  m.a.resize(4);
-  m.a << -0.1313, 0.0370, 0.0019, 0.0995e-3;
-  m.c.resize(3);
-  m.c << 55.082, -345.72, 633.48;
-  m.delay_samples = 17;
+  const CommensurateModel m = testdata::SeedOneHalf();
   const int samples = 700;
   // A random binary input held 7 samples, at rest (0) at the first sample.
   Eigen::VectorXd du(samples);
