@@ -1,6 +1,7 @@
 #include "core/online/estimator_bank.h"
 
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -41,6 +42,11 @@ void BankSelector::Reset() {
   switches_ = 0;
 }
 
+void BankSelector::SetLoss(int i, double loss) {
+  loss_[static_cast<std::size_t>(i)] =
+      std::isfinite(loss) ? loss : std::numeric_limits<double>::infinity();
+}
+
 void BankSelector::Record(int i, double prediction_error) {
   // The warm-up errors (estimators still converging from theta = 0) would dominate the average
   // for many memory lengths: they are not recorded.
@@ -59,6 +65,11 @@ int BankSelector::Commit() {
   int best = 0;
   for (int i = 1; i < num_candidates(); ++i) {
     if (loss(i) < loss(best)) best = i;
+  }
+  if (options_.criterion == BankCriterion::kResidual) {
+    if (selected_ >= 0 && best != selected_) ++switches_;
+    selected_ = best;
+    return selected_;
   }
   if (selected_ < 0) {
     selected_ = best;

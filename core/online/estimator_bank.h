@@ -1,10 +1,26 @@
 #pragma once
+#include <cstdint>
 #include <vector>
 
 namespace canalid::core {
 
+/// What BankSelector compares.
+enum class BankCriterion : std::uint8_t {
+  /// Each candidate's exponentially weighted squared a-priori prediction error (Record), with
+  /// hysteresis: noise-driven switches are damped, but the choice depends on the path (which
+  /// candidate led while the estimators converged).
+  kPredictionError,
+  /// Each candidate's own least-squares loss (SetLoss: its residual sum of squares, weighted by
+  /// its forgetting), the smallest taken on every sample, no hysteresis.  With lambda = 1 and a
+  /// large P0 this is the loss a batch scan over the same rows minimises, so the bank chooses the
+  /// batch fit's candidate at every sample.
+  kResidual,
+};
+
 /// Options of BankSelector.
 struct BankSelectorOptions {
+  BankCriterion criterion = BankCriterion::kPredictionError;
+  // kPredictionError only: the loss's memory and the hysteresis.
   double loss_forgetting = 0.99;  ///< gamma of the loss J_i <- gamma J_i + (1 - gamma) e_i^2
   double switch_margin = 0.1;     ///< a challenger must have J < (1 - margin) J_selected ...
   int switch_hold_samples = 20;   ///< ... on this many consecutive samples to take over
@@ -14,17 +30,23 @@ struct BankSelectorOptions {
   void Validate() const;
 };
 
-/// Chooses one of a bank of estimators by the exponentially weighted squared a-priori prediction
-/// error, with hysteresis: the selection changes only when the best candidate beats the selected
-/// one by the margin on switch_hold_samples consecutive samples (the first choice after the
-/// warm-up is simply the best).  Allocates only in the constructor.  Pure, not thread-safe.
+/// Chooses one of a bank of estimators (BankCriterion).  kPredictionError: by the exponentially
+/// weighted squared a-priori prediction error, with hysteresis: the selection changes only when
+/// the best candidate beats the selected one by the margin on switch_hold_samples consecutive
+/// samples (the first choice after the warm-up is simply the best).  kResidual: the candidate of
+/// smallest loss after each sample past the warm-up (ties: the first).  Allocates only in the
+/// constructor.  Pure, not thread-safe.
 class BankSelector final {
  public:
   /// @throws std::invalid_argument if num_candidates < 1 or an option is out of range.
   BankSelector(int num_candidates, const BankSelectorOptions& options);
 
-  /// Records candidate i's a-priori error of the current sample (non-finite errors are ignored).
+  /// kPredictionError: records candidate i's a-priori error of the current sample (non-finite
+  /// errors are ignored).
   void Record(int i, double prediction_error);
+  /// kResidual: candidate i's loss after the current sample (non-finite: the candidate is not
+  /// chosen until its loss is finite again).
+  void SetLoss(int i, double loss);
   /// Closes the sample: updates the choice.  Returns the selected index (-1 during the warm-up).
   int Commit();
 

@@ -69,8 +69,13 @@ bool OnlineArxBank::Update(double u, double y) {
       const int nk = options_.min_delay_samples + c;
       if (k_ - nk - options_.nb + 1 <= last_bad_u_ && last_bad_u_ <= k_ - nk) continue;
       for (int j = 0; j < options_.nb; ++j) phi_(options_.na + j) = u_history_[nk + j];
-      const auto result = estimators_[static_cast<std::size_t>(c)].Update(phi_, y);
-      selector_.Record(c, result.prediction_error);
+      Rls<Eigen::Dynamic>& rls = estimators_[static_cast<std::size_t>(c)];
+      const auto result = rls.Update(phi_, y);
+      if (options_.selector.criterion == BankCriterion::kResidual) {
+        selector_.SetLoss(c, rls.residual_sum_of_squares());
+      } else {
+        selector_.Record(c, result.prediction_error);
+      }
     }
     selector_.Commit();
     updated = true;

@@ -25,7 +25,10 @@ struct OnlineArxOptions {
   int min_delay_samples = 1;  ///< >= 0
   int max_delay_samples = 1;  ///< >= min_delay_samples
   RlsOptions rls;             ///< per candidate (n = na + nb)
-  BankSelectorOptions selector;
+  /// The delay's choice.  Default kResidual: the candidate of smallest least-squares loss, so
+  /// that with lambda = 1 the bank's nk is a batch scan's over the same rows (a candidate skips
+  /// the rows a bad u enters, so its loss then covers a few rows fewer).
+  BankSelectorOptions selector{.criterion = BankCriterion::kResidual};
   double input_abs_max = 1e9;   ///< |u| above it (or non-finite) is absurd
   double output_abs_max = 1e9;  ///< |y| above it (or non-finite) is absurd
 

@@ -11,6 +11,13 @@
 namespace canalid::core {
 namespace {
 
+// An IV estimate does not minimise its residuals, so the IV bank keeps the prediction-error
+// criterion (OnlineIntegratorDelayOptions::selector).
+BankSelectorOptions IvSelectorOptions(BankSelectorOptions options) {
+  options.criterion = BankCriterion::kPredictionError;
+  return options;
+}
+
 [[noreturn]] void Fail(const char* name, double value, const char* range) {
   ThrowOptionOutOfRange("OnlineIntegratorDelayOptions", name, value, range);
 }
@@ -107,7 +114,8 @@ OnlineIntegratorDelayBank::OnlineIntegratorDelayBank(const OnlineIntegratorDelay
     : options_(options),
       selector_((options.Validate(), options.max_delay_samples - options.min_delay_samples + 1),
                 options.selector),
-      iv_selector_(options.max_delay_samples - options.min_delay_samples + 1, options.selector),
+      iv_selector_(options.max_delay_samples - options.min_delay_samples + 1,
+                   IvSelectorOptions(options.selector)),
       q_in_history_(options.max_delay_samples + 1) {
   const int n = options_.max_delay_samples - options_.min_delay_samples + 1;
   const auto un = static_cast<std::size_t>(n);
@@ -258,20 +266,40 @@ void OnlineIntegratorDelayBank::UpdateCandidates(std::vector<Rls<N>>& estimators
     } else {
       phi << q_integrated_[ui] - q_centre_[ui], 1.0, t - t_centre_;
     }
+    Rls<N>& rls = estimators[ui];
+    if (options_.selector.criterion == BankCriterion::kResidual) {
+      rls.Update(phi, level_m);
+      selector_.SetLoss(i, ResidualLoss<N>(rls));
+      continue;
+    }
     double constrained_error = 0.0;
-    const bool constrained =
-        N == 4 && options_.wave_front_non_negative && estimators[ui].theta()(1) < 0.0;
+    const bool constrained = N == 4 && options_.wave_front_non_negative && rls.theta()(1) < 0.0;
     if (constrained) {
       Eigen::Matrix<double, N, N> p;
-      estimators[ui].Covariance(p);
-      constrained_error = level_m - phi.dot(Constrained<N>(estimators[ui].theta(), p));
+      rls.Covariance(p);
+      constrained_error = level_m - phi.dot(Constrained<N>(rls.theta(), p));
     }
-    const auto result = estimators[ui].Update(phi, level_m);
+    const auto result = rls.Update(phi, level_m);
     // The selector sees the error of the estimate the snapshot reports (p21 >= 0).
     selector_.Record(i, constrained && std::isfinite(result.prediction_error)
                             ? constrained_error
                             : result.prediction_error);
   }
+}
+
+template <int N>
+double OnlineIntegratorDelayBank::ResidualLoss(const Rls<N>& rls) const {
+  const double loss = rls.residual_sum_of_squares();
+  if constexpr (N == 4) {
+    // The snapshot reports the p21 = 0 fit when p21 < 0: its residual sum of squares is the free
+    // fit's plus p21^2 / P22 (the equality-constrained least squares, P relative to sigma2).
+    const double p21 = rls.theta()(1);
+    if (options_.wave_front_non_negative && p21 < 0.0) {
+      const double p21_variance = rls.CovarianceDiagonal(1);
+      return p21_variance > 0.0 ? loss + p21 * p21 / p21_variance : loss;
+    }
+  }
+  return loss;
 }
 
 template <int N>

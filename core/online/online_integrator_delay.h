@@ -56,7 +56,14 @@ struct OnlineIntegratorDelayOptions {
   /// fixed-gate pool 2 record ended with areas of 0-748 m^2, so the bank could not choose the
   /// batch's nk = 12.)
   bool wave_front_non_negative = false;
-  BankSelectorOptions selector;
+  /// The delay's choice.  Default kResidual: the candidate of smallest least-squares loss (with
+  /// p21 >= 0: of the reported, constrained fit), so that with lambda = 1 the bank's delay is the
+  /// batch FitIntegratorDelay scan's at every sample.  The least-squares bank only: the IV bank
+  /// (closed_loop) always chooses by the a-priori error, an IV estimate not being a least-squares
+  /// one.  kPredictionError, the choice before (see BankCriterion), depended on which candidate
+  /// led while the estimators converged: on the demo's closed-loop pool 2 record, P0 = 1e6
+  /// settled on 480 s and P0 = 1e10 on 660 s, the batch scan's delay.
+  BankSelectorOptions selector{.criterion = BankCriterion::kResidual};
   /// Re-centring period of the regressor (samples): 0 = automatic, i.e. never for lambda = 1 and
   /// ceil(1 / (1 - lambda)) (one memory length) otherwise; < 0 = never.
   int recentre_samples = 0;
@@ -192,7 +199,8 @@ struct IntegratorDelayBankHealth {
 ///
 /// A non-finite or absurd flow is replaced by the last good value of that flow (so the
 /// integrators stay continuous) and counted; a bad level skips the regression update for that
-/// sample.  The selector (BankSelector) picks nk by the weighted a-priori error with hysteresis.
+/// sample.  The selector (BankSelector) picks nk by each candidate's least-squares loss (or, by
+/// option, the weighted a-priori error with hysteresis).
 /// Allocates only in the constructor; Update and the snapshots never allocate.  Deterministic.
 class OnlineIntegratorDelayBank final {
  public:
@@ -220,6 +228,9 @@ class OnlineIntegratorDelayBank final {
   static Eigen::Matrix<double, N, N> CentreShift(double dq, double dt);
   /// theta with p21 >= 0 (wave_front_non_negative): theta itself, or the estimate constrained
   /// to p21 = 0 through the gain g (P or the IV gain).
+  /// The candidate's least-squares loss as the kResidual selector compares it.
+  template <int N>
+  double ResidualLoss(const Rls<N>& rls) const;
   template <int N>
   Eigen::Matrix<double, N, 1> Constrained(const Eigen::Matrix<double, N, 1>& theta,
                                           const Eigen::Matrix<double, N, N>& g) const;

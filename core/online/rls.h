@@ -75,8 +75,13 @@ class Rls final {
   void StandardDeviations(Vector& out) const;
   /// sqrt(sigma2 P_ii) of one parameter (O(n)); NaN for NLMS.  @pre 0 <= i < num_params().
   double StandardDeviation(int i) const;
+  /// P_ii, relative to sigma2 (O(n) for the UD form); NaN for NLMS.  @pre 0 <= i < n.
+  double CovarianceDiagonal(int i) const;
   /// sigma2, the innovation variance estimate.
   double innovation_variance() const { return health_.innovation_variance; }
+  /// V of step 6, the weighted sum of the squared normalised innovations: with lambda = nu = 1
+  /// and a large P0, the batch least-squares residual sum of squares of the samples given.
+  double residual_sum_of_squares() const { return ssr_; }
   double last_prediction_error() const { return last_error_; }
   /// Counters and flags of the last update; trace(P) and the condition estimate are computed
   /// here (O(n^2), no allocation) so that Update does not pay for them.
@@ -251,6 +256,12 @@ void Rls<N>::Transform(const Matrix& t) {
 template <int N>
 double Rls<N>::StandardDeviation(int i) const {
   if (options_.method == RlsMethod::kNlms) return std::numeric_limits<double>::quiet_NaN();
+  return std::sqrt(std::max(0.0, health_.innovation_variance * CovarianceDiagonal(i)));
+}
+
+template <int N>
+double Rls<N>::CovarianceDiagonal(int i) const {
+  if (options_.method == RlsMethod::kNlms) return std::numeric_limits<double>::quiet_NaN();
   double pii = 0.0;
   // clang-tidy 14 compares the branches of a template's instantiation and calls them identical
   // (they are not: UD factors vs P); the false positive is reported only there.
@@ -260,7 +271,7 @@ double Rls<N>::StandardDeviation(int i) const {
   } else {
     pii = p_(i, i);
   }
-  return std::sqrt(std::max(0.0, health_.innovation_variance * pii));
+  return pii;
 }
 
 template <int N>

@@ -104,6 +104,47 @@ TEST(OnlineIdWaveFront, NonNegativeWaveFrontEqualsTheBatchAtEveryDelay) {
   EXPECT_GT(constrained, 0);  // the record does exercise the constraint
 }
 
+// The bank's default delay choice (BankCriterion::kResidual) is the batch scan's at every sample:
+// on both records (the fixed-gate one in closed loop, where the a-priori error criterion's choice
+// depended on P0: 480 s or 660 s on the demo's record), at checkpoints through the record, the
+// selected nk equals FitIntegratorDelay's on the samples so far, and every candidate's loss
+// equals the scan's residual sum of squares (its mean squared residual, from a Frisch-Waugh-Lovell
+// reduction the bank does not share, times the rows), the p21 >= 0 ones included.
+TEST(OnlineIdWaveFront, ResidualCriterionChoosesTheBatchScanDelayAtEverySample) {
+  for (const char* name : {"asce2-pool2-prbs.csv", "asce2-pool2-prbs-fixed-gate.csv"}) {
+    const PoolRecord r = ReadPoolRecord(name);
+    const int max_nk = 30;
+    OnlineIntegratorDelayOptions o;
+    o.sample_time_s = r.ts;
+    o.max_delay_samples = max_nk;
+    o.wave_front_term = true;
+    o.wave_front_non_negative = true;
+    o.rls.initial_covariance = 1e10;
+    ASSERT_EQ(o.selector.criterion, BankCriterion::kResidual);
+    OnlineIntegratorDelayBank bank(o);
+    const auto n = r.level.size();
+    int checked = 0;
+    for (Eigen::Index k = 0; k < n; ++k) {
+      bank.Update(r.q_in(k), r.q_out(k), r.level(k));
+      const Eigen::Index rows = k + 1 - (max_nk + 1);
+      if (rows < 60 || (rows % 40 != 0 && k != n - 1)) continue;
+      IntegratorDelayFitOptions fit_options;
+      fit_options.max_nk = max_nk;
+      fit_options.closed_loop = ClosedLoopMode::kOff;
+      const IntegratorDelayFit batch = FitIntegratorDelay(r.q_in.head(k + 1), r.q_out.head(k + 1),
+                                                          r.level.head(k + 1), r.ts, fit_options);
+      EXPECT_EQ(bank.selected_delay_samples(), batch.model.nk) << name << " sample " << k;
+      for (int nk = 0; nk <= max_nk; ++nk) {
+        const double scan_ssr = batch.loss_by_nk(nk) * static_cast<double>(rows);
+        EXPECT_LT(Rel(bank.CandidateSnapshot(nk).loss, scan_ssr), 1e-6)
+            << name << " sample " << k << " nk " << nk;
+      }
+      ++checked;
+    }
+    EXPECT_GT(checked, 5) << name;
+  }
+}
+
 // Re-centring with the wave-front term is still an exact re-parameterisation.
 TEST(OnlineIdWaveFront, RecentringDoesNotChangeTheFit) {
   const PoolRecord r = ReadPoolRecord("asce2-pool2-prbs.csv");
