@@ -99,6 +99,10 @@ struct OnlineModelOptions {
   void Validate() const;
 };
 
+/// The recursive least squares of every kind with `num_params` parameters: the settings' method,
+/// forgetting and P0 = initial_covariance I (constant trace holds the initial trace).
+RlsOptions RlsOptionsFor(const OnlineModelSettings& settings, int num_params);
+
 /// `kind`'s options from the settings: delays round(seconds / Ts); throws
 /// std::invalid_argument naming the setting when the result is out of range.
 OnlineModelOptions OnlineModelOptionsFor(OnlineModelKind kind, const OnlineModelSettings& settings);

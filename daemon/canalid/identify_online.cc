@@ -3,8 +3,6 @@
 // model's JSON keys (docs/model-json.md) plus `estimator` and `health`.
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <map>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -14,52 +12,18 @@
 #include "core/linear/arx.h"
 #include "core/numerics/metrics.h"
 #include "core/online/online_integrator_delay.h"
+#include "core/online/online_model.h"
 #include "core/online/rls.h"
 #include "daemon/canalid/closed_loop_option.h"
 #include "daemon/canalid/identify_command.h"
 #include "daemon/canalid/input_error.h"
+#include "daemon/canalid/online_settings_flags.h"
 #include "daemon/canalid/table_columns.h"
 #include "daemon/canalid/trace_writer.h"
 #include "drivers/json/model_json.h"
 
 namespace canalid::cli {
 namespace {
-
-// A large initial covariance, so that with forgetting 1 the estimates are the batch least-squares
-// ones (the prior's weight ||theta||^2 / P0 is negligible against the data's information).
-constexpr double kInitialCovariance = 1e10;
-
-core::RlsOptions ParseRlsOptions(const IdentifyOptions& options, int num_params) {
-  static const std::map<std::string, core::RlsMethod> kMethods = {
-      {"ud_directional", core::RlsMethod::kUdDirectional},
-      {"ud_exponential", core::RlsMethod::kUdExponential},
-      {"exponential", core::RlsMethod::kExponential},
-      {"directional", core::RlsMethod::kDirectional},
-      {"constant_trace", core::RlsMethod::kConstantTrace},
-      {"stabilised", core::RlsMethod::kStabilised},
-      {"kalman", core::RlsMethod::kKalman},
-      {"nlms", core::RlsMethod::kNlms}};
-  const auto method = kMethods.find(options.method);
-  if (method == kMethods.end()) {
-    throw InputError("--method " + options.method +
-                     ": unknown (allowed: ud_directional, ud_exponential, exponential, "
-                     "directional, constant_trace, stabilised, kalman, nlms)");
-  }
-  if (!(options.forgetting > 0.0 && options.forgetting <= 1.0)) {
-    char value[32];
-    std::snprintf(value, sizeof value, "%g", options.forgetting);
-    throw InputError(std::string("--forgetting ") + value + ": out of range (0 < L <= 1)");
-  }
-  core::RlsOptions rls;
-  rls.method = method->second;
-  rls.forgetting = options.forgetting;
-  rls.initial_covariance = kInitialCovariance;
-  // Constant trace needs a finite trace to hold: the initial one.
-  if (rls.method == core::RlsMethod::kConstantTrace) {
-    rls.trace_max = num_params * kInitialCovariance;
-  }
-  return rls;
-}
 
 nlohmann::json HealthJson(const core::RlsHealth& h) {
   return {{"trace_p", h.trace_p},
@@ -93,23 +57,27 @@ nlohmann::json OnlineId(const IdentifyOptions& options, const drivers::CsvTable&
     level = cleaned.cleaned;
     outliers = cleaned.report;
   }
-  core::OnlineIntegratorDelayOptions id;
-  id.sample_time_s = ts;
-  id.min_delay_samples = 0;
-  id.max_delay_samples = options.max_delay_s > 0.0
-                             ? OptionSamples(options.max_delay_s, table, "--max-delay-s", false)
-                             : static_cast<int>(n / 3);
-  id.wave_front_term = true;
-  id.rls = ParseRlsOptions(options, 4);
+  // The id kind's options through the registry's one function (the daemon's), from the flags.
+  core::OnlineModelSettings settings = OnlineSettingsFromFlags(options, table);
+  const int max_delay_samples =
+      options.max_delay_s > 0.0 ? OptionSamples(options.max_delay_s, table, "--max-delay-s", false)
+                                : static_cast<int>(n / 3);
+  settings.min_delay_s = 0.0;
+  settings.max_delay_s = max_delay_samples * ts;
+  // With p21 >= 0 as in the batch fit: a negative wave-front gain lets Q_(nk-1) - b q_in(k-nk+1)
+  // mimic Q_nk, so the delay would be ambiguous by one sample.
+  settings.wave_front_term = true;
   // on (three-step) = the recursive three-step method (core::OnlineThreeStep), iv =
   // instrumental-variable RLS, off = least squares, auto = IV and LS over the first samples, then
   // FitIntegratorDelay's closed-loop test picks one (core::OnlineIntegratorDelayOptions).
-  id.closed_loop = ParseClosedLoop(options.closed_loop);
-  id.outflow_direct_gain_s_per_m2 = std::max(options.p22, 0.0);  // not given: plain ID
-  // p21 >= 0 as in the batch fit: a negative wave-front gain lets Q_(nk-1) - b q_in(k-nk+1) mimic
-  // Q_nk, so the delay would be ambiguous by one sample.  Not by the RLS box: a clamped theta
-  // with an unconstrained P never recovers (core::OnlineIntegratorDelayOptions).
-  id.wave_front_non_negative = true;
+  settings.closed_loop = ParseClosedLoop(options.closed_loop);
+  settings.p22_s_per_m2 = std::max(options.p22, 0.0);  // not given: plain ID
+  core::OnlineIntegratorDelayOptions id;
+  try {
+    id = core::OnlineModelOptionsFor(core::OnlineModelKind::kIntegratorDelay, settings).id;
+  } catch (const std::invalid_argument& e) {
+    throw InputError(e.what());
+  }
   if (id.max_delay_samples + 20 >= n) {
     throw InputError(table.source() + ": " + std::to_string(n) +
                      " samples are too few for delays up to " +
@@ -200,7 +168,7 @@ nlohmann::json OnlineArx(const IdentifyOptions& options, const drivers::CsvTable
     throw InputError(table.source() + ": " + std::to_string(n - first) + " equations for " +
                      std::to_string(d) + " ARX parameters");
   }
-  core::Rls<Eigen::Dynamic> rls(ParseRlsOptions(options, d), d);
+  core::Rls<Eigen::Dynamic> rls(core::RlsOptionsFor(OnlineSettingsFromFlags(options, table), d), d);
   std::vector<std::string> names;
   for (int j = 1; j <= orders.na; ++j) names.push_back("a" + std::to_string(j));
   for (std::size_t i = 0; i < inputs.size(); ++i) {

@@ -10,6 +10,7 @@
 #include "core/online/online_model.h"
 #include "daemon/canalid/identify_command.h"
 #include "daemon/canalid/input_error.h"
+#include "daemon/canalid/online_settings_flags.h"
 #include "daemon/canalid/table_columns.h"
 #include "daemon/canalid/trace_writer.h"
 #include "daemon/config/config_loader.h"
@@ -18,9 +19,6 @@
 
 namespace canalid::cli {
 namespace {
-
-// As identify_online.cc: with forgetting 1 the estimates are the batch least-squares ones.
-constexpr double kInitialCovariance = 1e10;
 
 // The signals of the registry's OnlineSample, one column each (empty: not used by the kind).
 struct OnlineColumns {
@@ -58,20 +56,7 @@ core::OnlineModelSettings IdzSettings(const IdentifyOptions& o, const drivers::C
 
 core::OnlineModelSettings SettingsFromFlags(const IdentifyOptions& o,
                                             const drivers::CsvTable& table, OnlineColumns& c) {
-  core::OnlineModelSettings s;
-  s.sample_time_s = table.sample_time_s();
-  const auto method = config::EnumFromName<core::RlsMethod>(o.method);
-  if (!method) {
-    throw InputError("--method " + o.method +
-                     ": unknown (allowed: " + config::AllowedNames<core::RlsMethod>() + ")");
-  }
-  if (!(o.forgetting > 0.0 && o.forgetting <= 1.0)) {
-    throw InputError("--forgetting " + std::to_string(o.forgetting) +
-                     ": out of range (0 < L <= 1)");
-  }
-  s.rls_method = *method;
-  s.forgetting = o.forgetting;
-  s.initial_covariance = kInitialCovariance;
+  core::OnlineModelSettings s = OnlineSettingsFromFlags(o, table);
   if (o.model == "idz") return IdzSettings(o, table, s, c);
   const int nk = SingleInteger("--nk", o.nk);
   if (nk < 0 || nk >= table.rows() / 2) {
