@@ -64,10 +64,10 @@ TEST(OnlineIdWaveFront, ForgettingOneEqualsBatchOpenLoopFit) {
 }
 
 // p21 >= 0 (wave_front_non_negative, as `identify --online` runs the bank) equals the batch at
-// every delay, the constrained ones included: where the unconstrained p21 is negative the batch
-// refits without the column, and so must the candidate.  The RLS box (clamping theta inside the
-// recursion) did not: on this record it left nk 8-13 of 0..280 with areas of 0-748 m^2, and the
-// bank chose 14 against the batch's 12.
+// every delay, the constrained ones included (and so does the batch scan's loss, against QR): where
+// the unconstrained p21 is negative the batch refits without the column, and so must the candidate.
+// The RLS box (clamping theta inside the recursion) did not: on this record it left nk 8-13 of
+// 0..280 with areas of 0-748 m^2, and the bank chose 14 against the batch's 12.
 TEST(OnlineIdWaveFront, NonNegativeWaveFrontEqualsTheBatchAtEveryDelay) {
   const PoolRecord r = ReadPoolRecord("asce2-pool2-prbs-fixed-gate.csv");
   const int max_nk = 30;
@@ -96,6 +96,9 @@ TEST(OnlineIdWaveFront, NonNegativeWaveFrontEqualsTheBatchAtEveryDelay) {
       const Eigen::VectorXd t3 = reduced.householderQr().solve(y);
       theta << t3(0), 0.0, t3(1), t3(2);
     }
+    // The batch scan's loss (one fused pass of inner products) against the QR residual.
+    const double qr_loss = (y - a * theta).squaredNorm() / static_cast<double>(y.size());
+    EXPECT_LT(Rel(batch.loss_by_nk(nk), qr_loss), 1e-9) << nk;
     const IntegratorDelaySnapshot c = bank.CandidateSnapshot(nk);
     EXPECT_LT(Rel(c.b, theta(0)), 1e-6) << nk << " " << c.b << " " << theta(0);
     EXPECT_GE(c.wave_front_gain_s_per_m2, 0.0) << nk;
