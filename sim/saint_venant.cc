@@ -41,7 +41,7 @@ SaintVenantCanal::SaintVenantCanal(const Canal& canal) : canal_(canal) {
   x_.setZero(n);
   residual_.setZero(n);
   delta_.setZero(n);
-  jacobian_.resize(n, n);
+  jacobian_ = BandedMatrix(n, kJacobianLowerBand, kJacobianUpperBand);
   BuildSteadyState();
   for (const LevelControl& c : canal_.level_controls) {
     LevelPidConfig config = c.pid;
@@ -165,18 +165,12 @@ double SaintVenantCanal::Volume() const {
   return v;
 }
 
-void SaintVenantCanal::Add(int row, int col, double value) {
-  if (recording_) {
-    triplets_.emplace_back(row, col, value);
-    return;
-  }
-  jacobian_.valuePtr()[slots_[static_cast<std::size_t>(add_count_++)]] = value;
-}
+void SaintVenantCanal::Add(int row, int col, double value) { jacobian_.Set(row, col, value); }
 
 void SaintVenantCanal::Assemble(const Eigen::VectorXd& old_x, double dt_s) {
   const double theta = canal_.theta;
   const double g = kGravity;
-  add_count_ = 0;
+  jacobian_.SetZero();
   int row = 0;
   // Upstream boundary.
   if (canal_.upstream.type == UpstreamBoundary::Type::kFlow) {
@@ -293,22 +287,8 @@ void SaintVenantCanal::Step(double dt_s) {
   int it = 0;
   for (; it < kMaxIterations && !converged; ++it) {
     Assemble(old_x_, dt_s);
-    if (recording_) {
-      jacobian_.setFromTriplets(triplets_.begin(), triplets_.end());
-      jacobian_.makeCompressed();
-      // Remember where each coefficient lives so later assemblies write values in place.
-      slots_.resize(triplets_.size());
-      for (std::size_t k = 0; k < triplets_.size(); ++k) {
-        const double* base = jacobian_.valuePtr();
-        slots_[k] =
-            static_cast<int>(&jacobian_.coeffRef(triplets_[k].row(), triplets_[k].col()) - base);
-      }
-      lu_.analyzePattern(jacobian_);
-      recording_ = false;
-    }
-    lu_.factorize(jacobian_);
-    if (lu_.info() != Eigen::Success) break;
-    delta_ = lu_.solve(-residual_);
+    delta_ = -residual_;
+    if (!jacobian_.SolveInPlace(delta_)) break;
     converged = true;
     for (Eigen::Index k = 0; k < delta_.size(); k += 2) {
       if (std::abs(delta_[k]) > kDepthTol || std::abs(delta_[k + 1]) > kFlowTol) {

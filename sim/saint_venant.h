@@ -1,9 +1,8 @@
 #pragma once
 #include <Eigen/Core>
-#include <Eigen/SparseCore>
-#include <Eigen/SparseLU>
 #include <vector>
 
+#include "sim/banded_solver.h"
 #include "sim/canal.h"
 #include "sim/hydraulics.h"
 #include "sim/level_pid.h"
@@ -27,7 +26,10 @@ struct MassBalance {
 ///   dA/dt + dQ/dx = 0,   dQ/dt + d(Q^2/A)/dx + g A dz/dx + g A Sf = 0,   Sf = n^2 Q|Q|/(A^2 R^4/3)
 /// with z the water surface elevation, discretised with the Preissmann four-point box scheme
 /// (space weight 1/2, time weight theta) and solved at each step by Newton iterations on all the
-/// depths and flows at once; the sparse (banded) Jacobian is factorised with Eigen::SparseLU.
+/// depths and flows at once.  With depths and flows interleaved (h0, Q0, h1, Q1, ...) and one
+/// row per equation in the same order, every equation involves at most the two unknowns before
+/// and after its own: the Jacobian is a band matrix (kJacobianLowerBand, kJacobianUpperBand),
+/// solved by banded Gaussian elimination with partial pivoting (BandedMatrix).
 /// The structure between two pools adds two algebraic equations (flow continuity with the
 /// offtake, structure law); the upstream end takes a flow or a level, the downstream end of the
 /// last pool its structure law against the tailwater.
@@ -135,12 +137,9 @@ class SaintVenantCanal final {
   Eigen::VectorXd old_x_;
   Eigen::VectorXd residual_;
   Eigen::VectorXd delta_;
-  Eigen::SparseMatrix<double> jacobian_;
-  Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>> lu_;
-  std::vector<Eigen::Triplet<double>> triplets_;
-  std::vector<int> slots_;  // value index of each Add call, recorded at the first assembly
-  bool recording_ = true;
-  int add_count_ = 0;
+  static constexpr int kJacobianLowerBand = 2;
+  static constexpr int kJacobianUpperBand = 2;
+  BandedMatrix jacobian_{1, kJacobianLowerBand, kJacobianUpperBand};
   int last_iterations_ = 0;
   double initial_volume_m3_ = 0.0;
   MassBalance mass_;

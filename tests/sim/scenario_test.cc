@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -122,15 +123,43 @@ TEST(Scenario, Canal2Pool2StepArrivalAndLateArea) {
   EXPECT_LT(summary.mass.relative_error, 1e-3);
 }
 
-// The committed data files are what the runner produces now (same code, same seed).
+// The committed data files are what the runner produces now (same code, same seed): the same
+// rows, columns and header, and every number within 1e-9 relative.  Not the same text: the files
+// were written when the Newton steps were solved by a sparse LU, and the banded elimination that
+// replaced it rounds differently; 1e-9 is the bound the solver change was held to (issue 17).
+// Measured: 1 of the 20 176 cells differs, in its 12th (last written) digit.
 TEST(Scenario, CommittedDataFilesAreReproduced) {
+  int differing = 0;
   for (const std::string name : {"asce2-pool2-step", "asce2-pool2-prbs", "asce2-pool2-prbs-noisy",
                                  "asce2-pool2-prbs-fixed-gate"}) {
     std::ifstream in(DataCsv(name));
     std::stringstream file;
     file << in.rdbuf();
-    EXPECT_EQ(file.str(), RunToString("asce-canal2.toml", name + ".toml")) << name;
+    std::istringstream committed(file.str());
+    std::istringstream produced(RunToString("asce-canal2.toml", name + ".toml"));
+    std::string expected_line, line;
+    ASSERT_TRUE(std::getline(committed, expected_line) && std::getline(produced, line)) << name;
+    EXPECT_EQ(line, expected_line) << name << ": header";
+    int row = 1;
+    while (std::getline(committed, expected_line)) {
+      ++row;
+      ASSERT_TRUE(std::getline(produced, line)) << name << ": ends at row " << row;
+      std::istringstream a(expected_line), b(line);
+      std::string x, y;
+      int column = 0;
+      while (std::getline(a, x, ',')) {
+        ++column;
+        ASSERT_TRUE(std::getline(b, y, ',')) << name << " row " << row << ": fewer columns";
+        const double ex = std::stod(x), got = std::stod(y);
+        EXPECT_LE(std::abs(got - ex), 1e-9 * std::max(std::abs(ex), 1e-300))
+            << name << " row " << row << " column " << column << ": " << x << " vs " << y;
+        differing += x != y;
+      }
+      EXPECT_FALSE(std::getline(b, y, ',')) << name << " row " << row << ": more columns";
+    }
+    EXPECT_FALSE(std::getline(produced, line)) << name << ": more rows than the file";
   }
+  std::printf("committed data files: %d cells differ in their last digits\n", differing);
 }
 
 // The inflow of the committed PRBS record is the order-7 m-sequence of core/signal/prbs.h, checked
