@@ -41,6 +41,8 @@ SaintVenantCanal::SaintVenantCanal(const Canal& canal) : canal_(canal) {
   x_.setZero(n);
   residual_.setZero(n);
   delta_.setZero(n);
+  friction_.setZero(n / 2, 3);
+  old_friction_.setZero(n / 2);
   jacobian_ = BandedMatrix(n, kJacobianLowerBand, kJacobianUpperBand);
   BuildSteadyState();
   for (const LevelControl& c : canal_.level_controls) {
@@ -167,7 +169,23 @@ double SaintVenantCanal::Volume() const {
 
 void SaintVenantCanal::Add(int row, int col, double value) { jacobian_.Set(row, col, value); }
 
+void SaintVenantCanal::NodeFriction(const Eigen::VectorXd& x, Eigen::MatrixX3d* all,
+                                    Eigen::VectorXd* g_only) const {
+  for (int p = 0; p < num_pools(); ++p) {
+    const TrapezoidSection& s = sections_[static_cast<std::size_t>(p)];
+    for (int j = offset_[static_cast<std::size_t>(p)]; j < offset_[static_cast<std::size_t>(p) + 1];
+         ++j) {
+      double g = 0.0, g_h = 0.0, g_q = 0.0;
+      const Eigen::Index h = 2 * Eigen::Index{j};
+      s.Friction(x[h], x[h + 1], &g, &g_h, &g_q);
+      if (all != nullptr) all->row(j) << g, g_h, g_q;
+      if (g_only != nullptr) (*g_only)(j) = g;
+    }
+  }
+}
+
 void SaintVenantCanal::Assemble(const Eigen::VectorXd& old_x, double dt_s) {
+  NodeFriction(x_, &friction_, nullptr);
   const double theta = canal_.theta;
   const double g = kGravity;
   jacobian_.SetZero();
@@ -202,11 +220,12 @@ void SaintVenantCanal::Assemble(const Eigen::VectorXd& old_x, double dt_s) {
       Add(row, qr, theta / dx);
       ++row;
       // Momentum; z differences include the bed: z_r - z_l = h_r - h_l - S0 dx.
-      double gl1, gl1h, gl1q, gr1, gr1h, gr1q, gl0, gl0h, gl0q, gr0, gr0h, gr0q;
-      s.Friction(hl1, ql1, &gl1, &gl1h, &gl1q);
-      s.Friction(hr1, qr1, &gr1, &gr1h, &gr1q);
-      s.Friction(hl0, ql0, &gl0, &gl0h, &gl0q);
-      s.Friction(hr0, qr0, &gr0, &gr0h, &gr0q);
+      // Friction per node (NodeFriction): the new level's of this iteration, the old level's of
+      // this step.
+      const double gl1 = friction_(j, 0), gl1h = friction_(j, 1), gl1q = friction_(j, 2);
+      const double gr1 = friction_(j + 1, 0), gr1h = friction_(j + 1, 1),
+                   gr1q = friction_(j + 1, 2);
+      const double gl0 = old_friction_(j), gr0 = old_friction_(j + 1);
       const double fl1 = ql1 * ql1 / al1, fr1 = qr1 * qr1 / ar1;
       const double fl0 = ql0 * ql0 / al0, fr0 = qr0 * qr0 / ar0;
       const double abar = 0.5 * theta * (al1 + ar1) + 0.5 * (1.0 - theta) * (al0 + ar0);
@@ -283,6 +302,7 @@ void SaintVenantCanal::Step(double dt_s) {
   }
   RunLevelControls();
   old_x_ = x_;
+  NodeFriction(old_x_, nullptr, &old_friction_);
   bool converged = false;
   int it = 0;
   for (; it < kMaxIterations && !converged; ++it) {

@@ -108,6 +108,10 @@ class SaintVenantCanal final {
   BoundaryFlows CurrentBoundaryFlows() const;
   void BuildSteadyState();
   void Assemble(const Eigen::VectorXd& old_x, double dt_s);
+  /// Manning friction G = g A Sf of every node at the depths and flows `x`: G, dG/dh and dG/dQ
+  /// into the rows of `all`, or G alone into `g_only` (either may be null).  Once per node, where
+  /// the segments computed it twice per node and the old level's again at every iteration.
+  void NodeFriction(const Eigen::VectorXd& x, Eigen::MatrixX3d* all, Eigen::VectorXd* g_only) const;
   void Add(int row, int col, double value);
   double TailLevel(int pool) const;
   void RunLevelControls();
@@ -137,6 +141,8 @@ class SaintVenantCanal final {
   Eigen::VectorXd old_x_;
   Eigen::VectorXd residual_;
   Eigen::VectorXd delta_;
+  Eigen::MatrixX3d friction_;     // per node at x_: G, dG/dh, dG/dQ (this iteration)
+  Eigen::VectorXd old_friction_;  // per node at old_x_: G (this step)
   static constexpr int kJacobianLowerBand = 2;
   static constexpr int kJacobianUpperBand = 2;
   BandedMatrix jacobian_{1, kJacobianLowerBand, kJacobianUpperBand};
