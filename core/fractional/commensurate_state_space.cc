@@ -191,6 +191,15 @@ void CheckFitArguments(const char* where, Eigen::Index input_size, Eigen::Index 
   CheckRecordLengths(where, input_size, output_size, 20 * q + delay_samples);
 }
 
+// A record whose input never leaves u[0] has no deviation to fit: the least-squares problem is
+// singular and the refinement would start from nothing.
+void CheckInputMoves(const char* where, const Eigen::Ref<const Eigen::VectorXd>& input) {
+  if ((input.array() == input(0)).all()) {
+    throw std::invalid_argument(std::string(where) +
+                                ": the input never moves from its first value");
+  }
+}
+
 }  // namespace
 
 CommensurateFitResult FitCommensurate(const Eigen::Ref<const Eigen::VectorXd>& input,
@@ -199,6 +208,7 @@ CommensurateFitResult FitCommensurate(const Eigen::Ref<const Eigen::VectorXd>& i
                                       const CommensurateFitOptions& options) {
   CheckFitArguments("FitCommensurate", input.size(), output.size(), q, delay_samples,
                     sample_time_s);
+  CheckInputMoves("FitCommensurate", input);
   const Eigen::VectorXd du = input.array() - input(0);
   const Eigen::VectorXd dy = output.array() - output(0);
   const Differences d = ComputeDifferences(du, dy, q);
@@ -212,6 +222,7 @@ CommensurateFitResult FitCommensurateScanDelay(const Eigen::Ref<const Eigen::Vec
                                                const CommensurateFitOptions& options) {
   CheckFitArguments("FitCommensurateScanDelay", input.size(), output.size(), q, max_delay_samples,
                     sample_time_s);
+  CheckInputMoves("FitCommensurateScanDelay", input);
   const Eigen::VectorXd du = input.array() - input(0);
   const Eigen::VectorXd dy = output.array() - output(0);
   const Differences d = ComputeDifferences(du, dy, q);

@@ -60,8 +60,8 @@ struct CommensurateFitResult {
 ///       = a_n sum_{m=0..n-1} c_m [D^{m alpha} u](k-n+m-nk),   c_0 = 1,
 /// with [D^b s](k) = sum_{j=0..k} w_j^(b) s(k-j) (full-memory GL), linear in (a, a_n c).
 /// Stage 2 (the LPV paper): Levenberg-Marquardt of (a, c) on the simulation error, started there.
-/// @throws std::invalid_argument on sizes, q < 1, delay < 0, sample_time_s <= 0, or too few
-///         samples (< 10 n + delay, n = 2q).
+/// @throws std::invalid_argument on sizes, q < 1, delay < 0, sample_time_s <= 0, too few
+///         samples (< 10 n + delay, n = 2q), or an input that never moves from input[0].
 CommensurateFitResult FitCommensurate(const Eigen::Ref<const Eigen::VectorXd>& input,
                                       const Eigen::Ref<const Eigen::VectorXd>& output, int q,
                                       int delay_samples, double sample_time_s,

@@ -98,10 +98,6 @@ ProcessBatchResult FitProcessBatch(ProcessBatchKind kind,
             " samples) is too short for frac-ss with q = " + std::to_string(batch.frac_ss_q);
         return result;
       }
-      if ((u.array() == u(0)).all()) {
-        result.problem = "the input never moves from its first value";
-        return result;
-      }
       CommensurateFitOptions options;
       options.memory_length = batch.frac_ss_memory_samples;
       result.memory_samples = batch.frac_ss_memory_samples;

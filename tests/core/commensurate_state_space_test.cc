@@ -5,6 +5,7 @@
 #include <cmath>
 #include <random>
 #include <stdexcept>
+#include <string>
 
 #include "tests/core/commensurate_test_models.h"
 
@@ -158,6 +159,23 @@ TEST(CommensurateStateSpaceTest, RejectsBadArguments) {
                std::invalid_argument);
   EXPECT_THROW(FitCommensurate(Prbs(200, 1), Eigen::VectorXd::Ones(200), 0, 0, 0.5),
                std::invalid_argument);
+  // An input that never moves: nothing to fit, said by both fits (the LPV locals and the daemon's
+  // batch frac-ss go through them).
+  const Eigen::VectorXd still = Eigen::VectorXd::Constant(200, 0.3);
+  for (const bool scan : {false, true}) {
+    try {
+      if (scan) {
+        FitCommensurateScanDelay(still, Prbs(200, 1), 2, 5, 0.5);
+      } else {
+        FitCommensurate(still, Prbs(200, 1), 2, 0, 0.5);
+      }
+      ADD_FAILURE() << "no throw, scan " << scan;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("the input never moves from its first value"),
+                std::string::npos)
+          << e.what();
+    }
+  }
 }
 
 }  // namespace

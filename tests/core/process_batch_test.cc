@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "core/reach/reach_sample_processor.h"
@@ -204,6 +205,9 @@ TEST(ProcessBatch, AFitThatCannotRunIsAProblemNotAThrow) {
     const ProcessBatchResult r = FitProcessBatch(kind, still, level, kTs, ProcessBatchOptions{9.0});
     EXPECT_FALSE(r.ok()) << ProcessBatchKindName(kind);
     EXPECT_FALSE(r.foptd.has_value() || r.fractional.has_value() || r.commensurate.has_value());
+    if (kind == ProcessBatchKind::kFracSs) {
+      EXPECT_NE(r.problem.find("never moves"), std::string::npos) << r.problem;
+    }
   }
   EXPECT_EQ(ProcessBatchKindName(ProcessBatchKind::kFractionalFoptd), "frac-foptd");
 }
