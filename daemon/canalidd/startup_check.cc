@@ -6,6 +6,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <stdexcept>
 #include <string>
 
 #include "core/system/errno_text.h"
@@ -44,6 +45,25 @@ void CheckStateDirectory(const std::string& directory, bool for_start, StartupNo
   ::unlink(probe.c_str());
 }
 
+// Each experiment of a reach whose nominal setpoint is configured, planned around it as the
+// daemon plans it at start (ReachExperiment::plan_for_nominal): one without room inside the
+// actuator's limits is refused then, and the reach is only watched and estimated.
+void CheckExperimentRoom(const DaemonPlan& plan, StartupNotes& notes) {
+  for (const ReachWiring& reach : plan.reaches) {
+    if (!reach.runner.nominal_setpoint) continue;
+    const double nominal = *reach.runner.nominal_setpoint;
+    for (const core::ReachExperiment& experiment : reach.runner.experiments) {
+      try {
+        experiment.plan_for_nominal(nominal).Validate();
+      } catch (const std::invalid_argument& e) {
+        notes.notes.push_back("warning: reach " + reach.runner.name + ": experiment '" +
+                              experiment.name + "' cannot run around the configured nominal (" +
+                              e.what() + "); the daemon will refuse it");
+      }
+    }
+  }
+}
+
 }  // namespace
 
 StartupNotes CheckStartup(const DaemonPlan& plan, bool for_start) {
@@ -56,6 +76,7 @@ StartupNotes CheckStartup(const DaemonPlan& plan, bool for_start) {
     }
   }
   CheckStateDirectory(plan.state_directory, for_start, notes);
+  CheckExperimentRoom(plan, notes);
   return notes;
 }
 

@@ -28,6 +28,9 @@ struct StartupNotes {
 ///   (a file is created and removed in it). When it does not exist, `for_start` makes that an error
 ///   (the daemon would find out only when the first model could not be saved); for --check-config
 ///   it is a note, since systemd's StateDirectory= creates it when the service starts.
+/// - the experiments of every reach with a configured `nominal_setpoint`, planned around it as
+///   the start plans them: one without room inside the actuator's limits is a warning note (the
+///   daemon starts, logs it and refuses that experiment; its others still run).
 /// @throws StartupError naming the file and the fix.
 StartupNotes CheckStartup(const DaemonPlan& plan, bool for_start);
 

@@ -213,6 +213,28 @@ TEST_F(CheckConfigCli, EveryBadKeyFileExits78InTheCheckAndAtStart) {
   EXPECT_EQ(Run({"--check-config", good.string()}, output), 0) << output;
 }
 
+// A configured nominal near the actuator's limit: the check plans the demo's designed experiment
+// around it as the daemon would, and warns that it has no room (the file stays valid: the daemon
+// starts and refuses that experiment).  Around a nominal with room, no warning.
+TEST_F(CheckConfigCli, AnExperimentWithoutRoomAroundTheConfiguredNominalIsWarned) {
+  std::string output;
+  // setpoint_max 2.0; the design's amplitude is 7.5 % of the nominal: 1.98 +- 0.1485 leaves it.
+  // (The demo's file reads the nominal at start: the key is added after nominal_inflow_m3s.)
+  const fs::path tight =
+      WriteConfig("tight.toml", {{"nominal_inflow_m3s", "10.0\nnominal_setpoint = 1.98"}});
+  EXPECT_EQ(Run({"--check-config", tight.string()}, output), 0) << output;
+  EXPECT_NE(output.find("warning: reach pool2: experiment 'pool2_prbs' cannot run around the "
+                        "configured nominal"),
+            std::string::npos)
+      << output;
+  EXPECT_NE(output.find("leaves the actuator's [0.050000, 2.000000]"), std::string::npos) << output;
+  EXPECT_NE(output.find(tight.string() + ": valid"), std::string::npos) << output;
+  const fs::path roomy =
+      WriteConfig("roomy.toml", {{"nominal_inflow_m3s", "10.0\nnominal_setpoint = 1.5"}});
+  EXPECT_EQ(Run({"--check-config", roomy.string()}, output), 0) << output;
+  EXPECT_EQ(output.find("warning:"), std::string::npos) << output;
+}
+
 TEST_F(CheckConfigCli, StateDirectoryIsCheckedBeforeStart) {
   std::string output;
   // Missing: the check notes it (systemd's StateDirectory= makes it at start), the start refuses.
