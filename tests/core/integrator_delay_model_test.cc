@@ -130,6 +130,46 @@ TEST(IntegratorDelayModel, ScanLossesEqualFullQrFitsOfEachCandidate) {
   EXPECT_GT(checked, 5);
 }
 
+// The scan's losses come from running inner products of the raw columns; a long record with
+// large flows and a gauge offset between inflow and outflow (so the integrated flow drifts by
+// 2 m^3/s every sample, to 2e5 at the end) is where cancellation would show.  Against QR, the
+// constrained candidates (p21 < 0, refitted without the column) included.
+TEST(IntegratorDelayModel, ScanLossesHoldOnALongRecordWithLargeFlowsAndAnOffset) {
+  const double ts = 10.0;
+  const int n = 100000;
+  const int first = 41;
+  const Eigen::VectorXd q_in = BinaryInflow(n, 500.0, 5.0, 37, 5);
+  const Eigen::VectorXd q_out = Eigen::VectorXd::Constant(n, 498.0);
+  Eigen::VectorXd y = IdLevel(q_in, q_out, ts / 2.0e6, 17, 3.0);
+  std::mt19937 rng(9);
+  std::normal_distribution<double> noise(0.0, 0.002);
+  for (auto& v : y) v += noise(rng);
+  IntegratorDelayFitOptions options;
+  options.max_nk = first - 1;
+  const IntegratorDelayFit r = FitIntegratorDelay(q_in, q_out, y, ts, options);
+  const Eigen::VectorXd target = y.tail(n - first);
+  int best_nk = -1;
+  double best_loss = 0.0;
+  for (int nk = 0; nk < first; ++nk) {
+    const Eigen::MatrixXd x = OpenLoopRegressors(q_in, q_out, nk, first);
+    Eigen::VectorXd theta = x.colPivHouseholderQr().solve(target);
+    double loss = (x * theta - target).squaredNorm();
+    if (theta(1) < 0.0) {
+      Eigen::MatrixXd reduced(x.rows(), 3);
+      reduced << x.col(0), x.col(2), x.col(3);
+      const Eigen::VectorXd t3 = reduced.colPivHouseholderQr().solve(target);
+      loss = (reduced * t3 - target).squaredNorm();
+    }
+    loss /= static_cast<double>(target.size());
+    EXPECT_NEAR(r.loss_by_nk(nk), loss, 1e-8 * loss) << "nk=" << nk;
+    if (best_nk < 0 || loss < best_loss) {
+      best_nk = nk;
+      best_loss = loss;
+    }
+  }
+  EXPECT_EQ(r.model.nk, best_nk);  // the scan chooses QR's smallest loss
+}
+
 TEST(IntegratorDelayModel, RejectsBadInput) {
   const Eigen::VectorXd flat = Eigen::VectorXd::Constant(200, 10.0);
   const Eigen::VectorXd level = Eigen::VectorXd::Constant(200, 2.0);
