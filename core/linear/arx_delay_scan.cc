@@ -1,9 +1,9 @@
 #include "core/linear/arx_delay_scan.h"
 
+#include <algorithm>
+#include <optional>
 #include <stdexcept>
 #include <string>
-
-#include "core/linear/delay_estimation.h"
 
 namespace canalid::core {
 
@@ -20,16 +20,15 @@ ArxModel FitArxOverDelays(const Eigen::Ref<const Eigen::VectorXd>& y,
   widest.nb = {nb};
   widest.nk = {max_nk};
   widest.Validate(1);
-  // ScanArxDelay's losses are FitArx's on the same equations (first sample the largest delay
-  // allows), computed from one factorisation of the output lags; the best delay is then fitted.
-  ArxDelayScanOptions scan_options;
-  scan_options.orders = widest;
-  scan_options.min_nk = min_nk;
-  scan_options.max_nk = max_nk;
-  const ArxDelayScan scan = ScanArxDelay(y, u, scan_options);
-  ArxOrders orders = widest;
-  orders.nk = {scan.best_nk};
-  return FitArx(y, u, orders, scan.first_sample);
+  const Eigen::Index first = widest.min_first_sample();
+  std::optional<ArxModel> best;
+  for (int nk = min_nk; nk <= max_nk; ++nk) {
+    ArxOrders orders = widest;
+    orders.nk = {nk};
+    ArxModel model = FitArx(y, u, orders, first);
+    if (!best || model.loss < best->loss) best = std::move(model);
+  }
+  return *best;
 }
 
 }  // namespace canalid::core
