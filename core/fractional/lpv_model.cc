@@ -245,7 +245,13 @@ LpvIdentification IdentifyLpv(const Eigen::Ref<const Eigen::VectorXd>& input,
     if (p.length < min_samples) continue;
     const Eigen::VectorXd u = input.segment(p.start, p.length);
     const Eigen::VectorXd y = output.segment(p.start, p.length);
-    p.local_params = kind.fit(u, y, sample_time_s);
+    try {
+      p.local_params = kind.fit(u, y, sample_time_s);
+    } catch (const std::invalid_argument& e) {
+      // Name the band: one without excitation (an input held through it) stops the whole fit.
+      throw std::invalid_argument("IdentifyLpv: the band of samples " + std::to_string(p.start) +
+                                  ".." + std::to_string(p.start + p.length - 1) + ": " + e.what());
+    }
     const Eigen::VectorXd du = u.array() - u(0);
     p.local_mae = MeanAbsoluteError(y, kind.simulate(p.local_params, du, sample_time_s));
     result.points.push_back(p);

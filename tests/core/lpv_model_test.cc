@@ -173,6 +173,18 @@ TEST(LpvModelTest, CommensurateLocalModelsRecoverQuadraticLaws) {
   }
   EXPECT_NEAR(EvaluatePolynomial(id.model.coefficients.row(3).transpose(), 2.5), 5.0, 1e-7);
   for (const LpvOperatingPoint& p : id.points) EXPECT_LT(p.lpv_mae, 1e-7);
+
+  // A band whose input is held throughout has nothing to fit: the error names the band.
+  Eigen::VectorXd held = u;
+  held.segment(2 * per_point, per_point).setZero();
+  try {
+    IdentifyLpv(held, y, theta, 0.5, {0.5, 1.5, 2.5, 3.5, 4.5}, CommensurateKind(1, 12, options));
+    ADD_FAILURE() << "no throw";
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("the band of samples 800..1199"), std::string::npos) << what;
+    EXPECT_NE(what.find("never moves"), std::string::npos) << what;
+  }
 }
 
 TEST(LpvModelTest, RejectsBadArguments) {
