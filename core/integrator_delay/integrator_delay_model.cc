@@ -328,7 +328,8 @@ IntegratorDelayFit FitIntegratorDelay(const Eigen::Ref<const Eigen::VectorXd>& q
   // p21 q_in(k - nk) takes the jump, so nk and b describe the integrating part.
   // Each candidate's loss comes from the Frisch-Waugh-Lovell reduction: with y and both varying
   // columns detrended (projected off [1, k]), the residual is that of a 2-column least-squares
-  // problem, solved by modified Gram-Schmidt QR.  The chosen nk is then refitted in full.
+  // problem, whose loss DelayScan computes from one pass of inner products.  The chosen nk is
+  // then refitted in full (QR).
   result.loss_by_nk.resize(max_nk - options.min_nk + 1);
   const Eigen::VectorXd y_fit = level.tail(n - k0);
   double best_loss = std::numeric_limits<double>::infinity();

@@ -67,6 +67,7 @@ int BankSelector::Commit() {
     if (loss(i) < loss(best)) best = i;
   }
   if (options_.criterion == BankCriterion::kResidual) {
+    if (!std::isfinite(loss(best))) return selected_;  // no candidate has a loss yet
     if (selected_ >= 0 && best != selected_) ++switches_;
     selected_ = best;
     return selected_;

@@ -45,12 +45,13 @@ class BankSelector final {
   /// errors are ignored).
   void Record(int i, double prediction_error);
   /// kResidual: candidate i's loss after the current sample (non-finite: the candidate is not
-  /// chosen until its loss is finite again).
+  /// chosen until its loss is finite again; while no loss is finite the choice stays as it was).
   void SetLoss(int i, double loss);
   /// Closes the sample: updates the choice.  Returns the selected index (-1 during the warm-up).
   int Commit();
 
   int selected() const { return selected_; }
+  BankCriterion criterion() const { return options_.criterion; }
   double loss(int i) const { return loss_[static_cast<std::size_t>(i)]; }
   int num_candidates() const { return static_cast<int>(loss_.size()); }
   int switches() const { return switches_; }

@@ -9,6 +9,14 @@
 namespace canalid::core {
 namespace {
 
+// kResidual needs an estimator whose residual sum of squares is a least-squares loss.
+BankSelectorOptions SelectorOptionsFor(const OnlineArxOptions& options) {
+  BankSelectorOptions selector = options.selector;
+  if (!IsLeastSquaresMethod(options.rls.method))
+    selector.criterion = BankCriterion::kPredictionError;
+  return selector;
+}
+
 [[noreturn]] void Fail(const char* name, double value, const char* range) {
   ThrowOptionOutOfRange("OnlineArxOptions", name, value, range);
 }
@@ -36,8 +44,10 @@ void OnlineArxOptions::Validate() const {
 OnlineArxBank::OnlineArxBank(const OnlineArxOptions& options)
     : options_(options),
       n_((options.Validate(), options.na + options.nb)),
-      selector_(options.max_delay_samples - options.min_delay_samples + 1, options.selector),
+      selector_(options.max_delay_samples - options.min_delay_samples + 1,
+                SelectorOptionsFor(options)),
       u_history_(options.max_delay_samples + options.nb),
+      u_bad_history_(options.max_delay_samples + options.nb),
       y_history_(std::max(options.na, 1)),
       phi_(Eigen::VectorXd::Zero(options.na + options.nb)) {
   const int count = options_.max_delay_samples - options_.min_delay_samples + 1;
@@ -49,11 +59,12 @@ OnlineArxBank::OnlineArxBank(const OnlineArxOptions& options)
 bool OnlineArxBank::Update(double u, double y) {
   ++k_;
   ++health_.samples;
-  if (!FiniteWithin(u, options_.input_abs_max)) {
+  const bool u_ok = FiniteWithin(u, options_.input_abs_max);
+  if (!u_ok) {
     ++health_.bad_inputs;
-    last_bad_u_ = k_;
-    u = 0.0;  // placeholder in the history; no regression will read it
+    u = 0.0;  // placeholder in the history; no regression reads it (u_bad_history_)
   }
+  u_bad_history_.Push(u_ok ? 0 : 1);
   const bool y_ok = FiniteWithin(y, options_.output_abs_max);
   if (!y_ok) {
     ++health_.bad_outputs;
@@ -67,11 +78,16 @@ bool OnlineArxBank::Update(double u, double y) {
     for (int i = 0; i < options_.na; ++i) phi_(i) = -y_history_[i];
     for (int c = 0; c < static_cast<int>(estimators_.size()); ++c) {
       const int nk = options_.min_delay_samples + c;
-      if (k_ - nk - options_.nb + 1 <= last_bad_u_ && last_bad_u_ <= k_ - nk) continue;
-      for (int j = 0; j < options_.nb; ++j) phi_(options_.na + j) = u_history_[nk + j];
+      // Every input of the row must be good, not only the most recent bad one outside it.
+      bool u_window_ok = true;
+      for (int j = 0; j < options_.nb; ++j) {
+        phi_(options_.na + j) = u_history_[nk + j];
+        u_window_ok = u_window_ok && u_bad_history_[nk + j] == 0;
+      }
+      if (!u_window_ok) continue;
       Rls<Eigen::Dynamic>& rls = estimators_[static_cast<std::size_t>(c)];
       const auto result = rls.Update(phi_, y);
-      if (options_.selector.criterion == BankCriterion::kResidual) {
+      if (selector_.criterion() == BankCriterion::kResidual) {
         selector_.SetLoss(c, rls.residual_sum_of_squares());
       } else {
         selector_.Record(c, result.prediction_error);

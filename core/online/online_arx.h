@@ -27,7 +27,7 @@ struct OnlineArxOptions {
   RlsOptions rls;             ///< per candidate (n = na + nb)
   /// The delay's choice.  Default kResidual: the candidate of smallest least-squares loss, so
   /// that with lambda = 1 the bank's nk is a batch scan's over the same rows (a candidate skips
-  /// the rows a bad u enters, so its loss then covers a few rows fewer).
+  /// the rows a bad u enters, so its loss then covers a few rows fewer; nb rows per bad u).
   BankSelectorOptions selector{.criterion = BankCriterion::kResidual};
   double input_abs_max = 1e9;   ///< |u| above it (or non-finite) is absurd
   double output_abs_max = 1e9;  ///< |y| above it (or non-finite) is absurd
@@ -84,11 +84,11 @@ class OnlineArxBank final {
   std::vector<Rls<Eigen::Dynamic>> estimators_;
   BankSelector selector_;
   RingBuffer<double> u_history_;
+  RingBuffer<std::uint8_t> u_bad_history_;  // 1 where u_history_ holds a bad input's placeholder
   RingBuffer<double> y_history_;
   Eigen::VectorXd phi_;
   std::int64_t k_ = -1;
   std::int64_t k_start_ = 0;
-  std::int64_t last_bad_u_ = -1000000000;
   std::int64_t last_bad_y_ = -1000000000;
   ArxBankHealth health_;
 };

@@ -18,6 +18,12 @@ BankSelectorOptions IvSelectorOptions(BankSelectorOptions options) {
   return options;
 }
 
+// kResidual needs an estimator whose residual sum of squares is a least-squares loss.
+BankSelectorOptions LeastSquaresSelectorOptions(BankSelectorOptions options, RlsMethod method) {
+  if (!IsLeastSquaresMethod(method)) options.criterion = BankCriterion::kPredictionError;
+  return options;
+}
+
 [[noreturn]] void Fail(const char* name, double value, const char* range) {
   ThrowOptionOutOfRange("OnlineIntegratorDelayOptions", name, value, range);
 }
@@ -113,7 +119,7 @@ void OnlineIntegratorDelayOptions::Validate() const {
 OnlineIntegratorDelayBank::OnlineIntegratorDelayBank(const OnlineIntegratorDelayOptions& options)
     : options_(options),
       selector_((options.Validate(), options.max_delay_samples - options.min_delay_samples + 1),
-                options.selector),
+                LeastSquaresSelectorOptions(options.selector, options.rls.method)),
       iv_selector_(options.max_delay_samples - options.min_delay_samples + 1,
                    IvSelectorOptions(options.selector)),
       q_in_history_(options.max_delay_samples + 1) {
@@ -267,7 +273,7 @@ void OnlineIntegratorDelayBank::UpdateCandidates(std::vector<Rls<N>>& estimators
       phi << q_integrated_[ui] - q_centre_[ui], 1.0, t - t_centre_;
     }
     Rls<N>& rls = estimators[ui];
-    if (options_.selector.criterion == BankCriterion::kResidual) {
+    if (selector_.criterion() == BankCriterion::kResidual) {
       rls.Update(phi, level_m);
       selector_.SetLoss(i, ResidualLoss<N>(rls));
       continue;

@@ -130,7 +130,10 @@ struct IntegratorDelaySnapshot {
   double area_std_m2 = 0.0;         ///< Ts b_std / b^2 (first order)
   double prediction_error_m = 0.0;  ///< last a-priori error
   double innovation_std_m = 0.0;    ///< sqrt(sigma2)
-  double loss = 0.0;                ///< the selector's weighted squared a-priori error
+  /// What the selector compares: the residual sum of squares of the reported fit (kResidual,
+  /// the least-squares bank's default) or the weighted squared a-priori error (kPredictionError,
+  /// and always for the IV bank).
+  double loss = 0.0;
   RlsHealth health;
   /// 2-norm condition number of the estimator's P (exact: a fixed-size eigen decomposition).
   double condition_number = 1.0;
@@ -226,11 +229,11 @@ class OnlineIntegratorDelayBank final {
   void UpdateIvCandidates(std::vector<IvRls<N>>& estimators, double t, double level_m);
   template <int N>
   static Eigen::Matrix<double, N, N> CentreShift(double dq, double dt);
-  /// theta with p21 >= 0 (wave_front_non_negative): theta itself, or the estimate constrained
-  /// to p21 = 0 through the gain g (P or the IV gain).
   /// The candidate's least-squares loss as the kResidual selector compares it.
   template <int N>
   double ResidualLoss(const Rls<N>& rls) const;
+  /// theta with p21 >= 0 (wave_front_non_negative): theta itself, or the estimate constrained
+  /// to p21 = 0 through the gain g (P or the IV gain).
   template <int N>
   Eigen::Matrix<double, N, 1> Constrained(const Eigen::Matrix<double, N, 1>& theta,
                                           const Eigen::Matrix<double, N, N>& g) const;

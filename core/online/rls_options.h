@@ -40,6 +40,19 @@ enum class RlsMethod {
   kNlms,
 };
 
+/// Whether an Rls with this method minimises a (weighted) least-squares cost, so that its
+/// residual_sum_of_squares() is that cost's minimum: the exponential-forgetting forms exactly, the
+/// directional ones exactly at lambda = 1 (for lambda < 1 they forget only along the excited
+/// directions, which no single weighting of the rows describes; the loss is then the
+/// exponentially weighted residual of a nearby fit).  Constant trace, stabilised, Kalman and NLMS
+/// do not (P is held, regularised, inflated or absent), and BankCriterion::kResidual does not
+/// apply to them.  The innovation guards (Huber, rejection, dead zone, CUSUM) and trace bounds,
+/// off by default, also change the cost.
+constexpr bool IsLeastSquaresMethod(RlsMethod method) {
+  return method == RlsMethod::kUdDirectional || method == RlsMethod::kUdExponential ||
+         method == RlsMethod::kExponential || method == RlsMethod::kDirectional;
+}
+
 /// Options of Rls.  Innovation guards use the normalised a-priori innovation
 /// z = e / sqrt(sigma2 (1 + phi' P phi / lambda)), sigma2 the running innovation variance estimate;
 /// they are active once the weighted sample count exceeds n + warmup_samples.

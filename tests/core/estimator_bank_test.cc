@@ -39,6 +39,13 @@ TEST(BankSelector, ResidualNeverChoosesANonFiniteLoss) {
   s.SetLoss(0, 1.0);
   s.SetLoss(1, std::numeric_limits<double>::infinity());
   EXPECT_EQ(s.Commit(), 0);
+  // No finite loss at all: the choice stays (here candidate 0), and a fresh bank chooses none.
+  s.SetLoss(0, std::numeric_limits<double>::quiet_NaN());
+  EXPECT_EQ(s.Commit(), 0);
+  BankSelector fresh(2, Residual(0));
+  fresh.SetLoss(0, std::numeric_limits<double>::infinity());
+  fresh.SetLoss(1, std::numeric_limits<double>::quiet_NaN());
+  EXPECT_EQ(fresh.Commit(), -1);
 }
 
 // kPredictionError: a challenger must beat the selected candidate by the margin on
