@@ -30,6 +30,15 @@ struct BankSelectorOptions {
   void Validate() const;
 };
 
+/// `options` for a bank whose estimators' residual sums of squares are least-squares losses
+/// (`least_squares`: e.g. IsLeastSquaresMethod of their RLS method) or not (an IV bank, a
+/// constant-trace or Kalman update): kResidual applies only to the former; the latter choose by
+/// the prediction error.
+inline BankSelectorOptions SelectorOptionsFor(BankSelectorOptions options, bool least_squares) {
+  if (!least_squares) options.criterion = BankCriterion::kPredictionError;
+  return options;
+}
+
 /// Chooses one of a bank of estimators (BankCriterion).  kPredictionError: by the exponentially
 /// weighted squared a-priori prediction error, with hysteresis: the selection changes only when
 /// the best candidate beats the selected one by the margin on switch_hold_samples consecutive

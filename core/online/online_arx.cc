@@ -9,14 +9,6 @@
 namespace canalid::core {
 namespace {
 
-// kResidual needs an estimator whose residual sum of squares is a least-squares loss.
-BankSelectorOptions SelectorOptionsFor(const OnlineArxOptions& options) {
-  BankSelectorOptions selector = options.selector;
-  if (!IsLeastSquaresMethod(options.rls.method))
-    selector.criterion = BankCriterion::kPredictionError;
-  return selector;
-}
-
 [[noreturn]] void Fail(const char* name, double value, const char* range) {
   ThrowOptionOutOfRange("OnlineArxOptions", name, value, range);
 }
@@ -45,7 +37,7 @@ OnlineArxBank::OnlineArxBank(const OnlineArxOptions& options)
     : options_(options),
       n_((options.Validate(), options.na + options.nb)),
       selector_(options.max_delay_samples - options.min_delay_samples + 1,
-                SelectorOptionsFor(options)),
+                SelectorOptionsFor(options.selector, IsLeastSquaresMethod(options.rls.method))),
       u_history_(options.max_delay_samples + options.nb),
       u_bad_history_(options.max_delay_samples + options.nb),
       y_history_(std::max(options.na, 1)),

@@ -11,19 +11,6 @@
 namespace canalid::core {
 namespace {
 
-// An IV estimate does not minimise its residuals, so the IV bank keeps the prediction-error
-// criterion (OnlineIntegratorDelayOptions::selector).
-BankSelectorOptions IvSelectorOptions(BankSelectorOptions options) {
-  options.criterion = BankCriterion::kPredictionError;
-  return options;
-}
-
-// kResidual needs an estimator whose residual sum of squares is a least-squares loss.
-BankSelectorOptions LeastSquaresSelectorOptions(BankSelectorOptions options, RlsMethod method) {
-  if (!IsLeastSquaresMethod(method)) options.criterion = BankCriterion::kPredictionError;
-  return options;
-}
-
 [[noreturn]] void Fail(const char* name, double value, const char* range) {
   ThrowOptionOutOfRange("OnlineIntegratorDelayOptions", name, value, range);
 }
@@ -119,9 +106,10 @@ void OnlineIntegratorDelayOptions::Validate() const {
 OnlineIntegratorDelayBank::OnlineIntegratorDelayBank(const OnlineIntegratorDelayOptions& options)
     : options_(options),
       selector_((options.Validate(), options.max_delay_samples - options.min_delay_samples + 1),
-                LeastSquaresSelectorOptions(options.selector, options.rls.method)),
+                SelectorOptionsFor(options.selector, IsLeastSquaresMethod(options.rls.method))),
       iv_selector_(options.max_delay_samples - options.min_delay_samples + 1,
-                   IvSelectorOptions(options.selector)),
+                   // An IV estimate does not minimise its residuals.
+                   SelectorOptionsFor(options.selector, false)),
       q_in_history_(options.max_delay_samples + 1) {
   const int n = options_.max_delay_samples - options_.min_delay_samples + 1;
   const auto un = static_cast<std::size_t>(n);

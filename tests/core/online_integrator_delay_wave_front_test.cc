@@ -21,6 +21,18 @@ using testdata::ReadPoolRecord;
 
 double Rel(double a, double b) { return std::abs(a - b) / std::abs(b); }
 
+// The bank as `identify --online` runs it (p21 >= 0), delays 0..max_nk, P0 large enough that with
+// lambda = 1 it is the batch least squares.
+OnlineIntegratorDelayOptions NonNegativeWaveFrontBank(double ts, int max_nk) {
+  OnlineIntegratorDelayOptions o;
+  o.sample_time_s = ts;
+  o.max_delay_samples = max_nk;
+  o.wave_front_term = true;
+  o.wave_front_non_negative = true;
+  o.rls.initial_covariance = 1e10;
+  return o;
+}
+
 // With lambda = 1 and P0 = 1e10 I the bank's candidate at the batch delay equals
 // FitIntegratorDelay's open-loop fit (QR on [Q, q_in(k - nk), 1, k - k0]).  The prior adds
 // ||theta||^2 / P0 against an information matrix dominated by sum Q^2 (O(1e6) and more here), far
@@ -75,13 +87,7 @@ TEST(OnlineIdWaveFront, NonNegativeWaveFrontEqualsTheBatchAtEveryDelay) {
   fit_options.max_nk = max_nk;
   fit_options.closed_loop = ClosedLoopMode::kOff;
   const IntegratorDelayFit batch = FitIntegratorDelay(r.q_in, r.q_out, r.level, r.ts, fit_options);
-  OnlineIntegratorDelayOptions o;
-  o.sample_time_s = r.ts;
-  o.max_delay_samples = max_nk;
-  o.wave_front_term = true;
-  o.wave_front_non_negative = true;
-  o.rls.initial_covariance = 1e10;
-  OnlineIntegratorDelayBank bank(o);
+  OnlineIntegratorDelayBank bank(NonNegativeWaveFrontBank(r.ts, max_nk));
   for (Eigen::Index k = 0; k < r.level.size(); ++k) bank.Update(r.q_in(k), r.q_out(k), r.level(k));
   EXPECT_EQ(bank.selected_delay_samples(), batch.model.nk);
   const Eigen::VectorXd y = r.level.tail(r.level.size() - (max_nk + 1));
@@ -117,12 +123,7 @@ TEST(OnlineIdWaveFront, ResidualCriterionChoosesTheBatchScanDelayAtEverySample) 
   for (const char* name : {"asce2-pool2-prbs.csv", "asce2-pool2-prbs-fixed-gate.csv"}) {
     const PoolRecord r = ReadPoolRecord(name);
     const int max_nk = 30;
-    OnlineIntegratorDelayOptions o;
-    o.sample_time_s = r.ts;
-    o.max_delay_samples = max_nk;
-    o.wave_front_term = true;
-    o.wave_front_non_negative = true;
-    o.rls.initial_covariance = 1e10;
+    const OnlineIntegratorDelayOptions o = NonNegativeWaveFrontBank(r.ts, max_nk);
     ASSERT_EQ(o.selector.criterion, BankCriterion::kResidual);
     OnlineIntegratorDelayBank bank(o);
     const auto n = r.level.size();
