@@ -28,7 +28,7 @@ import sys
 LAYERS = {
     "core/numerics": 0, "core/signal": 0, "core/toml": 0, "core/registers": 0,
     "core/system": 0,
-    "core/linear": 1, "core/experiment": 1, "core/hydraulics": 1,
+    "core/linear": 1, "core/experiment": 1, "core/hydraulics": 1, "core/results": 1,
     "core/integrator_delay": 2, "core/fractional": 2,
     "core/online": 3,
     "core/reach": 4,

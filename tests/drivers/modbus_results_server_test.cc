@@ -1,0 +1,305 @@
+// The results server against real masters: libmodbus (its own float helper decodes the words),
+// pymodbus and mbpoll; writes refused with exception 1; 50 masters at once; masters that misbehave.
+#include <arpa/inet.h>
+#include <gtest/gtest.h>
+#include <modbus/modbus.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "core/results/results_image.h"
+#include "core/results/results_layout.h"
+#include "drivers/modbus/results_server.h"
+#include "tests/support/run_program.h"
+
+namespace canalid::drivers {
+namespace {
+
+using namespace std::chrono_literals;
+
+double WallNow() {
+  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
+
+int ParamAddress(int reach, const std::string& kind, bool batch, int index) {
+  const core::ResultsKind& k = *core::FindResultsKind(kind);
+  return core::ResultsSlotAddress(reach, k, batch) + core::kResultsSlotHeaderWords +
+         core::kResultsWordsPerParam * index;
+}
+
+class Master {
+ public:
+  explicit Master(int port) : ctx_(modbus_new_tcp("127.0.0.1", port)) {
+    modbus_set_response_timeout(ctx_, 5, 0);
+    connected_ = modbus_connect(ctx_) == 0;
+  }
+  ~Master() {
+    modbus_close(ctx_);
+    modbus_free(ctx_);
+  }
+  Master(const Master&) = delete;
+  Master& operator=(const Master&) = delete;
+  bool connected() const { return connected_; }
+  modbus_t* ctx() { return ctx_; }
+
+ private:
+  modbus_t* ctx_;
+  bool connected_ = false;
+};
+
+class ResultsServerTest : public ::testing::Test {
+ protected:
+  void Start(int max_clients = 64) {
+    core::ResultsImage image({"pool1", "pool2"}, WallNow() - 100.0);
+    ResultsServerOptions options;
+    options.port = "0";
+    options.max_clients = max_clients;
+    server_ = std::make_unique<ResultsServer>(std::move(image), options);
+    ASSERT_GT(server_->port(), 0);
+    server_->Update([&](core::ResultsImage& im) {
+      ASSERT_TRUE(im.SetModel(
+          1, {"id", "rls-bank", WallNow() - 30.0, 4321, names_, values_, std_devs_, 0, 0.004}));
+    });
+  }
+  // Waits (at most 10 s) until `done()`.
+  template <class Done>
+  static bool WaitFor(Done done) {
+    const auto end = std::chrono::steady_clock::now() + 10s;
+    while (!done()) {
+      if (std::chrono::steady_clock::now() > end) return false;
+      std::this_thread::sleep_for(10ms);
+    }
+    return true;
+  }
+
+  std::vector<std::string> names_{"delay_s", "area_m2"};
+  std::vector<double> values_{660.0, 32954.25};
+  std::vector<double> std_devs_{0.0, 912.5};
+  std::unique_ptr<ResultsServer> server_;
+};
+
+TEST_F(ResultsServerTest, LibmodbusReadsHoldingAndInputRegistersAlike) {
+  Start();
+  Master m(server_->port());
+  ASSERT_TRUE(m.connected());
+  const int at = ParamAddress(1, "id", false, 0);
+  std::uint16_t holding[8];
+  std::uint16_t input[8];
+  ASSERT_EQ(modbus_read_registers(m.ctx(), at, 8, holding), 8) << modbus_strerror(errno);
+  ASSERT_EQ(modbus_read_input_registers(m.ctx(), at, 8, input), 8) << modbus_strerror(errno);
+  EXPECT_EQ(modbus_get_float_abcd(holding), 660.0f);
+  EXPECT_EQ(modbus_get_float_abcd(holding + 2), 0.0f);
+  EXPECT_EQ(modbus_get_float_abcd(holding + 4), 32954.25f);
+  EXPECT_EQ(modbus_get_float_abcd(holding + 6), 912.5f);
+  EXPECT_EQ(std::vector<std::uint16_t>(holding, holding + 8),
+            std::vector<std::uint16_t>(input, input + 8));
+  // The slot's age is computed when asked: 30 s and counting.
+  std::uint16_t age[2];
+  const int slot = core::ResultsSlotAddress(1, *core::FindResultsKind("id"), false);
+  ASSERT_EQ(modbus_read_registers(m.ctx(), slot + core::kSlotAge, 2, age), 2);
+  EXPECT_GE(modbus_get_float_abcd(age), 30.0f);
+  EXPECT_LT(modbus_get_float_abcd(age), 90.0f);
+  std::uint16_t header[core::kHeaderWords];
+  ASSERT_EQ(modbus_read_input_registers(m.ctx(), 0, core::kHeaderWords, header),
+            core::kHeaderWords);
+  EXPECT_EQ(header[core::kHeaderReachCount], 2);
+  EXPECT_GE((header[core::kHeaderUptime] << 16) | header[core::kHeaderUptime + 1], 100);
+  EXPECT_EQ(server_->counters().requests, 4);
+}
+
+TEST_F(ResultsServerTest, EveryWriteIsRefusedWithIllegalFunction) {
+  Start();
+  Master m(server_->port());
+  ASSERT_TRUE(m.connected());
+  const int at = ParamAddress(1, "id", false, 0);
+  const std::uint16_t values[2] = {1, 2};
+  std::uint16_t read[2];
+  const std::uint8_t bits[2] = {1, 0};
+  EXPECT_EQ(modbus_write_register(m.ctx(), at, 1), -1);
+  EXPECT_EQ(errno, EMBXILFUN);
+  EXPECT_EQ(modbus_write_registers(m.ctx(), at, 2, values), -1);
+  EXPECT_EQ(errno, EMBXILFUN);
+  EXPECT_EQ(modbus_write_bit(m.ctx(), 0, 1), -1);
+  EXPECT_EQ(errno, EMBXILFUN);
+  EXPECT_EQ(modbus_write_bits(m.ctx(), 0, 2, bits), -1);
+  EXPECT_EQ(errno, EMBXILFUN);
+  EXPECT_EQ(modbus_mask_write_register(m.ctx(), at, 0, 1), -1);
+  EXPECT_EQ(errno, EMBXILFUN);
+  EXPECT_EQ(modbus_write_and_read_registers(m.ctx(), at, 2, values, at, 2, read), -1);
+  EXPECT_EQ(errno, EMBXILFUN);
+  ASSERT_EQ(modbus_read_registers(m.ctx(), at, 2, read), 2);
+  EXPECT_EQ(modbus_get_float_abcd(read), 660.0f);  // unchanged
+  EXPECT_EQ(server_->counters().refused_writes, 6);
+}
+
+TEST_F(ResultsServerTest, AddressesOutsideTheImageAndBitsAreIllegal) {
+  Start();
+  Master m(server_->port());
+  ASSERT_TRUE(m.connected());
+  const int size = core::ResultsImageWords(2);
+  std::uint16_t words[4];
+  std::uint8_t bits[4];
+  EXPECT_EQ(modbus_read_registers(m.ctx(), size - 2, 4, words), -1);
+  EXPECT_EQ(errno, EMBXILADD);
+  EXPECT_EQ(modbus_read_input_registers(m.ctx(), 65000, 1, words), -1);
+  EXPECT_EQ(errno, EMBXILADD);
+  EXPECT_EQ(modbus_read_bits(m.ctx(), 0, 4, bits), -1);
+  EXPECT_EQ(errno, EMBXILADD);
+  EXPECT_EQ(modbus_read_registers(m.ctx(), size - 4, 4, words), 4);  // the last words are there
+}
+
+TEST_F(ResultsServerTest, PymodbusAndMbpollReadTheSlot) {
+  Start();
+  const int at = ParamAddress(1, "id", false, 0);
+  const auto dir = testing::TestDirectory("results_server_pymodbus");
+  const testing::ProgramRun py = testing::RunProgramWithin(
+      "/usr/bin/python3 " + std::string(CANALID_SOURCE_DIR) +
+          "/tests/drivers/results_map_pymodbus.py " + std::to_string(server_->port()) + " " +
+          std::to_string(at) + " 8",
+      dir, 60);
+  ASSERT_EQ(py.exit_code, 0) << py.out << py.err;
+  const nlohmann::json j = nlohmann::json::parse(py.out);
+  EXPECT_EQ(j["floats"][0].get<double>(), 660.0);
+  EXPECT_EQ(j["floats"][2].get<double>(), 32954.25);
+  EXPECT_EQ(j["floats"][3].get<double>(), 912.5);
+  EXPECT_EQ(j["holding"], j["input"]);
+  EXPECT_EQ(j["write_exception"].get<int>(), 1);
+  EXPECT_EQ(j["write_multiple_exception"].get<int>(), 1);
+
+  // mbpoll: 0-based references (-0), f32 big-endian words (-B), input registers (-t 3:float).
+  const std::string base =
+      "mbpoll -m tcp -a 1 -p " + std::to_string(server_->port()) + " -1 -o 5 -0 ";
+  const testing::ProgramRun read = testing::RunProgramWithin(
+      base + "-B -t 3:float -r " + std::to_string(at + 4) + " -c 1 127.0.0.1", dir, 30);
+  EXPECT_NE(read.out.find("32954.2"), std::string::npos) << read.out << read.err;
+  const testing::ProgramRun write =
+      testing::RunProgramWithin(base + "-t 4 -r " + std::to_string(at) + " 127.0.0.1 7", dir, 30);
+  EXPECT_NE(write.exit_code, 0) << write.out << write.err;
+  EXPECT_NE((write.out + write.err).find("Illegal function"), std::string::npos)
+      << write.out << write.err;
+}
+
+TEST_F(ResultsServerTest, FiftyMastersAtOnceAreAllAnswered) {
+  Start();
+  constexpr int kMasters = 50;
+  constexpr int kReads = 100;
+  std::atomic<int> good{0};
+  std::vector<std::thread> threads;
+  threads.reserve(kMasters);
+  const int at = ParamAddress(1, "id", false, 0);
+  for (int i = 0; i < kMasters; ++i) {
+    threads.emplace_back([&] {
+      Master m(server_->port());
+      if (!m.connected()) return;
+      std::uint16_t words[4];
+      for (int k = 0; k < kReads; ++k) {
+        if (modbus_read_registers(m.ctx(), at, 4, words) == 4 &&
+            modbus_get_float_abcd(words) == 660.0f) {
+          good.fetch_add(1);
+        }
+      }
+    });
+  }
+  for (std::thread& t : threads) t.join();
+  EXPECT_EQ(good.load(), kMasters * kReads);
+  EXPECT_EQ(server_->counters().clients_accepted, kMasters);
+  EXPECT_EQ(server_->counters().requests, kMasters * kReads);
+  EXPECT_TRUE(WaitFor([&] { return server_->counters().clients_connected == 0; }));
+}
+
+TEST_F(ResultsServerTest, MastersBeyondTheLimitAreRefused) {
+  Start(2);
+  Master a(server_->port()), b(server_->port());
+  std::uint16_t w[1];
+  ASSERT_EQ(modbus_read_registers(a.ctx(), 0, 1, w), 1);
+  ASSERT_EQ(modbus_read_registers(b.ctx(), 0, 1, w), 1);
+  Master c(server_->port());
+  EXPECT_EQ(modbus_read_registers(c.ctx(), 0, 1, w), -1);
+  EXPECT_TRUE(WaitFor([&] { return server_->counters().clients_refused == 1; }));
+  EXPECT_EQ(modbus_read_registers(a.ctx(), 0, 1, w), 1);
+}
+
+int RawConnect(int port) {
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  addr.sin_port = htons(static_cast<std::uint16_t>(port));
+  if (connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) {
+    close(fd);
+    return -1;
+  }
+  return fd;
+}
+
+// A frame that stops mid-way (here after its function code) is dropped after libmodbus's byte
+// timeout; the connection's peer is not waited for.
+TEST_F(ResultsServerTest, AFrameThatStopsMidwayDropsOnlyItsConnection) {
+  Start();
+  const int fd = RawConnect(server_->port());
+  ASSERT_GE(fd, 0);
+  const std::uint8_t frame[] = {0, 1, 0, 0, 0, 6, 1, 3, 0};
+  ASSERT_EQ(send(fd, frame, sizeof frame, 0), static_cast<ssize_t>(sizeof frame));
+  EXPECT_TRUE(WaitFor([&] { return server_->counters().clients_dropped == 1; }));
+  std::uint8_t byte = 0;
+  EXPECT_EQ(recv(fd, &byte, 1, 0), 0);  // closed by the server
+  close(fd);
+  Master m(server_->port());
+  std::uint16_t w[1];
+  EXPECT_EQ(modbus_read_registers(m.ctx(), 0, 1, w), 1);
+}
+
+// A master that sends requests and never reads the replies fills its socket: the server drops it
+// after its send timeout (1 s, while the others wait) and goes on answering the others.
+TEST_F(ResultsServerTest, AMasterThatNeverReadsIsDroppedAfterTheSendTimeout) {
+  Start();
+  const int fd = RawConnect(server_->port());
+  ASSERT_GE(fd, 0);
+  const int small = 4096;
+  setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &small, sizeof small);
+  // Read 125 registers, over and over: each reply is 259 bytes.
+  std::vector<std::uint8_t> requests;
+  for (int i = 0; i < 20000; ++i) {
+    const std::uint8_t r[] = {static_cast<std::uint8_t>(i >> 8),
+                              static_cast<std::uint8_t>(i),
+                              0,
+                              0,
+                              0,
+                              6,
+                              1,
+                              3,
+                              0,
+                              0,
+                              0,
+                              125};
+    requests.insert(requests.end(), r, r + sizeof r);
+  }
+  std::thread writer([&] {
+    std::size_t sent = 0;
+    while (sent < requests.size()) {
+      const ssize_t n = send(fd, requests.data() + sent, requests.size() - sent, MSG_NOSIGNAL);
+      if (n <= 0) break;  // the server closed the connection
+      sent += static_cast<std::size_t>(n);
+    }
+  });
+  EXPECT_TRUE(WaitFor([&] { return server_->counters().clients_dropped == 1; }));
+  EXPECT_GT(server_->counters().requests, 1000);  // it was answered until its socket filled
+  Master m(server_->port());
+  std::uint16_t w[1];
+  EXPECT_EQ(modbus_read_registers(m.ctx(), 0, 1, w), 1) << modbus_strerror(errno);
+  shutdown(fd, SHUT_RDWR);
+  writer.join();
+  close(fd);
+}
+
+}  // namespace
+}  // namespace canalid::drivers
