@@ -82,6 +82,14 @@ DaemonExit Daemon::Run() {
   watchdog_period_s_ = WatchdogPeriodS();
   try {
     publisher_.PublishConfig(plan_.config_path, plan_.config_text, WallNowS());
+    if (plan_.results_enabled) {
+      results_ = std::make_unique<ResultsFeed>(plan_);
+      publisher_.SetModelObserver(
+          [this](const canalid::model_snapshot_t& model) { results_->OnModel(model); });
+      LogInfo("results map: serving " + std::to_string(reaches_.size()) + " reach(es) on " +
+              plan_.results_host + ":" + std::to_string(results_->port()) +
+              " (Modbus TCP, read-only)");
+    }
     LoadState();
     for (auto& reach : reaches_) {
       const int actuator = reach->wiring.runner.channels.actuator;
@@ -190,6 +198,7 @@ void Daemon::OnPoll(int index, const drivers::PollSample& s) {
               reach.runner.experiment_name());
       Handle(reach, *start, s.time_s);
     }
+    if (results_) results_->OnReachPoll(r, s, readings, reach.runner);
   }
 }
 
@@ -419,6 +428,7 @@ void Daemon::PublishHealth() {
                            uptime, wall);
   if (const drivers::CommandReceiver* receiver = commands_.receiver())
     publisher_.PublishHealth(CommandHealth(*receiver), uptime, wall);
+  if (results_) publisher_.PublishHealth(results_->Health(), uptime, wall);
   for (const auto& reach : reaches_) {
     publisher_.PublishHealth(ReachHealth(reach->name(), reach->pipeline()), uptime, wall);
     if (const auto& plan = reach->pipeline().experiment_plan()) {

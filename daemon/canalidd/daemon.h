@@ -15,6 +15,7 @@
 #include "daemon/canalidd/daemon_runtime.h"
 #include "daemon/canalidd/lcm_publisher.h"
 #include "daemon/canalidd/persistence_worker.h"
+#include "daemon/canalidd/results_feed.h"
 #include "daemon/canalidd/signal_watch.h"
 #include "daemon/canalidd/state_store.h"
 #include "drivers/auth/command_auth.h"
@@ -119,6 +120,7 @@ class Daemon final {
   std::optional<DaemonPlan> reloaded_plan_;
   std::optional<StateStore> store_;
   std::unique_ptr<PersistenceWorker> model_saver_;  ///< with a state directory
+  std::unique_ptr<ResultsFeed> results_;            ///< with [results] listen
   core::OnlineModelSnapshot snapshot_;              ///< reused for every online model's publication
   DaemonExit exit_ = DaemonExit::kStopped;
   bool stopping_ = false;

@@ -44,6 +44,11 @@ struct DaemonPlan {
   std::string command_key_file;
   double command_max_clock_skew_s = 5.0;
   std::vector<drivers::CommandKind> command_kinds;  ///< the kinds accepted (others are refused)
+  /// The results register map ([results] listen): served when results_enabled.
+  bool results_enabled = false;
+  std::string results_host;
+  int results_port = 0;
+  int results_max_clients = 64;
 };
 
 }  // namespace canalid::daemon

@@ -19,6 +19,8 @@ static_assert(core::kFlagIllConditioned == canalid::model_snapshot_t::FLAG_ILL_C
 static_assert(core::kFlagFrozen == canalid::model_snapshot_t::FLAG_FROZEN);
 static_assert(core::kFlagOutOfBounds == canalid::model_snapshot_t::FLAG_OUT_OF_BOUNDS);
 
+}  // namespace
+
 int8_t ExperimentStateCode(core::ExperimentPhase phase) {
   switch (phase) {
     case core::ExperimentPhase::kIdle:
@@ -36,6 +38,8 @@ int8_t ExperimentStateCode(core::ExperimentPhase phase) {
   }
   return canalid::experiment_state_t::STATE_IDLE;
 }
+
+namespace {
 
 // num_params = n; the arrays only ever grow (LCM encodes num_params entries), so that the names'
 // strings keep their storage when kinds with fewer parameters are published in between.
@@ -118,7 +122,12 @@ void LcmPublisher::PublishOnlineModel(const std::string& reach,
   model_.excitation = snapshot.excitation;
   model_.prediction_error_rms = snapshot.prediction_error_rms;
   model_.flags = snapshot.flags;
+  SendModel(reach);
+}
+
+void LcmPublisher::SendModel(const std::string& reach) {
   Send(Channel(model_channels_, "MODEL_", reach), model_);
+  if (model_observer_) model_observer_(model_);
 }
 
 void LcmPublisher::PublishBatchId(const std::string& reach,
@@ -142,7 +151,7 @@ void LcmPublisher::PublishBatchId(const std::string& reach,
   model_.prediction_error_rms = fit.metrics.rmse;
   model_.flags = (std::isfinite(fit.model.b) ? 0 : core::kFlagNan) |
                  (out_of_bounds ? core::kFlagOutOfBounds : 0);
-  Send(Channel(model_channels_, "MODEL_", reach), model_);
+  SendModel(reach);
 }
 
 void LcmPublisher::PublishModelJson(const std::string& reach, const nlohmann::json& model,
@@ -169,7 +178,7 @@ void LcmPublisher::PublishModelJson(const std::string& reach, const nlohmann::js
           ? (*metrics)["rmse"].get<double>()
           : kNan;
   model_.flags = flags;
-  Send(Channel(model_channels_, "MODEL_", reach), model_);
+  SendModel(reach);
 }
 
 void LcmPublisher::PublishExperiment(const std::string& reach, const std::string& experiment,

@@ -6,6 +6,7 @@
 #include <canalid/sample_t.hpp>
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -64,10 +65,17 @@ class LcmPublisher final {
   void PublishHealth(const HealthReport& report, double uptime_s, double time_s);
   void PublishConfig(const std::string& path, const std::string& text, double time_s);
 
+  /// Called with every model message after it is sent (also when the bus refused it): the
+  /// results register map shows what was published.
+  void SetModelObserver(std::function<void(const canalid::model_snapshot_t&)> observer) {
+    model_observer_ = std::move(observer);
+  }
+
   std::int64_t failures() const { return failures_; }
   const std::string& prefix() const { return prefix_; }
 
  private:
+  void SendModel(const std::string& reach);
   template <class Message>
   void Send(const std::string& channel, const Message& message);
   const std::string& Channel(std::map<std::string, std::string, std::less<>>& cache,
@@ -83,7 +91,11 @@ class LcmPublisher final {
   canalid::experiment_state_t experiment_;
   canalid::health_t health_;
   std::int64_t failures_ = 0;
+  std::function<void(const canalid::model_snapshot_t&)> model_observer_;
 };
+
+/// experiment_state_t.STATE_* of a phase.
+int8_t ExperimentStateCode(core::ExperimentPhase phase);
 
 /// Microseconds since the epoch from seconds.
 inline std::int64_t ToUtime(double time_s) { return static_cast<std::int64_t>(time_s * 1e6); }

@@ -35,6 +35,12 @@ DaemonPlan BuildDaemonPlan(const config::DaemonConfig& config, const std::string
   plan.command_key_file = config.commands.key_file;
   plan.command_max_clock_skew_s = config.commands.max_clock_skew_s;
   plan.command_kinds = config.commands.accepted;
+  if (const auto listen = config::ParseListenAddress(config.results.listen)) {
+    plan.results_enabled = true;
+    plan.results_host = listen->host;
+    plan.results_port = listen->port;
+  }
+  plan.results_max_clients = config.results.max_clients;
   for (const config::PlcConfig& plc : config.plcs) {
     PlcWiring wiring;
     wiring.link = BuildModbusConfig(plc);

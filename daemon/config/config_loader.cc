@@ -275,6 +275,14 @@ void ReadLcm(Reader& r, const toml::table& root, DaemonConfig& c) {
   r.String(*t, "lcm", "channel_prefix", c.lcm.channel_prefix);
 }
 
+void ReadResults(Reader& r, const toml::table& root, DaemonConfig& c) {
+  const toml::table* t = r.Table(root, "", "results");
+  if (t == nullptr) return;
+  r.Keys(*t, "results", {"listen", "max_clients"});
+  r.String(*t, "results", "listen", c.results.listen);
+  r.Integer(*t, "results", "max_clients", c.results.max_clients);
+}
+
 void ReadPlc(Reader& r, const toml::table& t, const std::string& at, PlcConfig& p) {
   r.String(t, at, "name", p.name, true);
   r.Enum(t, at, "transport", p.transport);
@@ -504,9 +512,11 @@ DaemonConfig Parse(core::TomlReader& toml) {
   const toml::table& root = toml.root();
   Reader r(toml);
   DaemonConfig c;
-  r.Keys(root, "", {"daemon", "lcm", "plc", "channel", "reach", "experiment", "commands"});
+  r.Keys(root, "",
+         {"daemon", "lcm", "results", "plc", "channel", "reach", "experiment", "commands"});
   ReadDaemon(r, root, c);
   ReadLcm(r, root, c);
+  ReadResults(r, root, c);
   r.Tables(root, "plc", [&](const toml::table& t, const std::string& at) {
     ReadPlc(r, t, at, c.plcs.emplace_back());
   });

@@ -84,6 +84,10 @@ std::string RenderDaemonConfig(const config::DaemonConfig& c) {
   w.Line("[lcm]");
   w.Str("url", c.lcm.url);
   w.Str("channel_prefix", c.lcm.channel_prefix);
+  w.Line("");
+  w.Line("[results]");
+  w.Str("listen", c.results.listen);
+  w.Int("max_clients", c.results.max_clients);
   for (const config::PlcConfig& p : c.plcs) {
     w.Line("");
     w.Line("[[plc]]");

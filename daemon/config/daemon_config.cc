@@ -10,6 +10,7 @@
 
 #include "core/experiment/experiment_design.h"
 #include "core/online/online_arx.h"
+#include "core/results/results_layout.h"
 #include "core/signal/prbs.h"
 
 namespace canalid::config {
@@ -550,6 +551,22 @@ void ValidateExperiments(const DaemonConfig& c, Collector& out) {
   }
 }
 
+void ValidateResults(const DaemonConfig& c, Collector& out) {
+  const ResultsSection& r = c.results;
+  out.IntRange("results.max_clients", r.max_clients, 1, 512);
+  if (r.listen.empty()) return;
+  if (!ParseListenAddress(r.listen)) {
+    out.Add("results.listen", Quoted(r.listen) +
+                                  " is not an address to listen on (allowed: \"host:port\" or "
+                                  "\"[IPv6]:port\", port 0..65535)");
+  }
+  if (c.reaches.size() > static_cast<std::size_t>(core::kResultsMaxReaches)) {
+    out.Add("results.listen", "the results map holds at most " +
+                                  std::to_string(core::kResultsMaxReaches) + " reaches, not " +
+                                  std::to_string(c.reaches.size()));
+  }
+}
+
 void ValidateCommands(const DaemonConfig& c, Collector& out) {
   const CommandsSection& k = c.commands;
   if (k.enabled && (k.key_file.empty() || k.key_file.front() != '/')) {
@@ -605,6 +622,25 @@ const PlcConfig* DaemonConfig::FindReachPlc(const ReachConfig& reach) const {
   return level == nullptr ? nullptr : FindPlc(level->plc);
 }
 
+std::optional<ListenAddress> ParseListenAddress(std::string_view listen) {
+  const std::size_t colon = listen.rfind(':');
+  if (colon == std::string_view::npos || colon == 0) return std::nullopt;
+  std::string_view host = listen.substr(0, colon);
+  const std::string_view port = listen.substr(colon + 1);
+  if (host.front() == '[') {
+    if (host.size() < 3 || host.back() != ']') return std::nullopt;
+    host = host.substr(1, host.size() - 2);
+  } else if (host.find(':') != std::string_view::npos) {
+    return std::nullopt;  // an IPv6 address needs its brackets
+  }
+  int value = 0;
+  const auto [end, error] = std::from_chars(port.data(), port.data() + port.size(), value);
+  if (error != std::errc() || end != port.data() + port.size() || value < 0 || value > 65535) {
+    return std::nullopt;
+  }
+  return ListenAddress{std::string(host), value};
+}
+
 std::vector<ConfigProblem> Validate(const DaemonConfig& config) {
   Collector out;
   ValidateDaemon(config, out);
@@ -612,6 +648,7 @@ std::vector<ConfigProblem> Validate(const DaemonConfig& config) {
   ValidateChannels(config, out);
   ValidateReaches(config, out);
   ValidateExperiments(config, out);
+  ValidateResults(config, out);
   ValidateCommands(config, out);
   return out.Take();
 }

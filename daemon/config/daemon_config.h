@@ -201,9 +201,25 @@ struct CommandsSection {
   bool operator==(const CommandsSection&) const = default;
 };
 
+/// The results register map (docs/results-register-map.md): off unless `listen` is given.
+struct ResultsSection {
+  /// "host:port" ("[v6]:port" for IPv6; port 0: any free port, logged); "" = no results map
+  std::string listen;
+  int max_clients = 64;  ///< [1, 512] connections at once
+  bool operator==(const ResultsSection&) const = default;
+};
+
+/// `listen`'s host and port; nullopt when it is not "host:port" with a port in 0..65535.
+struct ListenAddress {
+  std::string host;
+  int port = 0;
+};
+std::optional<ListenAddress> ParseListenAddress(std::string_view listen);
+
 struct DaemonConfig {
   DaemonSection daemon;
   LcmSection lcm;
+  ResultsSection results;
   std::vector<PlcConfig> plcs;
   std::vector<ChannelConfig> channels;
   std::vector<ReachConfig> reaches;

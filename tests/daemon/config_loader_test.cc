@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "daemon/canalidd/driver_config.h"
+#include "daemon/canalidd/plan_builder.h"
 #include "daemon/config/plan_from_config.h"
 
 namespace canalid::daemon {
@@ -74,8 +75,8 @@ TEST(ConfigLoaderTest, SyntaxErrorIsReportedWithItsPosition) {
 
 TEST(ConfigLoaderTest, UnknownKeysAndTablesAreErrors) {
   EXPECT_THAT(Issues("[deamon]\n" + kMinimal + "bogus = 1\n"),
-              ElementsAre("t.toml:1:2: deamon: unknown key (allowed: daemon, lcm, plc, channel, "
-                          "reach, experiment, commands)",
+              ElementsAre("t.toml:1:2: deamon: unknown key (allowed: daemon, lcm, results, plc, "
+                          "channel, reach, experiment, commands)",
                           "t.toml:14:1: channel[0].bogus: unknown key (allowed: name, plc, role, "
                           "register, address, type, word_order, scale, offset, unit, valid_min, "
                           "valid_max, writable)"));
@@ -217,6 +218,33 @@ accepted = ["start_experiment", "reboot"]
                           "t.toml:12:33: commands.accepted[1]: \"reboot\" is not allowed "
                           "(allowed: start_experiment, abort_experiment, reset_estimator, "
                           "publish_config)"));
+}
+
+TEST(ConfigLoaderTest, ResultsSectionIsCheckedWithPositions) {
+  EXPECT_THAT(Issues("[results]\nlisten = \"localhost\"\nmax_clients = 0\n" + kMinimal),
+              ElementsAre("t.toml:2:10: results.listen: \"localhost\" is not an address to listen "
+                          "on (allowed: \"host:port\" or \"[IPv6]:port\", port 0..65535)",
+                          "t.toml:3:15: results.max_clients: 0 is out of range (allowed: 1..512)"));
+  EXPECT_THAT(Issues("[results]\nlisten = \"::1:1503\"\nport = 1\n" + kMinimal),
+              ElementsAre("t.toml:2:10: results.listen: \"::1:1503\" is not an address to listen "
+                          "on (allowed: \"host:port\" or \"[IPv6]:port\", port 0..65535)",
+                          "t.toml:3:1: results.port: unknown key (allowed: listen, max_clients)"));
+  const config::DaemonConfig c = ParseDaemonConfig(
+      "[results]\nlisten = \"[::1]:1503\"\nmax_clients = 8\n" + kMinimal, "t.toml");
+  EXPECT_EQ(c.results.listen, "[::1]:1503");
+  EXPECT_EQ(c.results.max_clients, 8);
+  const auto address = config::ParseListenAddress(c.results.listen);
+  ASSERT_TRUE(address.has_value());
+  EXPECT_EQ(address->host, "::1");
+  EXPECT_EQ(address->port, 1503);
+  EXPECT_FALSE(config::ParseListenAddress("127.0.0.1:65536"));
+  EXPECT_FALSE(config::ParseListenAddress("127.0.0.1:"));
+  EXPECT_FALSE(config::ParseListenAddress(":1503"));
+  EXPECT_FALSE(config::ParseListenAddress("[::1]1503"));
+  // The plan serves the map only when listen is set.
+  EXPECT_TRUE(daemon::BuildDaemonPlan(c, "t.toml", "").results_enabled);
+  EXPECT_FALSE(
+      daemon::BuildDaemonPlan(ParseDaemonConfig(kMinimal, "t.toml"), "t.toml", "").results_enabled);
 }
 
 TEST(ConfigLoaderTest, RtuPlc) {

@@ -1,0 +1,251 @@
+// canalidd's results register map, live: the demo's configuration (ASCE canal 2, pool 2, designed
+// experiment at 600 x) against canalsim serve, with [results] listen on a free port.  While the
+// experiment runs, SCADA-like masters read the map: libmodbus, pymodbus and mbpoll; 50 libmodbus
+// masters poll it without pause until the end.  The truths: what the daemon published on LCM (its
+// log, read afterwards): each slot read in one request equals the message with the same
+// samples_used (f32 of the double); the experiment's phase; the refusal of writes.
+#include <gtest/gtest.h>
+#include <modbus/modbus.h>
+
+#include <atomic>
+#include <cmath>
+#include <filesystem>
+#include <lcm/lcm-cpp.hpp>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <canalid/model_snapshot_t.hpp>
+#include <canalid/sample_t.hpp>
+
+#include "core/results/results_layout.h"
+#include "tests/sim/serve_process.h"
+#include "tests/support/child_process.h"
+#include "tests/support/daemon_experiment_run.h"
+#include "tests/support/run_program.h"
+
+namespace canalid::testing {
+namespace {
+
+namespace fs = std::filesystem;
+
+float F32(const std::uint16_t* words) { return modbus_get_float_abcd(words); }
+
+// One slot read in one request (the server copies it under the image's lock: consistent).
+struct Slot {
+  std::vector<std::uint16_t> words;
+  bool published() const { return words[core::kSlotPublished] == 1; }
+  std::uint32_t samples() const {
+    return (std::uint32_t{words[core::kSlotSamples]} << 16) | words[core::kSlotSamples + 1];
+  }
+  float Value(const core::ResultsKind& kind, const std::string& name) const {
+    for (std::size_t i = 0; i < kind.params.size(); ++i) {
+      if (kind.params[i] == name) {
+        return F32(&words[core::kResultsSlotHeaderWords + core::kResultsWordsPerParam * i]);
+      }
+    }
+    ADD_FAILURE() << kind.name << " has no parameter " << name;
+    return NAN;
+  }
+};
+
+Slot ReadSlot(modbus_t* ctx, const std::string& kind_name, bool batch) {
+  const core::ResultsKind& kind = *core::FindResultsKind(kind_name);
+  Slot slot;
+  slot.words.resize(static_cast<std::size_t>(kind.words()));
+  const int at = core::ResultsSlotAddress(0, kind, batch);
+  // At most 125 registers per request: every slot of the demo's kinds (id, idz) fits one.
+  EXPECT_EQ(modbus_read_input_registers(ctx, at, kind.words(), slot.words.data()), kind.words())
+      << modbus_strerror(errno);
+  return slot;
+}
+
+// The first message of `channel` in the log with this kind, estimator class and samples_used.
+std::optional<canalid::model_snapshot_t> Published(const fs::path& log_path,
+                                                   const std::string& channel,
+                                                   const std::string& kind, bool batch,
+                                                   std::uint32_t samples) {
+  lcm::LogFile log(log_path.string(), "r");
+  while (const lcm::LogEvent* e = log.readNextEvent()) {
+    if (e->channel != channel) continue;
+    canalid::model_snapshot_t m;
+    if (m.decode(e->data, 0, e->datalen) != e->datalen) continue;
+    const bool is_batch = m.estimator == "batch" || m.estimator == "persisted";
+    if (m.model_kind == kind && is_batch == batch && m.samples_used == samples) return m;
+  }
+  return std::nullopt;
+}
+
+// Every parameter of the message equals the slot's, as f32 (NaN where the message has NaN).
+void ExpectSlotEquals(const Slot& slot, const std::string& kind_name,
+                      const canalid::model_snapshot_t& m) {
+  const core::ResultsKind& kind = *core::FindResultsKind(kind_name);
+  ASSERT_GT(m.num_params, 1);
+  for (int i = 0; i < m.num_params; ++i) {
+    const auto at = static_cast<std::size_t>(i);
+    const float expected = static_cast<float>(m.param_values[at]);
+    const float got = slot.Value(kind, m.param_names[at]);
+    if (std::isnan(expected)) {
+      EXPECT_TRUE(std::isnan(got)) << kind_name << " " << m.param_names[at];
+    } else {
+      EXPECT_EQ(got, expected) << kind_name << " " << m.param_names[at];
+    }
+  }
+  EXPECT_EQ(slot.words[core::kSlotFlags], m.flags);
+}
+
+// Masters polling the reach's status block without pause (20 ms apart) until stopped; the
+// destructor stops and joins them (also when an assertion returns early).
+class Pollers {
+ public:
+  Pollers(int port, int count) {
+    for (int i = 0; i < count; ++i) {
+      threads_.emplace_back([this, port] {
+        modbus_t* c = modbus_new_tcp("127.0.0.1", port);
+        modbus_set_response_timeout(c, 5, 0);
+        if (modbus_connect(c) != 0) {
+          failures_.fetch_add(1);
+        } else {
+          std::uint16_t words[125];
+          while (!stop_.load()) {
+            const bool ok =
+                modbus_read_registers(c, core::ResultsReachAddress(0), 125, words) == 125;
+            (ok ? reads_ : failures_).fetch_add(1);
+            std::this_thread::sleep_for(std::chrono::milliseconds(20));
+          }
+        }
+        modbus_close(c);
+        modbus_free(c);
+      });
+    }
+  }
+  ~Pollers() { Stop(); }
+  Pollers(const Pollers&) = delete;
+  Pollers& operator=(const Pollers&) = delete;
+  void Stop() {
+    stop_.store(true);
+    for (std::thread& t : threads_) {
+      if (t.joinable()) t.join();
+    }
+  }
+  long reads() const { return reads_.load(); }
+  long failures() const { return failures_.load(); }
+
+ private:
+  std::atomic<bool> stop_{false};
+  std::atomic<long> reads_{0}, failures_{0};
+  std::vector<std::thread> threads_;
+};
+
+TEST(DaemonResultsMap, ScadaMastersReadWhatTheDaemonPublishes) {
+  const fs::path dir = fs::path(CANALID_BINARY_DIR) / "test-output" / "daemon_results_map";
+  fs::remove_all(dir);
+  fs::create_directories(dir / "state");
+  ServeProcess canal({"--canal", SourcePath("config/sim/asce-canal2.toml"), "--plc",
+                      SourcePath("config/sim/plc/asce2.toml"), "--time-scale", "600"},
+                     dir / "canalsim.err");
+  const std::string config =
+      RewriteDaemonConfig(SourcePath("config/canalidd-asce2.toml"),
+                          {{"port", std::to_string(canal.port())},
+                           {"state_directory", "\"" + (dir / "state").string() + "\""}},
+                          "") +
+      "\n[results]\nlisten = \"127.0.0.1:0\"\n";
+  WriteFile(dir / "canalidd.toml", config);
+  const fs::path log_path = dir / "run.lcmlog";
+  ChildProcess daemon({std::string(CANALID_BINARY_DIR) + "/daemon/canalidd/canalidd", "--config",
+                       (dir / "canalidd.toml").string()},
+                      {"LCM_DEFAULT_URL=file://" + log_path.string() + "?mode=w"},
+                      dir / "canalidd.log");
+  const std::string key = "on 127.0.0.1:";
+  const std::string serving = daemon.WaitForLine("results map: serving 1 reach(es) " + key, 20000);
+  ASSERT_FALSE(serving.empty()) << daemon.output();
+  const int port = std::stoi(serving.substr(serving.find(key) + key.size()));
+
+  modbus_t* ctx = modbus_new_tcp("127.0.0.1", port);
+  modbus_set_response_timeout(ctx, 5, 0);
+  ASSERT_EQ(modbus_connect(ctx), 0) << modbus_strerror(errno);
+
+  // 50 masters poll the reach status and the online id slot until the experiment ends.
+  Pollers pollers(port, 50);
+
+  // While exciting: the phase, its progress and the comms status as a SCADA sees them.
+  ASSERT_FALSE(daemon.WaitForLine("reach pool2: experiment exciting", 60000).empty())
+      << daemon.output();
+  const int base = core::ResultsReachAddress(0);
+  std::uint16_t status[core::kReachStatusWords];
+  ASSERT_EQ(modbus_read_input_registers(ctx, base, core::kReachStatusWords, status),
+            core::kReachStatusWords);
+  EXPECT_EQ(status[core::kReachExperimentState],
+            3);  // exciting (or the daemon moved on: see below)
+  const float progress = F32(status + core::kReachProgress);
+  EXPECT_GT(progress, 0.0f);
+  EXPECT_LT(progress, 1.0f);
+  EXPECT_GT(F32(status + core::kReachTimeLeft), 0.0f);
+  EXPECT_EQ(status[core::kReachCommsStatus], 0);
+  EXPECT_GE(F32(status + core::kReachLevel), 1.9f);
+  EXPECT_LE(F32(status + core::kReachLevel), 2.3f);
+  EXPECT_EQ(status[0], ('p' << 8) | 'o');
+  // The online id bank publishes once its estimate is valid: wait for it (bounded).
+  Slot online = ReadSlot(ctx, "id", false);
+  for (int i = 0; i < 600 && !online.published(); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    online = ReadSlot(ctx, "id", false);
+  }
+  ASSERT_TRUE(online.published());
+
+  // pymodbus during the experiment: the same words by function 3 and 4, writes refused.
+  const ProgramRun py = RunProgramWithin(
+      "/usr/bin/python3 " + SourcePath("tests/drivers/results_map_pymodbus.py") + " " +
+          std::to_string(port) + " " +
+          std::to_string(core::ResultsSlotAddress(0, *core::FindResultsKind("id"), false)) + " 42",
+      dir, 60);
+  ASSERT_EQ(py.exit_code, 0) << py.out << py.err;
+  const nlohmann::json pj = nlohmann::json::parse(py.out);
+  EXPECT_EQ(pj["write_exception"].get<int>(), 1);
+  EXPECT_EQ(pj["holding"][0].get<int>(), 1);  // published
+
+  ASSERT_FALSE(daemon.WaitForLine("reach pool2: experiment done", 120000).empty())
+      << daemon.output();
+  pollers.Stop();
+  const Slot batch_id = ReadSlot(ctx, "id", true);
+  const Slot batch_idz = ReadSlot(ctx, "idz", true);
+  const Slot last_online = ReadSlot(ctx, "id", false);
+  ASSERT_TRUE(batch_id.published());
+  ASSERT_TRUE(batch_idz.published());
+  const std::string mbpoll =
+      "mbpoll -m tcp -a 1 -p " + std::to_string(port) + " -1 -o 5 -0 -B -t 3:float -c 1 -r " +
+      std::to_string(core::ResultsSlotAddress(0, *core::FindResultsKind("id"), true) +
+                     core::kResultsSlotHeaderWords + 4) +
+      " 127.0.0.1";
+  const ProgramRun mb = RunProgramWithin(mbpoll, dir, 30);
+  std::uint16_t done[1];
+  ASSERT_EQ(modbus_read_input_registers(ctx, base + core::kReachExperimentState, 1, done), 1);
+  EXPECT_EQ(done[0], 5);
+  modbus_close(ctx);
+  modbus_free(ctx);
+  EXPECT_EQ(daemon.Stop(SIGTERM), 0) << daemon.output();
+
+  EXPECT_EQ(pollers.failures(), 0);
+  EXPECT_GT(pollers.reads(), 50);
+  // Each slot is the message it was copied from (the LCM log is the daemon's record).
+  const std::string channel = "CANALID_ASCE2_MODEL_pool2";
+  for (const auto& [slot, kind, is_batch] :
+       {std::tuple{static_cast<const Slot*>(&online), "id", false},
+        std::tuple{&last_online, "id", false}, std::tuple{&batch_id, "id", true},
+        std::tuple{&batch_idz, "idz", true}}) {
+    const auto m = Published(log_path, channel, kind, is_batch, slot->samples());
+    ASSERT_TRUE(m.has_value()) << kind << (is_batch ? " batch" : " online") << " samples "
+                               << slot->samples();
+    ExpectSlotEquals(*slot, kind, *m);
+  }
+  // mbpoll prints the batch area (parameter 1 of id) with 6 significant digits.
+  const auto area = static_cast<double>(batch_id.Value(*core::FindResultsKind("id"), "area_m2"));
+  const std::string needle = "]:";
+  const std::size_t at = mb.out.find(needle);
+  ASSERT_NE(at, std::string::npos) << mb.out << mb.err;
+  EXPECT_NEAR(std::stod(mb.out.substr(at + needle.size())), area, 1e-5 * area) << mb.out;
+}
+
+}  // namespace
+}  // namespace canalid::testing
