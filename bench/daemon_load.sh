@@ -21,7 +21,13 @@
 #     libmodbus round trip per poll (sample_t.round_trip_s from the LCM log the daemon writes) and
 #     the CPU time per poll cycle; the peer's CPU over the same window and the ratio.
 #
-# Usage: bench/daemon_load.sh [build-dir]  (DURATION_S=60 RUNS=5 ONLINE_MODELS='"id", "frac-foptd"')
+# RESULTS_POLLERS=N (default 0): canalidd also serves its results register map
+# (docs/results-register-map.md) and N mbpoll masters read it at 10 Hz each (125 registers of
+# reach 1's block per request) from the start of the warm-up: canalidd's CPU and sample intervals
+# then include serving them.
+#
+# Usage: bench/daemon_load.sh [build-dir]
+#        (DURATION_S=60 RUNS=5 ONLINE_MODELS='"id", "frac-foptd"' RESULTS_POLLERS=0)
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 build=${1:-$here/build}
@@ -29,6 +35,7 @@ duration_s=${DURATION_S:-60}
 warmup_s=${WARMUP_S:-205}
 runs=${RUNS:-5}
 online_models=${ONLINE_MODELS:-'"id", "frac-foptd"'}
+results_pollers=${RESULTS_POLLERS:-0}
 work=$(mktemp -d)
 trap 'kill $(jobs -p) 2>/dev/null || true' EXIT
 
@@ -152,6 +159,7 @@ closed_loop = "off"
 EOF
   done
   printf '\n[commands]\nenabled = false\n'
+  if [ "$results_pollers" -gt 0 ]; then printf '\n[results]\nlisten = "127.0.0.1:0"\n'; fi
 } >"$config"
 mkdir -p "$work/state"
 "$build/daemon/canalidd/canalidd" --config "$config" --check-config
@@ -182,6 +190,7 @@ clk=$(getconf CLK_TCK)
 cpu_ready=$(awk '{ print $14 + $15 }' "/proc/$pid/stat")
 # The peer, polling through the warm-up so that it is steady when the window starts.
 peers=()
+map_pollers=()
 command -v mbpoll >/dev/null || { echo "daemon_load: mbpoll is missing (scripts/setup installs it)"; exit 1; }
 # The gate setpoint of record r is holding float 300 + 4 r: 16 floats from 300 cover all 8.
 for args in "-t 3:float -r 300 -c 32" "-t 3:float -r 364 -c 32" "-t 4:float -r 300 -c 16"; do
@@ -195,6 +204,15 @@ peer_cpu() {
     awk '{ print $14 + $15 }' "/proc/$p/stat"
   done | awk '{ s += $1 } END { print s }'
 }
+if [ "$results_pollers" -gt 0 ]; then
+  map_port=$(grep -o 'results map: serving .* on 127.0.0.1:[0-9]*' "$work/load.log" | sed 's/.*://')
+  [ -n "$map_port" ] || { echo "daemon_load: no results map in the log"; cat "$work/load.log"; exit 1; }
+  for _ in $(seq "$results_pollers"); do
+    mbpoll -m tcp -a 1 -p "$map_port" -0 -l 100 -o 1 -t 3 -r 1000 -c 125 127.0.0.1 >/dev/null 2>&1 &
+    map_pollers+=($!)
+  done
+  echo "results map on port $map_port: $results_pollers mbpoll masters at 10 Hz each"
+fi
 sleep "$warmup_s"
 cpu0=$(awk '{ print $14 + $15 }' "/proc/$pid/stat")
 peer0=$(peer_cpu)
@@ -203,8 +221,8 @@ echo "canalidd CPU over the warm-up ($warmup_s s): $(awk -v a="$cpu_ready" -v b=
 sleep "$duration_s"
 cpu1=$(awk '{ print $14 + $15 }' "/proc/$pid/stat")
 peer1=$(peer_cpu)
-kill -TERM "${peers[@]}"
-wait "${peers[@]}" 2>/dev/null || true
+kill -TERM "${peers[@]}" "${map_pollers[@]}"
+wait "${peers[@]}" "${map_pollers[@]}" 2>/dev/null || true
 hwm=$(awk '/VmHWM/ { print $2 }' "/proc/$pid/status")
 kill -TERM "$pid"
 wait "$pid" || true
@@ -241,6 +259,10 @@ rate = polls / ((utimes[-1] - utimes[0]) * 1e-6) if polls > 1 else 0
 print(f'polls ok: {polls} ({rate:.2f} per s over the log)')
 print(f'round trip per poll (s): mean {sum(trips) / polls:.6f}, median {trips[polls // 2]:.6f}, '
       f'p99 {trips[int(0.99 * polls)]:.6f}')
+gaps = sorted((b - a) * 1e-6 for a, b in zip(utimes, utimes[1:]))
+if gaps:
+    print(f'sample interval (s): median {gaps[len(gaps) // 2]:.4f}, '
+          f'p99 {gaps[int(0.99 * len(gaps))]:.4f}, max {gaps[-1]:.4f}')
 print(f'canalidd CPU over {duration} s: {cpu_s:.2f} s ({100 * cpu_s / float(duration):.1f} % of '
       f'one core); per poll cycle {1e3 * cpu_s / (float(duration) * rate):.3f} ms')
 print(f'canalidd peak RSS (VmHWM): {int(hwm) / 1024:.1f} MiB')
