@@ -23,7 +23,7 @@
 #
 # RESULTS_POLLERS=N (default 0): canalidd also serves its results register map
 # (docs/results-register-map.md) and N mbpoll masters read it at 10 Hz each (125 registers of
-# reach 1's block per request) from the start of the warm-up: canalidd's CPU and sample intervals
+# reach 0's (pool1's) block per request) from the start of the warm-up: canalidd's CPU and sample intervals
 # then include serving them.
 #
 # Usage: bench/daemon_load.sh [build-dir]

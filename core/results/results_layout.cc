@@ -16,7 +16,8 @@ constexpr std::array<ResultsField, 8> kHeader{{
      "offset of the online model slots in a reach block"},
     {kHeaderBatchOffset, ResultsType::kU16, "batch_offset",
      "offset of the batch model slots in a reach block"},
-    {kHeaderUptime, ResultsType::kU32, "uptime_s", "seconds since canalidd started", true},
+    {kHeaderUptime, ResultsType::kU32, "uptime_s", "seconds since canalidd started (or reloaded)",
+     true},
     {kHeaderChanges, ResultsType::kU16, "update_counter",
      "incremented on every update of the image (wraps at 65536): a SCADA watchdog"},
 }};

@@ -58,6 +58,7 @@ Daemon::Daemon(DaemonPlan plan, drivers::Bus& bus, PortFactory make_port, Reload
   }
   for (std::size_t r = 0; r < plan_.reaches.size(); ++r) {
     auto reach = std::make_unique<ReachRuntime>(plan_.reaches[r]);
+    reach->index = static_cast<int>(r);
     if (!reach->runner.initial_plan_error().empty())
       LogError("reach " + reach->name() + ": no experiment: " + reach->runner.initial_plan_error());
     plcs_.at(static_cast<std::size_t>(reach->wiring.plc))->reaches.push_back(static_cast<int>(r));
@@ -66,6 +67,7 @@ Daemon::Daemon(DaemonPlan plan, drivers::Bus& bus, PortFactory make_port, Reload
 }
 
 Daemon::~Daemon() {
+  publisher_.SetModelObserver(nullptr);  // results_ goes first
   for (auto& plc : plcs_) plc->poller->Stop();
 }
 
@@ -198,7 +200,7 @@ void Daemon::OnPoll(int index, const drivers::PollSample& s) {
               reach.runner.experiment_name());
       Handle(reach, *start, s.time_s);
     }
-    if (results_) results_->OnReachPoll(r, s, readings, reach.runner);
+    if (results_) results_->OnReachPoll(r, s, readings);
   }
 }
 
@@ -303,6 +305,9 @@ void Daemon::Handle(ReachRuntime& reach, const core::ReachActions& actions, doub
     ReportProcessModels(reach, time_s);
     Handle(reach, after, time_s);
   }
+  // Every path that moves the experiment (a poll, a lost link, a failed write, a command) ends
+  // here: the results map shows its state at once, also while no poll comes.
+  if (results_) results_->OnReachState(reach.index, reach.runner);
 }
 
 void Daemon::ReportIdzModel(const ReachRuntime& reach, double time_s) {

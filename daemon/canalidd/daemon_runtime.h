@@ -30,6 +30,7 @@ struct ReachRuntime {
   explicit ReachRuntime(const ReachWiring& w)
       : wiring(w), runner(w.runner), published_at(runner.pipeline().online_models().size(), -1) {}
   const ReachWiring& wiring;
+  int index = 0;  ///< in the plan's reaches
   core::ReachController runner;
   double last_time_s = 0.0;
   /// Per online model (ReachSampleProcessor::online_models()): the sample it was last published

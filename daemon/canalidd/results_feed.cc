@@ -84,8 +84,7 @@ void ResultsFeed::OnModel(const canalid::model_snapshot_t& m) {
 }
 
 void ResultsFeed::OnReachPoll(int reach, const drivers::PollSample& sample,
-                              const core::ReachReadings& readings,
-                              const core::ReachController& controller) {
+                              const core::ReachReadings& readings) {
   core::ResultsPoll poll;
   poll.time_s = sample.time_s;
   poll.status = static_cast<std::uint16_t>(sample.status.kind);
@@ -93,14 +92,15 @@ void ResultsFeed::OnReachPoll(int reach, const drivers::PollSample& sample,
                             ? static_cast<std::uint16_t>(sample.status.exception_code)
                             : 0;
   poll.level_m = readings.level_valid ? readings.level_m : kNan;
+  server_->Update([&](core::ResultsImage& image) { image.SetPoll(reach, poll); });
+}
+
+void ResultsFeed::OnReachState(int reach, const core::ReachController& controller) {
   const auto& plan = controller.pipeline().experiment_plan();
   const core::ResultsExperiment experiment =
       Experiment(controller.pipeline().experiment_state(), plan ? &*plan : nullptr,
                  poll_period_s_[static_cast<std::size_t>(reach)]);
-  server_->Update([&](core::ResultsImage& image) {
-    image.SetPoll(reach, poll);
-    image.SetExperiment(reach, experiment);
-  });
+  server_->Update([&](core::ResultsImage& image) { image.SetExperiment(reach, experiment); });
 }
 
 HealthReport ResultsFeed::Health() const {

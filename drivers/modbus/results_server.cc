@@ -5,13 +5,14 @@
 #include <netinet/tcp.h>
 #include <poll.h>
 #include <sys/eventfd.h>
-#include <sys/select.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <stdexcept>
 #include <vector>
 
@@ -47,17 +48,25 @@ int BoundPort(int fd) {
 
 }  // namespace
 
+/// One master's connection: the frame being received.
+struct ResultsServer::Client {
+  int fd = -1;
+  std::array<std::uint8_t, MODBUS_TCP_MAX_ADU_LENGTH> frame{};
+  int have = 0;               ///< bytes of the current frame received
+  double frame_start_s = 0;   ///< when its first byte came
+  double last_request_s = 0;  ///< the last whole request (or the connection's start)
+};
+
 /// What the serving thread owns: the libmodbus context, the sockets, the reply buffer.
 struct ResultsServer::Connections {
   modbus_t* ctx = nullptr;
   int listen_fd = -1;
-  std::vector<int> clients;
+  std::vector<Client> clients;
   std::vector<std::uint16_t> words;  ///< the registers a reply reads (filled per request)
   modbus_mapping_t mapping{};
-  std::vector<std::uint8_t> request = std::vector<std::uint8_t>(MODBUS_TCP_MAX_ADU_LENGTH);
 
   ~Connections() {
-    for (const int fd : clients) close(fd);
+    for (const Client& c : clients) close(c.fd);
     if (listen_fd >= 0) close(listen_fd);
     if (ctx != nullptr) modbus_free(ctx);
   }
@@ -74,7 +83,6 @@ ResultsServer::ResultsServer(core::ResultsImage image, ResultsServerOptions opti
     throw std::runtime_error("results map: cannot create a Modbus TCP context for " + where + ": " +
                              modbus_strerror(errno));
   }
-  modbus_set_byte_timeout(c.ctx, 0, 100000);
   c.listen_fd = modbus_tcp_pi_listen(c.ctx, 64);
   if (c.listen_fd < 0) {
     throw std::runtime_error("results map: cannot listen on " + where + ": " +
@@ -92,12 +100,10 @@ ResultsServer::ResultsServer(core::ResultsImage image, ResultsServerOptions opti
 }
 
 ResultsServer::~ResultsServer() {
+  stop_.store(true);
   const std::uint64_t one = 1;
-  if (write(stop_fd_, &one, sizeof(one)) < 0) {
-    // Cannot happen for an eventfd below its maximum; the join below would then wait for ever,
-    // so close the listening socket instead to end poll() with an error.
-    shutdown(connections_->listen_fd, SHUT_RDWR);
-  }
+  // Wakes poll() at once; were the write to fail, the loop sees stop_ within its 1 s wait.
+  if (write(stop_fd_, &one, sizeof(one)) < 0) stop_.store(true);
   if (thread_.joinable()) thread_.join();
   close(stop_fd_);
 }
@@ -107,81 +113,128 @@ ResultsServerCounters ResultsServer::counters() const {
           clients_refused_.load(), clients_dropped_.load(), clients_connected_.load()};
 }
 
+bool ResultsServer::Answer(Client& client) {
+  Connections& c = *connections_;
+  modbus_set_socket(c.ctx, client.fd);
+  const std::uint8_t* req = client.frame.data();
+  const int function = req[7];
+  requests_.fetch_add(1);
+  auto exception = [&](unsigned code) { return modbus_reply_exception(c.ctx, req, code) >= 0; };
+  if (IsWrite(function)) {
+    refused_writes_.fetch_add(1);
+    return exception(MODBUS_EXCEPTION_ILLEGAL_FUNCTION);
+  }
+  if (function != MODBUS_FC_READ_HOLDING_REGISTERS && function != MODBUS_FC_READ_INPUT_REGISTERS) {
+    return exception(MODBUS_EXCEPTION_ILLEGAL_FUNCTION);
+  }
+  if (client.have != 12) return exception(MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
+  const int first = Word(req + 8);
+  const int count = Word(req + 10);
+  if (count < 1 || count > MODBUS_MAX_READ_REGISTERS) {
+    return exception(MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
+  }
+  if (first + count > image_.size()) return exception(MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS);
+  {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    image_.Read(NowS(), first,
+                std::span<std::uint16_t>(c.words.data() + first, static_cast<std::size_t>(count)));
+  }
+  // A reply that does not fit the socket's buffer at once fails (non-blocking): dropped.
+  return modbus_reply(c.ctx, req, client.have, &c.mapping) >= 0;
+}
+
+bool ResultsServer::Receive(Client& client, double now_s) {
+  constexpr int kHeader = 7;  // MBAP: transaction, protocol, length, unit
+  for (;;) {
+    int need = kHeader;
+    if (client.have >= kHeader) {
+      const int length = Word(client.frame.data() + 4);  // unit id and PDU
+      if (Word(client.frame.data() + 2) != 0 || length < 2 ||
+          6 + length > MODBUS_TCP_MAX_ADU_LENGTH) {
+        clients_dropped_.fetch_add(1);
+        return false;
+      }
+      need = 6 + length;
+    }
+    if (client.have == need) {  // a whole frame: answered, then the next one
+      client.last_request_s = now_s;
+      const bool ok = Answer(client);
+      client.have = 0;
+      if (!ok) {
+        clients_dropped_.fetch_add(1);
+        return false;
+      }
+      continue;
+    }
+    const ssize_t n = recv(client.fd, client.frame.data() + client.have,
+                           static_cast<std::size_t>(need - client.have), 0);
+    if (n == 0) return false;  // the master closed the connection
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      if (errno == EAGAIN || errno == EWOULDBLOCK) return true;
+      return false;  // reset by the peer
+    }
+    if (client.have == 0) client.frame_start_s = now_s;
+    client.have += static_cast<int>(n);
+  }
+}
+
 void ResultsServer::Serve() {
   Connections& c = *connections_;
   std::vector<pollfd> fds;
-  const int header = modbus_get_header_length(c.ctx);
-  // Answers one request of `fd`; false when the connection must be closed.
-  auto answer = [&](int fd) {
-    modbus_set_socket(c.ctx, fd);
-    const int length = modbus_receive(c.ctx, c.request.data());
-    if (length < 0) {
-      if (errno != ECONNRESET) clients_dropped_.fetch_add(1);
-      return false;
-    }
-    if (length == 0) return true;  // not for us (libmodbus filtered it)
-    const std::uint8_t* pdu = c.request.data() + header;
-    const int function = pdu[0];
-    requests_.fetch_add(1);
-    if (IsWrite(function)) {
-      refused_writes_.fetch_add(1);
-      return modbus_reply_exception(c.ctx, c.request.data(), MODBUS_EXCEPTION_ILLEGAL_FUNCTION) >=
-             0;
-    }
-    if ((function == MODBUS_FC_READ_HOLDING_REGISTERS ||
-         function == MODBUS_FC_READ_INPUT_REGISTERS) &&
-        length >= header + 5) {
-      const int first = Word(pdu + 1);
-      const int count = Word(pdu + 3);
-      // Otherwise modbus_reply answers with the exception the request deserves.
-      if (count >= 1 && count <= MODBUS_MAX_READ_REGISTERS && first + count <= image_.size()) {
-        const std::lock_guard<std::mutex> lock(mutex_);
-        image_.Read(
-            NowS(), first,
-            std::span<std::uint16_t>(c.words.data() + first, static_cast<std::size_t>(count)));
+  while (!stop_.load()) {
+    const double now = NowS();
+    // Drop the connections past their deadline; wait at most until the next one (and 1 s).
+    double wait_s = 1.0;
+    std::erase_if(c.clients, [&](const Client& client) {
+      const double deadline = client.have > 0 ? client.frame_start_s + options_.frame_timeout_s
+                                              : client.last_request_s + options_.idle_timeout_s;
+      if (now >= deadline) {
+        close(client.fd);
+        clients_dropped_.fetch_add(1);
+        return true;
       }
-    }
-    if (modbus_reply(c.ctx, c.request.data(), length, &c.mapping) < 0) {
-      clients_dropped_.fetch_add(1);
+      wait_s = std::min(wait_s, deadline - now);
       return false;
-    }
-    return true;
-  };
-  for (;;) {
+    });
+    clients_connected_.store(static_cast<std::int64_t>(c.clients.size()));
     fds.clear();
     fds.push_back({stop_fd_, POLLIN, 0});
     fds.push_back({c.listen_fd, POLLIN, 0});
-    for (const int fd : c.clients) fds.push_back({fd, POLLIN, 0});
-    if (poll(fds.data(), fds.size(), -1) < 0) {
+    for (const Client& client : c.clients) fds.push_back({client.fd, POLLIN, 0});
+    const int wait_ms = static_cast<int>(std::ceil(std::max(wait_s, 0.0) * 1000.0));
+    if (poll(fds.data(), fds.size(), wait_ms) < 0) {
       if (errno == EINTR) continue;
-      return;  // cannot wait any more: the map stops answering (its clients time out)
+      return;  // cannot wait any more: the map stops answering (its masters time out)
     }
     if (fds[0].revents != 0) return;
+    const double received = NowS();
     for (std::size_t i = 2; i < fds.size(); ++i) {
       if (fds[i].revents == 0) continue;
-      if ((fds[i].revents & POLLIN) == 0 || !answer(fds[i].fd)) {
-        close(fds[i].fd);
-        c.clients.erase(std::find(c.clients.begin(), c.clients.end(), fds[i].fd));
-        clients_connected_.store(static_cast<std::int64_t>(c.clients.size()));
+      Client& client = c.clients[i - 2];
+      if (!Receive(client, received)) {
+        close(client.fd);
+        client.fd = -1;
       }
     }
+    std::erase_if(c.clients, [](const Client& client) { return client.fd < 0; });
     if ((fds[1].revents & POLLIN) != 0) {
-      const int fd = accept4(c.listen_fd, nullptr, nullptr, SOCK_CLOEXEC);
+      const int fd = accept4(c.listen_fd, nullptr, nullptr, SOCK_CLOEXEC | SOCK_NONBLOCK);
       if (fd < 0) continue;  // the peer went away before we accepted
-      // libmodbus waits on the socket with select(): a descriptor past FD_SETSIZE cannot be served.
-      if (fd >= FD_SETSIZE || static_cast<int>(c.clients.size()) >= options_.max_clients) {
+      if (static_cast<int>(c.clients.size()) >= options_.max_clients) {
         close(fd);
         clients_refused_.fetch_add(1);
         continue;
       }
       const int one = 1;
       setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof(one));
-      const timeval send_timeout{1, 0};
-      setsockopt(fd, SOL_SOCKET, SO_SNDTIMEO, &send_timeout, sizeof(send_timeout));
-      c.clients.push_back(fd);
+      Client client;
+      client.fd = fd;
+      client.last_request_s = received;
+      c.clients.push_back(client);
       clients_accepted_.fetch_add(1);
-      clients_connected_.store(static_cast<std::int64_t>(c.clients.size()));
     }
+    clients_connected_.store(static_cast<std::int64_t>(c.clients.size()));
   }
 }
 

@@ -14,6 +14,11 @@ struct ResultsServerOptions {
   std::string host = "127.0.0.1";  ///< address to bind ("0.0.0.0" / "::" for every interface)
   std::string port = "1503";       ///< "0" picks a free port (tests)
   int max_clients = 64;            ///< connections beyond are accepted and closed at once
+  /// A frame must arrive whole within this time of its first byte (s, > 0).
+  double frame_timeout_s = 1.0;
+  /// A connection with no request for this long is closed (s, > 0): connections a SCADA left
+  /// behind (its restart, a network break) do not hold the max_clients slots.
+  double idle_timeout_s = 60.0;
 };
 
 /// What the server has done since it started (monotonic, read from any thread).
@@ -22,18 +27,22 @@ struct ResultsServerCounters {
   std::int64_t refused_writes = 0;  ///< write requests answered with exception 1
   std::int64_t clients_accepted = 0;
   std::int64_t clients_refused = 0;  ///< over max_clients
-  std::int64_t clients_dropped = 0;  ///< closed for a malformed frame or a failed send
+  /// Closed by the server: a malformed frame, a frame not whole in time, replies not read, idle.
+  std::int64_t clients_dropped = 0;
   std::int64_t clients_connected = 0;
 };
 
-/// The results register map (core/results) served read-only over Modbus TCP by libmodbus on its
-/// own thread: functions 3 and 4 read the image (the same words for both); every write function
-/// (5, 6, 15, 16, 22, 23) is refused with exception 1 (illegal function), coils and discrete
-/// inputs do not exist (exception 2), as do addresses past the image.  The owner updates the image
-/// through Update(), which holds the lock for the update only; a request copies the words it asks
-/// for under the lock and replies after releasing it, so a slow client never holds it.  A client
-/// that does not read its replies is dropped after a 1 s send timeout; a frame that stops
-/// mid-way, after 100 ms (libmodbus's byte timeout).
+/// The results register map (core/results) served read-only over Modbus TCP on its own thread:
+/// libmodbus binds the socket and encodes the replies; the thread reads frames itself from
+/// non-blocking sockets, so that no master can hold it.  Functions 3 and 4 read the image (the
+/// same words for both); every write function (5, 6, 15, 16, 22, 23) gets exception 1 (illegal
+/// function), as does any other function; a count outside 1..125 gets exception 3, an address
+/// past the image exception 2.  A master is dropped when its frame is malformed (MBAP protocol id
+/// not 0, length outside 2..254), not whole within frame_timeout_s, when it does not read its
+/// replies (a reply that does not fit its socket's send buffer at once), or after idle_timeout_s
+/// without a request.  The owner updates the image through Update(), which holds the image's lock
+/// for the update only; a request copies the words it asks for under the lock and replies after
+/// releasing it.
 class ResultsServer final {
  public:
   /// Binds and listens.  @throws std::runtime_error naming the address and the system error.
@@ -56,7 +65,12 @@ class ResultsServer final {
 
  private:
   struct Connections;
+  struct Client;
   void Serve();
+  /// Reads what `client` sent; false when the connection must be closed.
+  bool Receive(Client& client, double now_s);
+  /// Answers the whole frame in client.frame; false when the connection must be closed.
+  bool Answer(Client& client);
 
   core::ResultsImage image_;
   ResultsServerOptions options_;
@@ -64,6 +78,7 @@ class ResultsServer final {
   std::unique_ptr<Connections> connections_;
   int port_ = 0;
   int stop_fd_ = -1;  ///< eventfd: written by the destructor to wake the thread
+  std::atomic<bool> stop_{false};
   std::atomic<std::int64_t> requests_{0}, refused_writes_{0}, clients_accepted_{0},
       clients_refused_{0}, clients_dropped_{0}, clients_connected_{0};
   std::thread thread_;

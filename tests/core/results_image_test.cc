@@ -195,14 +195,17 @@ TEST(ResultsImage, PollsAndExperimentFillTheReachStatus) {
 TEST(ResultsImage, APartialReadOfAnAgeGetsItsHalf) {
   ResultsImage image({"p1"}, 0.0);
   image.SetPoll(0, {100.0, 0, 0, 1.0});
-  const auto all = ReadAll(image, 150.0);
+  // 50.1 s: both halves of the f32 are non-zero (the stored words are zero).
+  const auto all = ReadAll(image, 150.1);
   const int at = ResultsReachAddress(0) + kReachPollAge;
+  ASSERT_NE(all[static_cast<std::size_t>(at)], 0);
+  ASSERT_NE(all[static_cast<std::size_t>(at) + 1], 0);
   std::array<std::uint16_t, 1> high{}, low{};
-  image.Read(150.0, at, high);
-  image.Read(150.0, at + 1, low);
+  image.Read(150.1, at, high);
+  image.Read(150.1, at + 1, low);
   EXPECT_EQ(high[0], all[static_cast<std::size_t>(at)]);
   EXPECT_EQ(low[0], all[static_cast<std::size_t>(at) + 1]);
-  EXPECT_EQ(F32(all, at), 50.0f);
+  EXPECT_FLOAT_EQ(F32(all, at), 50.1f);
   std::array<std::uint16_t, 1> uptime_low{};
   image.Read(150.0, kHeaderUptime + 1, uptime_low);
   EXPECT_EQ(uptime_low[0], 150);
