@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <csignal>
 #include <filesystem>
 #include <lcm/lcm-cpp.hpp>
 #include <nlohmann/json.hpp>
@@ -236,6 +237,28 @@ TEST(DaemonResultsMap, ScadaMastersReadWhatTheDaemonPublishes) {
   EXPECT_EQ(done[0], 5);
   modbus_close(ctx);
   modbus_free(ctx);
+
+  // A reload (SIGHUP) restarts the map with the daemon: the models it persisted are back at once
+  // in the batch slots (estimator 5, persisted), with the same values.
+  const std::size_t before = daemon.output().size();
+  kill(daemon.pid(), SIGHUP);
+  const std::string again =
+      daemon.WaitForLine("results map: serving 1 reach(es) " + key, 20000, before);
+  ASSERT_FALSE(again.empty()) << daemon.output();
+  // Logged once the state directory is loaded.
+  ASSERT_FALSE(daemon.WaitForLine("running: ", 20000, before).empty()) << daemon.output();
+  modbus_t* reloaded =
+      modbus_new_tcp("127.0.0.1", std::stoi(again.substr(again.find(key) + key.size())));
+  modbus_set_response_timeout(reloaded, 5, 0);
+  ASSERT_EQ(modbus_connect(reloaded), 0) << modbus_strerror(errno);
+  const Slot persisted_id = ReadSlot(reloaded, "id", true);
+  modbus_close(reloaded);
+  modbus_free(reloaded);
+  EXPECT_EQ(persisted_id.words[core::kSlotEstimator], 5);
+  const core::ResultsKind& id_kind = *core::FindResultsKind("id");
+  for (const char* name : {"delay_s", "area_m2"}) {
+    EXPECT_EQ(persisted_id.Value(id_kind, name), batch_id.Value(id_kind, name)) << name;
+  }
   EXPECT_EQ(daemon.Stop(SIGTERM), 0) << daemon.output();
 
   EXPECT_EQ(pollers.failures(), 0);
