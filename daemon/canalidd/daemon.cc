@@ -15,6 +15,7 @@
 #include "daemon/canalidd/systemd_notify.h"
 #include "drivers/json/model_json.h"
 #include "drivers/modbus/modbus_port.h"
+#include "drivers/modbus/results_server.h"
 
 namespace canalid::daemon {
 namespace {
@@ -130,6 +131,20 @@ bool Daemon::Reload() {
   if (!plan) {
     LogWarning("the new configuration is not valid; carrying on with the running one");
     return false;
+  }
+  // A results map moved to another address: that address must be free before this daemon stops
+  // (the new one could not serve it, and would exit).  The same address is handed over.
+  if (plan->results_enabled &&
+      (!plan_.results_enabled || plan->results_host != plan_.results_host ||
+       plan->results_port != plan_.results_port)) {
+    const std::string problem =
+        drivers::ResultsListenProblem(plan->results_host, std::to_string(plan->results_port));
+    if (!problem.empty()) {
+      LogWarning("the new configuration's results map cannot listen on " + plan->results_host +
+                 ":" + std::to_string(plan->results_port) + " (" + problem +
+                 "); carrying on with the running one");
+      return false;
+    }
   }
   reloaded_plan_ = std::move(plan);
   NotifyReloading();

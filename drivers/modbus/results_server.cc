@@ -1,6 +1,7 @@
 #include "drivers/modbus/results_server.h"
 
 #include <modbus/modbus.h>
+#include <netdb.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
 #include <poll.h>
@@ -15,6 +16,8 @@
 #include <cmath>
 #include <stdexcept>
 #include <vector>
+
+#include "core/system/errno_text.h"
 
 namespace canalid::drivers {
 namespace {
@@ -47,6 +50,33 @@ int BoundPort(int fd) {
 }
 
 }  // namespace
+
+std::string ResultsListenProblem(const std::string& host, const std::string& port) {
+  addrinfo hints{};
+  hints.ai_family = AF_UNSPEC;
+  hints.ai_socktype = SOCK_STREAM;
+  hints.ai_flags = AI_PASSIVE;
+  addrinfo* found = nullptr;
+  if (const int rc = getaddrinfo(host.c_str(), port.c_str(), &hints, &found); rc != 0) {
+    return gai_strerror(rc);
+  }
+  std::string problem = "no address";
+  for (const addrinfo* a = found; a != nullptr; a = a->ai_next) {
+    const int fd = socket(a->ai_family, a->ai_socktype | SOCK_CLOEXEC, a->ai_protocol);
+    if (fd < 0) continue;
+    const int one = 1;
+    setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof(one));  // as modbus_tcp_pi_listen
+    const bool bound = bind(fd, a->ai_addr, a->ai_addrlen) == 0 && listen(fd, 1) == 0;
+    if (!bound) problem = core::ErrnoText(errno);
+    close(fd);
+    if (bound) {
+      problem.clear();
+      break;
+    }
+  }
+  freeaddrinfo(found);
+  return problem;
+}
 
 /// One master's connection: the frame being received.
 struct ResultsServer::Client {

@@ -21,6 +21,9 @@ struct ResultsServerOptions {
   double idle_timeout_s = 60.0;
 };
 
+/// Why host:port cannot be bound now (a probe socket, closed at once); empty when it can.
+std::string ResultsListenProblem(const std::string& host, const std::string& port);
+
 /// What the server has done since it started (monotonic, read from any thread).
 struct ResultsServerCounters {
   std::int64_t requests = 0;        ///< requests answered (with data or an exception)

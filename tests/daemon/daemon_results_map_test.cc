@@ -4,13 +4,18 @@
 // masters poll it without pause until the end.  The truths: what the daemon published on LCM (its
 // log, read afterwards): each slot read in one request equals the message with the same
 // samples_used (f32 of the double); the experiment's phase; the refusal of writes.
+#include <arpa/inet.h>
 #include <gtest/gtest.h>
 #include <modbus/modbus.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <csignal>
+#include <cstdlib>
 #include <filesystem>
 #include <lcm/lcm-cpp.hpp>
 #include <nlohmann/json.hpp>
@@ -207,6 +212,21 @@ TEST(DaemonResultsMap, ScadaMastersReadWhatTheDaemonPublishes) {
   }
   ASSERT_TRUE(online.published());
 
+  // mbpoll during the experiment: the online id delay (f32, high word first), a whole number of
+  // samples of 60 plant s within the bank's 0..1400 s.
+  const int online_delay = core::ResultsSlotAddress(0, *core::FindResultsKind("id"), false) +
+                           core::kResultsSlotHeaderWords;
+  const ProgramRun mb_online = RunProgramWithin("mbpoll -m tcp -a 1 -p " + std::to_string(port) +
+                                                    " -1 -o 5 -0 -B -t 3:float -c 1 -r " +
+                                                    std::to_string(online_delay) + " 127.0.0.1",
+                                                dir, 30);
+  const std::size_t value_at = mb_online.out.find("]:");
+  ASSERT_NE(value_at, std::string::npos) << mb_online.out << mb_online.err;
+  const double delay = std::stod(mb_online.out.substr(value_at + 2));
+  EXPECT_GE(delay, 0.0) << mb_online.out;
+  EXPECT_LE(delay, 1400.0) << mb_online.out;
+  EXPECT_EQ(std::fmod(delay, 60.0), 0.0) << mb_online.out;
+
   // pymodbus during the experiment: the same words by function 3 and 4, writes refused.
   const ProgramRun py = RunProgramWithin(
       "/usr/bin/python3 " + SourcePath("tests/drivers/results_map_pymodbus.py") + " " +
@@ -259,6 +279,32 @@ TEST(DaemonResultsMap, ScadaMastersReadWhatTheDaemonPublishes) {
   for (const char* name : {"delay_s", "area_m2"}) {
     EXPECT_EQ(persisted_id.Value(id_kind, name), batch_id.Value(id_kind, name)) << name;
   }
+
+  // A reload that moves the map to an address in use is refused before the daemon stops.
+  const int busy = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  socklen_t length = sizeof address;
+  ASSERT_EQ(bind(busy, reinterpret_cast<sockaddr*>(&address), sizeof address), 0);
+  ASSERT_EQ(listen(busy, 1), 0);
+  ASSERT_EQ(getsockname(busy, reinterpret_cast<sockaddr*>(&address), &length), 0);
+  std::string moved = config;
+  const std::string listen_line = "listen = \"127.0.0.1:0\"";
+  moved.replace(moved.find(listen_line), listen_line.size(),
+                "listen = \"127.0.0.1:" + std::to_string(ntohs(address.sin_port)) + "\"");
+  WriteFile(dir / "canalidd.toml", moved);
+  const std::size_t before_busy = daemon.output().size();
+  kill(daemon.pid(), SIGHUP);
+  EXPECT_FALSE(
+      daemon
+          .WaitForLine("cannot listen on 127.0.0.1:" + std::to_string(ntohs(address.sin_port)),
+                       20000, before_busy)
+          .empty())
+      << daemon.output();
+  EXPECT_EQ(daemon.output().find("reloading the configuration", before_busy), std::string::npos);
+  EXPECT_TRUE(daemon.Running());
+  close(busy);
   EXPECT_EQ(daemon.Stop(SIGTERM), 0) << daemon.output();
 
   EXPECT_EQ(pollers.failures(), 0);

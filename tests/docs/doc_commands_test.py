@@ -98,6 +98,9 @@ NOT_OURS = {
     "openssl": "writes the command key into /etc (root)",
     "chmod": "sets the mode of the key in /etc (root)",
     "$EDITOR": "the reader edits the installed configuration",
+    "mbpoll": "a Modbus master reading a canalidd's results map on port 1503; "
+              "DaemonResultsMap.ScadaMastersReadWhatTheDaemonPublishes reads a live map with mbpoll "
+              "(the batch area at 2014), ResultsServerTest.PymodbusAndMbpollReadTheSlot a served one",
     "cat": "writes an environment file into /etc (root)",
     "ip": "adds a multicast route (root)",
 }

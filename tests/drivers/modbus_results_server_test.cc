@@ -148,6 +148,15 @@ TEST_F(ResultsServerTest, LibmodbusReadsHoldingAndInputRegistersAlike) {
   EXPECT_EQ(server_->counters().requests, 4);
 }
 
+// The probe a reload runs before it moves the map: a port in use, an unknown host are problems.
+TEST_F(ResultsServerTest, ListenProblemNamesAnAddressInUse) {
+  Start();
+  const std::string problem = ResultsListenProblem("127.0.0.1", std::to_string(server_->port()));
+  EXPECT_NE(problem.find("in use"), std::string::npos) << problem;
+  EXPECT_EQ(ResultsListenProblem("127.0.0.1", "0"), "");
+  EXPECT_NE(ResultsListenProblem("no-such-host.invalid", "1503"), "");
+}
+
 TEST_F(ResultsServerTest, EveryWriteIsRefusedWithIllegalFunction) {
   Start();
   Master m(server_->port());
