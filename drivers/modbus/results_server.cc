@@ -32,9 +32,20 @@ bool IsWrite(int function) {
          function == MODBUS_FC_WRITE_AND_READ_REGISTERS;
 }
 
-double NowS() {
+// The wall clock, for the ages a reply shows.
+double WallNowS() {
   return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
 }
+
+// The monotonic clock, for the connections' deadlines (a stepped wall clock moves none of them).
+double SteadyNowS() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+// Frames answered per connection before the others get their turn.
+constexpr int kFramesPerTurn = 16;
+// How long accepting pauses when the process is out of descriptors or memory.
+constexpr double kAcceptPauseS = 0.1;
 
 int BoundPort(int fd) {
   sockaddr_storage address{};
@@ -55,7 +66,7 @@ std::string ResultsListenProblem(const std::string& host, const std::string& por
   addrinfo hints{};
   hints.ai_family = AF_UNSPEC;
   hints.ai_socktype = SOCK_STREAM;
-  hints.ai_flags = AI_PASSIVE;
+  hints.ai_flags = AI_PASSIVE | AI_ADDRCONFIG;  // as modbus_tcp_pi_listen
   addrinfo* found = nullptr;
   if (const int rc = getaddrinfo(host.c_str(), port.c_str(), &hints, &found); rc != 0) {
     return gai_strerror(rc);
@@ -63,7 +74,10 @@ std::string ResultsListenProblem(const std::string& host, const std::string& por
   std::string problem = "no address";
   for (const addrinfo* a = found; a != nullptr; a = a->ai_next) {
     const int fd = socket(a->ai_family, a->ai_socktype | SOCK_CLOEXEC, a->ai_protocol);
-    if (fd < 0) continue;
+    if (fd < 0) {
+      problem = core::ErrnoText(errno);
+      continue;
+    }
     const int one = 1;
     setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof(one));  // as modbus_tcp_pi_listen
     const bool bound = bind(fd, a->ai_addr, a->ai_addrlen) == 0 && listen(fd, 1) == 0;
@@ -125,7 +139,10 @@ ResultsServer::ResultsServer(core::ResultsImage image, ResultsServerOptions opti
   c.mapping.nb_input_registers = image_.size();
   c.mapping.tab_input_registers = c.words.data();
   stop_fd_ = eventfd(0, EFD_CLOEXEC);
-  if (stop_fd_ < 0) throw std::runtime_error("results map: cannot create an eventfd");
+  if (stop_fd_ < 0) {
+    throw std::runtime_error("results map: cannot create an eventfd: " + core::ErrnoText(errno));
+  }
+  c.clients.reserve(static_cast<std::size_t>(options_.max_clients));
   thread_ = std::thread([this] { Serve(); });
 }
 
@@ -133,7 +150,9 @@ ResultsServer::~ResultsServer() {
   stop_.store(true);
   const std::uint64_t one = 1;
   // Wakes poll() at once; were the write to fail, the loop sees stop_ within its 1 s wait.
-  if (write(stop_fd_, &one, sizeof(one)) < 0) stop_.store(true);
+  if (write(stop_fd_, &one, sizeof(one)) < 0) {
+    // nothing more to do: see above
+  }
   if (thread_.joinable()) thread_.join();
   close(stop_fd_);
 }
@@ -148,6 +167,9 @@ bool ResultsServer::Answer(Client& client) {
   modbus_set_socket(c.ctx, client.fd);
   const std::uint8_t* req = client.frame.data();
   const int function = req[7];
+  // A function code with the exception bit cannot be answered (its exception would read as a
+  // reply of function code - 0x80): the frame is malformed.
+  if (function >= 0x80) return false;
   requests_.fetch_add(1);
   auto exception = [&](unsigned code) { return modbus_reply_exception(c.ctx, req, code) >= 0; };
   if (IsWrite(function)) {
@@ -160,13 +182,15 @@ bool ResultsServer::Answer(Client& client) {
   if (client.have != 12) return exception(MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
   const int first = Word(req + 8);
   const int count = Word(req + 10);
+  // Checked here, not left to modbus_reply: its own exception path sleeps the response timeout
+  // and flushes the socket (pipelined requests lost).  Only valid reads reach modbus_reply.
   if (count < 1 || count > MODBUS_MAX_READ_REGISTERS) {
     return exception(MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
   }
   if (first + count > image_.size()) return exception(MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS);
   {
     const std::lock_guard<std::mutex> lock(mutex_);
-    image_.Read(NowS(), first,
+    image_.Read(WallNowS(), first,
                 std::span<std::uint16_t>(c.words.data() + first, static_cast<std::size_t>(count)));
   }
   // A reply that does not fit the socket's buffer at once fails (non-blocking): dropped.
@@ -175,7 +199,7 @@ bool ResultsServer::Answer(Client& client) {
 
 bool ResultsServer::Receive(Client& client, double now_s) {
   constexpr int kHeader = 7;  // MBAP: transaction, protocol, length, unit
-  for (;;) {
+  for (int answered = 0; answered < kFramesPerTurn;) {
     int need = kHeader;
     if (client.have >= kHeader) {
       const int length = Word(client.frame.data() + 4);  // unit id and PDU
@@ -190,6 +214,7 @@ bool ResultsServer::Receive(Client& client, double now_s) {
       client.last_request_s = now_s;
       const bool ok = Answer(client);
       client.have = 0;
+      ++answered;
       if (!ok) {
         clients_dropped_.fetch_add(1);
         return false;
@@ -207,13 +232,15 @@ bool ResultsServer::Receive(Client& client, double now_s) {
     if (client.have == 0) client.frame_start_s = now_s;
     client.have += static_cast<int>(n);
   }
+  return true;  // the others' turn; poll() reports what is left at once
 }
 
 void ResultsServer::Serve() {
   Connections& c = *connections_;
   std::vector<pollfd> fds;
+  double accept_paused_until = 0.0;
   while (!stop_.load()) {
-    const double now = NowS();
+    const double now = SteadyNowS();
     // Drop the connections past their deadline; wait at most until the next one (and 1 s).
     double wait_s = 1.0;
     std::erase_if(c.clients, [&](const Client& client) {
@@ -230,15 +257,17 @@ void ResultsServer::Serve() {
     clients_connected_.store(static_cast<std::int64_t>(c.clients.size()));
     fds.clear();
     fds.push_back({stop_fd_, POLLIN, 0});
-    fds.push_back({c.listen_fd, POLLIN, 0});
+    const bool accepting = now >= accept_paused_until;
+    if (!accepting) wait_s = std::min(wait_s, accept_paused_until - now);
+    fds.push_back({c.listen_fd, static_cast<short>(accepting ? POLLIN : 0), 0});
     for (const Client& client : c.clients) fds.push_back({client.fd, POLLIN, 0});
-    const int wait_ms = static_cast<int>(std::ceil(std::max(wait_s, 0.0) * 1000.0));
+    const int wait_ms = static_cast<int>(std::ceil(wait_s * 1000.0));
     if (poll(fds.data(), fds.size(), wait_ms) < 0) {
       if (errno == EINTR) continue;
       return;  // cannot wait any more: the map stops answering (its masters time out)
     }
     if (fds[0].revents != 0) return;
-    const double received = NowS();
+    const double received = SteadyNowS();
     for (std::size_t i = 2; i < fds.size(); ++i) {
       if (fds[i].revents == 0) continue;
       Client& client = c.clients[i - 2];
@@ -250,7 +279,14 @@ void ResultsServer::Serve() {
     std::erase_if(c.clients, [](const Client& client) { return client.fd < 0; });
     if ((fds[1].revents & POLLIN) != 0) {
       const int fd = accept4(c.listen_fd, nullptr, nullptr, SOCK_CLOEXEC | SOCK_NONBLOCK);
-      if (fd < 0) continue;  // the peer went away before we accepted
+      if (fd < 0) {
+        // Out of descriptors or memory: the connection stays queued and the socket readable, so
+        // accepting pauses instead of spinning.  (Otherwise the peer went away first.)
+        if (errno == EMFILE || errno == ENFILE || errno == ENOBUFS || errno == ENOMEM) {
+          accept_paused_until = received + kAcceptPauseS;
+        }
+        continue;
+      }
       if (static_cast<int>(c.clients.size()) >= options_.max_clients) {
         close(fd);
         clients_refused_.fetch_add(1);

@@ -41,9 +41,11 @@ struct ResultsServerCounters {
 /// same words for both); every write function (5, 6, 15, 16, 22, 23) gets exception 1 (illegal
 /// function), as does any other function; a count outside 1..125 gets exception 3, an address
 /// past the image exception 2.  A master is dropped when its frame is malformed (MBAP protocol id
-/// not 0, length outside 2..254), not whole within frame_timeout_s, when it does not read its
+/// not 0, length outside 2..254, a function code with the exception bit), not whole within
+/// frame_timeout_s, when it does not read its
 /// replies (a reply that does not fit its socket's send buffer at once), or after idle_timeout_s
-/// without a request.  The owner updates the image through Update(), which holds the image's lock
+/// without a request.  A connection is answered at most 16 frames in a row before the others get
+/// their turn.  The owner updates the image through Update(), which holds the image's lock
 /// for the update only; a request copies the words it asks for under the lock and replies after
 /// releasing it.
 class ResultsServer final {

@@ -364,13 +364,14 @@ TEST_F(ResultsServerTest, AMalformedHeaderDropsItsConnection) {
   for (const std::vector<std::uint8_t>& frame :
        {std::vector<std::uint8_t>{0, 1, 0, 7, 0, 6, 1, 3, 0, 0, 0, 1},  // protocol id 7
         std::vector<std::uint8_t>{0, 1, 0, 0, 0, 1, 1},                 // length 1
-        std::vector<std::uint8_t>{0, 1, 0, 0, 1, 0, 1}}) {              // length 256
+        std::vector<std::uint8_t>{0, 1, 0, 0, 1, 0, 1},                 // length 256
+        std::vector<std::uint8_t>{0, 1, 0, 0, 0, 2, 1, 0x83}}) {        // an exception's code
     const int fd = RawConnect(server_->port());
     ASSERT_GE(fd, 0);
     EXPECT_TRUE(Exchange(fd, frame, 1).empty());  // closed, no reply
     close(fd);
   }
-  EXPECT_EQ(server_->counters().clients_dropped, 3);
+  EXPECT_EQ(server_->counters().clients_dropped, 4);
   EXPECT_EQ(server_->counters().requests, 0);
 }
 
