@@ -1,11 +1,11 @@
 #include "daemon/canalidd/results_feed.h"
 
 #include <algorithm>
-#include <chrono>
 #include <limits>
 #include <span>
 
 #include "core/results/results_image.h"
+#include "daemon/canalidd/clock.h"
 
 namespace canalid::daemon {
 namespace {
@@ -16,10 +16,6 @@ std::vector<std::string> ReachNames(const DaemonPlan& plan) {
   std::vector<std::string> names;
   for (const ReachWiring& reach : plan.reaches) names.push_back(reach.runner.name);
   return names;
-}
-
-double WallNowS() {
-  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
 }
 
 // The experiment's progress over its settle and excitation samples, and the wall seconds left.

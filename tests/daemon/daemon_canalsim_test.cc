@@ -298,20 +298,6 @@ TEST(DaemonCanalsim, Pool2OnlineBanksChooseTheBatchDelays) {
   EXPECT_NEAR(online_id.at("area_m2"), open_loop_area, 0.05 * open_loop_area) << id;
 }
 
-// Every model_snapshot_t on `channel` of the LCM log `path`, in order.
-std::vector<canalid::model_snapshot_t> ModelMessagesIn(const fs::path& path,
-                                                       const std::string& channel) {
-  std::vector<canalid::model_snapshot_t> messages;
-  lcm::LogFile log(path.string(), "r");
-  if (!log.good()) return messages;
-  while (const lcm::LogEvent* e = log.readNextEvent()) {
-    if (e->channel != channel) continue;
-    canalid::model_snapshot_t m;
-    if (m.decode(e->data, 0, e->datalen) == e->datalen) messages.push_back(m);
-  }
-  return messages;
-}
-
 // The same in the run's log, dir/run.lcmlog.
 std::vector<canalid::model_snapshot_t> ModelMessages(const fs::path& dir,
                                                      const std::string& channel) {

@@ -4,11 +4,8 @@
 // masters poll it without pause until the end.  The truths: what the daemon published on LCM (its
 // log, read afterwards): each slot read in one request equals the message with the same
 // samples_used (f32 of the double); the experiment's phase; the refusal of writes.
-#include <arpa/inet.h>
 #include <gtest/gtest.h>
 #include <modbus/modbus.h>
-#include <netinet/in.h>
-#include <sys/socket.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -30,6 +27,7 @@
 #include "tests/sim/serve_process.h"
 #include "tests/support/child_process.h"
 #include "tests/support/daemon_experiment_run.h"
+#include "tests/support/loopback_port.h"
 #include "tests/support/run_program.h"
 
 namespace canalid::testing {
@@ -73,13 +71,11 @@ std::optional<canalid::model_snapshot_t> Published(const fs::path& log_path,
                                                    const std::string& channel,
                                                    const std::string& kind, bool batch,
                                                    std::uint32_t samples) {
-  lcm::LogFile log(log_path.string(), "r");
-  while (const lcm::LogEvent* e = log.readNextEvent()) {
-    if (e->channel != channel) continue;
-    canalid::model_snapshot_t m;
-    if (m.decode(e->data, 0, e->datalen) != e->datalen) continue;
-    const bool is_batch = m.estimator == "batch" || m.estimator == "persisted";
-    if (m.model_kind == kind && is_batch == batch && m.samples_used == samples) return m;
+  for (const canalid::model_snapshot_t& m : ModelMessagesIn(log_path, channel)) {
+    if (m.model_kind == kind && core::IsBatchEstimator(m.estimator) == batch &&
+        m.samples_used == samples) {
+      return m;
+    }
   }
   return std::nullopt;
 }
@@ -204,12 +200,15 @@ TEST(DaemonResultsMap, ScadaMastersReadWhatTheDaemonPublishes) {
   EXPECT_GE(F32(status + core::kReachLevel), 1.9f);
   EXPECT_LE(F32(status + core::kReachLevel), 2.3f);
   EXPECT_EQ(status[0], ('p' << 8) | 'o');
-  // The online id bank publishes once its estimate is valid: wait for it (bounded).
-  Slot online = ReadSlot(ctx, "id", false);
-  for (int i = 0; i < 600 && !online.published(); ++i) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    online = ReadSlot(ctx, "id", false);
-  }
+  // The online id bank publishes once its estimate is valid: wait for it (bounded, and over at
+  // once should the daemon exit).
+  Slot online;
+  EXPECT_TRUE(daemon.WaitUntil(
+      [&] {
+        online = ReadSlot(ctx, "id", false);
+        return online.published();
+      },
+      60000, 100));
   ASSERT_TRUE(online.published());
 
   // mbpoll during the experiment: the online id delay (f32, high word first), a whole number of
@@ -281,30 +280,23 @@ TEST(DaemonResultsMap, ScadaMastersReadWhatTheDaemonPublishes) {
   }
 
   // A reload that moves the map to an address in use is refused before the daemon stops.
-  const int busy = socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in address{};
-  address.sin_family = AF_INET;
-  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  socklen_t length = sizeof address;
-  ASSERT_EQ(bind(busy, reinterpret_cast<sockaddr*>(&address), sizeof address), 0);
-  ASSERT_EQ(listen(busy, 1), 0);
-  ASSERT_EQ(getsockname(busy, reinterpret_cast<sockaddr*>(&address), &length), 0);
+  const LoopbackListener busy = ListenOnLoopback();
+  ASSERT_GE(busy.fd, 0);
   std::string moved = config;
   const std::string listen_line = "listen = \"127.0.0.1:0\"";
   moved.replace(moved.find(listen_line), listen_line.size(),
-                "listen = \"127.0.0.1:" + std::to_string(ntohs(address.sin_port)) + "\"");
+                "listen = \"127.0.0.1:" + std::to_string(busy.port) + "\"");
   WriteFile(dir / "canalidd.toml", moved);
   const std::size_t before_busy = daemon.output().size();
   kill(daemon.pid(), SIGHUP);
-  EXPECT_FALSE(
-      daemon
-          .WaitForLine("cannot listen on 127.0.0.1:" + std::to_string(ntohs(address.sin_port)),
-                       20000, before_busy)
-          .empty())
+  EXPECT_FALSE(daemon
+                   .WaitForLine("cannot listen on 127.0.0.1:" + std::to_string(busy.port), 20000,
+                                before_busy)
+                   .empty())
       << daemon.output();
   EXPECT_EQ(daemon.output().find("reloading the configuration", before_busy), std::string::npos);
   EXPECT_TRUE(daemon.Running());
-  close(busy);
+  close(busy.fd);
   EXPECT_EQ(daemon.Stop(SIGTERM), 0) << daemon.output();
 
   EXPECT_EQ(pollers.failures(), 0);

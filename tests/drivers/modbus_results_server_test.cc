@@ -19,12 +19,14 @@
 #include "core/results/results_image.h"
 #include "core/results/results_layout.h"
 #include "drivers/modbus/results_server.h"
+#include "tests/support/loopback_port.h"
 #include "tests/support/run_program.h"
 
 namespace canalid::drivers {
 namespace {
 
 using namespace std::chrono_literals;
+using testing::ConnectLoopback;
 
 double WallNow() {
   return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
@@ -55,19 +57,6 @@ class Master {
   modbus_t* ctx_;
   bool connected_ = false;
 };
-
-int RawConnect(int port) {
-  const int fd = socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in addr{};
-  addr.sin_family = AF_INET;
-  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  addr.sin_port = htons(static_cast<std::uint16_t>(port));
-  if (connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) {
-    close(fd);
-    return -1;
-  }
-  return fd;
-}
 
 // Sends `bytes` on `fd` and reads `count` bytes back (at most 5 s); what it read.
 std::vector<std::uint8_t> Exchange(int fd, const std::vector<std::uint8_t>& bytes,
@@ -275,7 +264,7 @@ TEST_F(ResultsServerTest, MastersBeyondTheLimitAreRefused) {
 // on the same connection (sent in the same segment) is answered too: nothing is flushed.
 TEST_F(ResultsServerTest, ExceptionsAreAnsweredAtOnceAndPipelinedRequestsAreKept) {
   Start();
-  const int fd = RawConnect(server_->port());
+  const int fd = ConnectLoopback(server_->port());
   ASSERT_GE(fd, 0);
   // Function 3 with count 0, function 8 (diagnostics), function 43 (device identification),
   // function 3 with count 126, then a good read of 1 register at 0, in one write.
@@ -345,7 +334,7 @@ TEST_F(ResultsServerTest, ExceptionsAreAnsweredAtOnceAndPipelinedRequestsAreKept
 // is answered (the server never waits on one connection).
 TEST_F(ResultsServerTest, AFrameThatStopsMidwayDropsOnlyItsConnection) {
   Start(64, 0.5);
-  const int fd = RawConnect(server_->port());
+  const int fd = ConnectLoopback(server_->port());
   ASSERT_GE(fd, 0);
   const std::uint8_t frame[] = {0, 1, 0, 0, 0, 6, 1, 3, 0};
   ASSERT_EQ(send(fd, frame, sizeof frame, 0), static_cast<ssize_t>(sizeof frame));
@@ -366,7 +355,7 @@ TEST_F(ResultsServerTest, AMalformedHeaderDropsItsConnection) {
         std::vector<std::uint8_t>{0, 1, 0, 0, 0, 1, 1},                 // length 1
         std::vector<std::uint8_t>{0, 1, 0, 0, 1, 0, 1},                 // length 256
         std::vector<std::uint8_t>{0, 1, 0, 0, 0, 2, 1, 0x83}}) {        // an exception's code
-    const int fd = RawConnect(server_->port());
+    const int fd = ConnectLoopback(server_->port());
     ASSERT_GE(fd, 0);
     EXPECT_TRUE(Exchange(fd, frame, 1).empty());  // closed, no reply
     close(fd);
@@ -379,8 +368,8 @@ TEST_F(ResultsServerTest, AMalformedHeaderDropsItsConnection) {
 // went away do not hold the slots.
 TEST_F(ResultsServerTest, IdleConnectionsAreClosed) {
   Start(2, 1.0, 0.3);
-  const int a = RawConnect(server_->port());
-  const int b = RawConnect(server_->port());
+  const int a = ConnectLoopback(server_->port());
+  const int b = ConnectLoopback(server_->port());
   ASSERT_GE(a, 0);
   ASSERT_GE(b, 0);
   EXPECT_TRUE(WaitFor([&] { return server_->counters().clients_dropped == 2; }));
@@ -399,7 +388,7 @@ TEST_F(ResultsServerTest, IdleConnectionsAreClosed) {
 // 3 s here, drops it instead.)
 TEST_F(ResultsServerTest, AMasterThatNeverReadsIsDropped) {
   Start(64, 1.0, 3.0);
-  const int fd = RawConnect(server_->port());
+  const int fd = ConnectLoopback(server_->port());
   ASSERT_GE(fd, 0);
   const int small = 4096;
   setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &small, sizeof small);

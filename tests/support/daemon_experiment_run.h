@@ -81,6 +81,21 @@ struct DaemonExperimentRun {
   std::string replay_err;                          ///< `canalid replay`'s stderr
 };
 
+/// Every model_snapshot_t on `channel` of the LCM log `path`, in order (none when it cannot be
+/// read).
+inline std::vector<canalid::model_snapshot_t> ModelMessagesIn(const std::filesystem::path& path,
+                                                              const std::string& channel) {
+  std::vector<canalid::model_snapshot_t> messages;
+  lcm::LogFile log(path.string(), "r");
+  if (!log.good()) return messages;
+  while (const lcm::LogEvent* e = log.readNextEvent()) {
+    if (e->channel != channel) continue;
+    canalid::model_snapshot_t m;
+    if (m.decode(e->data, 0, e->datalen) == e->datalen) messages.push_back(m);
+  }
+  return messages;
+}
+
 /// Runs canalidd on `config` (written to dir/canalidd.toml; LCM to dir/run.lcmlog) until it logs
 /// "reach REACH: experiment done" (at most `timeout_ms`), stops it with SIGTERM, reads what it
 /// published on `prefix`MODEL_`reach` and `prefix`EXPERIMENT_`reach`, and replays the log.
