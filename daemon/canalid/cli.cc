@@ -8,6 +8,7 @@
 #include <string>
 
 #include "canalid/version.h"
+#include "daemon/canalid/dashboard_command.h"
 #include "daemon/canalid/design_command.h"
 #include "daemon/canalid/export_command.h"
 #include "daemon/canalid/identify_command.h"
@@ -65,6 +66,8 @@ int Run(int argc, char** argv) {
   AddReportCommand(app, report, exit_code);
   TheoryOptions theory;
   AddTheoryCommand(app, theory, exit_code);
+  DashboardCommandOptions dashboard;
+  AddDashboardCommand(app, dashboard, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

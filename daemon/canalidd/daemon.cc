@@ -35,7 +35,8 @@ Daemon::Daemon(DaemonPlan plan, drivers::Bus& bus, PortFactory make_port, Reload
       signals_(
           io_, [this] { BeginStop(DaemonExit::kStopped); }, [this] { return Reload(); }),
       bus_watch_(
-          io_, bus_, [this] { commands_.LogRejected(false); }, [this] { return stopping_; }),
+          io_, bus_, [this] { commands_.LogRejected(false); }, [this] { return stopping_; },
+          [](bool lost, const std::string& text) { lost ? LogError(text) : LogInfo(text); }),
       health_timer_(io_),
       stop_timer_(io_),
       publisher_(bus_, plan_.channel_prefix),

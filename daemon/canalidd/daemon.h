@@ -9,7 +9,6 @@
 #include <vector>
 
 #include "core/reach/reach_sample_processor.h"
-#include "daemon/canalidd/bus_watch.h"
 #include "daemon/canalidd/command_dispatch.h"
 #include "daemon/canalidd/daemon_plan.h"
 #include "daemon/canalidd/daemon_runtime.h"
@@ -20,6 +19,7 @@
 #include "daemon/canalidd/state_store.h"
 #include "drivers/auth/command_auth.h"
 #include "drivers/lcm/bus.h"
+#include "drivers/lcm/bus_watch.h"
 #include "drivers/lcm/command_receiver.h"
 #include "drivers/modbus/plc_poller.h"
 
@@ -110,7 +110,7 @@ class Daemon final {
   ReloadFunction reload_;
   boost::asio::io_context io_;
   SignalWatch signals_;
-  BusWatch bus_watch_;
+  drivers::BusWatch bus_watch_;
   boost::asio::steady_timer health_timer_;
   boost::asio::steady_timer stop_timer_;
   LcmPublisher publisher_;

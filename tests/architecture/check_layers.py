@@ -33,11 +33,13 @@ LAYERS = {
     "core/online": 3,
     "core/reach": 4,
     "core": 5,  # canalid_core: all of core, for programs and tests
-    "drivers/auth": 10, "drivers/csv": 10, "drivers/json": 10, "drivers/modbus": 10,
+    "drivers/auth": 10, "drivers/csv": 10, "drivers/http": 10, "drivers/json": 10,
+    "drivers/modbus": 10,
     "drivers/lcm": 11,  # signed commands travel over the bus
     "drivers": 10,
     "sim": 10,
     "daemon/config": 20,
+    "daemon/dashboard": 25,  # `canalid dashboard`'s library: above the configuration it reads
     "daemon/canalidd": 30, "daemon/canalid": 30, "sim/canalsim": 30,
     "daemon/command": 31,
     "bench": 40, "tests": 40,

@@ -5,9 +5,14 @@
 // works inside a chroot, where a user namespace cannot be made); otherwise inside a user namespace
 // (`unshare -r`).  A machine that allows neither cannot run these tests: they fail with the reason
 // (PrivateNetworkProblem), never pass silently.
+#include <sched.h>
 #include <unistd.h>
 
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -52,6 +57,38 @@ inline std::string PrivateNetworkProblem(const std::filesystem::path& scratch_di
            std::string(geteuid() == 0 ? "unshare -n" : "unshare -rn") +
            "` then `ip route add 224.0.0.0/4 dev lo` failed: " + child.output() +
            "); run the tests as root or where user namespaces are allowed";
+  }
+  return {};
+}
+
+/// Moves this process into a new network namespace whose loopback is up with the route udpm
+/// needs; the programs it starts afterwards share it, so the test, its servers and their clients
+/// talk on a bus and ports of their own.  Call it first in the test, before any thread starts
+/// (a user namespace, needed when not root, cannot be entered by a threaded process).  Empty on
+/// success, else why it failed (the test fails with it).
+inline std::string EnterPrivateNetwork() {
+  const uid_t uid = geteuid();
+  const gid_t gid = getegid();
+  if (uid == 0) {
+    if (unshare(CLONE_NEWNET) != 0) {
+      return std::string("unshare(CLONE_NEWNET): ") + std::strerror(errno) +
+             " (a container without CAP_SYS_ADMIN?)";
+    }
+  } else {
+    if (unshare(CLONE_NEWUSER | CLONE_NEWNET) != 0) {
+      return std::string("unshare(CLONE_NEWUSER | CLONE_NEWNET): ") + std::strerror(errno) +
+             "; run the tests as root or where user namespaces are allowed";
+    }
+    std::ofstream("/proc/self/setgroups") << "deny";
+    std::ofstream("/proc/self/uid_map") << "0 " << uid << " 1";
+    std::ofstream("/proc/self/gid_map") << "0 " << gid << " 1";
+  }
+  const int status = std::system(  // NOLINT(cert-env33-c): a fixed command, no user input
+      "ip link set lo up && ip route add 224.0.0.0/4 dev lo");
+  if (status != 0) {
+    return "`ip link set lo up && ip route add 224.0.0.0/4 dev lo` failed in the new namespace "
+           "(status " +
+           std::to_string(status) + "; Debian package iproute2)";
   }
   return {};
 }

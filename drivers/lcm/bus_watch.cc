@@ -1,28 +1,28 @@
-#include "daemon/canalidd/bus_watch.h"
+#include "drivers/lcm/bus_watch.h"
 
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
+#include <chrono>
 #include <cstring>
 
 #include "core/system/errno_text.h"
-#include "daemon/canalidd/clock.h"
-#include "daemon/canalidd/log.h"
 
-namespace canalid::daemon {
+namespace canalid::drivers {
 
-BusWatch::BusWatch(boost::asio::io_context& io, drivers::Bus& bus,
-                   std::function<void()> after_handle, std::function<bool()> stopping)
+BusWatch::BusWatch(boost::asio::io_context& io, Bus& bus, std::function<void()> after_handle,
+                   std::function<bool()> stopping, ConnectionLog log)
     : io_(io),
       bus_(bus),
       after_handle_(std::move(after_handle)),
       stopping_(std::move(stopping)),
+      log_(std::move(log)),
       retry_timer_(io) {}
 
 void BusWatch::Start() {
-  lcm_bus_ = dynamic_cast<drivers::LcmBus*>(&bus_);
+  lcm_bus_ = dynamic_cast<LcmBus*>(&bus_);
   if (lcm_bus_ == nullptr) return;  // a fake bus in tests is pumped by the test
   Watch();
 }
@@ -78,9 +78,10 @@ void BusWatch::OnLost(const std::string& why) {
   ++losses_;
   const double delay_s = backoff_s_;
   backoff_s_ = std::min(backoff_s_ * 2.0, kBackoffMaxS);
-  LogError("LCM bus " + lcm_bus_->url() + " lost (" + why + "); reconnecting in " +
-           std::to_string(delay_s) + " s");
-  retry_timer_.expires_after(Seconds(delay_s));
+  log_(true, "LCM bus " + lcm_bus_->url() + " lost (" + why + "); reconnecting in " +
+                 std::to_string(delay_s) + " s");
+  retry_timer_.expires_after(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(delay_s)));
   retry_timer_.async_wait([this](const boost::system::error_code& error) {
     if (error || stopping_()) return;
     std::string problem;
@@ -90,9 +91,9 @@ void BusWatch::OnLost(const std::string& why) {
     }
     ++reconnects_;
     backoff_s_ = kBackoffMinS;
-    LogInfo("LCM bus " + lcm_bus_->url() + " reconnected");
+    log_(false, "LCM bus " + lcm_bus_->url() + " reconnected");
     Watch();
   });
 }
 
-}  // namespace canalid::daemon
+}  // namespace canalid::drivers

@@ -1,0 +1,55 @@
+#pragma once
+// Helpers of the dashboard suites: LCM messages as bytes, and /metrics text read back through
+// Python's reference Prometheus parser (parse_metrics.py).
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "tests/support/run_program.h"
+
+namespace canalid::testing {
+
+/// `message` encoded as lcm-gen encodes it.
+template <class Message>
+std::vector<std::uint8_t> Encoded(const Message& message) {
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(message.getEncodedSize()));
+  message.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  return bytes;
+}
+
+/// Every sample of `metrics` as the reference parser reads it ({"family", "type", "name",
+/// "labels", "value"}); fails the test when the text does not parse.
+inline std::vector<nlohmann::json> ParsedMetrics(const std::string& metrics,
+                                                 const std::filesystem::path& dir) {
+  const auto path = dir / "metrics.txt";
+  WriteFile(path, metrics);
+  const ProgramRun run = RunProgramWithin("/usr/bin/python3 " + std::string(CANALID_SOURCE_DIR) +
+                                              "/tests/dashboard/parse_metrics.py " + path.string(),
+                                          dir, 60);
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  std::vector<nlohmann::json> samples;
+  std::istringstream lines(run.out);
+  for (std::string line; std::getline(lines, line);) samples.push_back(nlohmann::json::parse(line));
+  return samples;
+}
+
+/// The value of the sample `name` whose labels include `labels` (NaN when there is none).
+inline double MetricValue(const std::vector<nlohmann::json>& samples, const std::string& name,
+                          const nlohmann::json& labels) {
+  for (const auto& s : samples) {
+    if (s["name"] != name) continue;
+    bool all = true;
+    for (const auto& [key, value] : labels.items()) {
+      all = all && s["labels"].contains(key) && s["labels"][key] == value;
+    }
+    if (all) return s["value"].is_null() ? std::nan("") : s["value"].get<double>();
+  }
+  return std::nan("");
+}
+
+}  // namespace canalid::testing
