@@ -36,7 +36,7 @@ struct HttpServerLimits {
   double idle_timeout_s = 30.0;
   /// Messages waiting to be sent to one WebSocket client (bytes); a client that does not read
   /// (or reads too slowly) is disconnected when its queue would exceed this, so memory stays
-  /// bounded at max_connections times this.
+  /// bounded at max_connections times this plus one message (an empty queue takes any message).
   std::size_t max_websocket_queue_bytes = std::size_t{8} << 20;
   /// The path on which WebSocket upgrades are accepted.
   std::string websocket_path = "/ws";

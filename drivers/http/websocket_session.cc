@@ -55,7 +55,9 @@ void WebSocketSession::ReadAndDiscard() {
 
 void WebSocketSession::Send(std::shared_ptr<const std::string> text) {
   if (closed_ || !open_ || !text) return;
-  if (queued_bytes_ + text->size() > state_->limits.max_websocket_queue_bytes) {
+  // A message is always taken into an empty queue (a snapshot may be larger than the limit), so
+  // a client holds at most the limit plus one message.
+  if (!queue_.empty() && queued_bytes_ + text->size() > state_->limits.max_websocket_queue_bytes) {
     ++state_->stats.websocket_dropped_slow;
     Close();
     return;

@@ -1,0 +1,186 @@
+// `canalid dashboard` under load, as a program: a log written by LCM's own writer (30 channels
+// at 1 kHz, played in real time) is served to 50 pages at once while one more client upgrades
+// to a WebSocket and never reads.  Its memory is measured (VmRSS of the process) against a
+// control run whose per-client queue limit is too large to matter, so the measurement is shown
+// to see the growth the limit prevents.
+#include <gtest/gtest.h>
+#include <sys/socket.h>
+
+#include <canalid/config_t.hpp>
+#include <canalid/sample_t.hpp>
+
+#include <atomic>
+#include <chrono>
+#include <fstream>
+#include <lcm/lcm-cpp.hpp>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "tests/dashboard/dashboard_test_support.h"
+#include "tests/support/child_process.h"
+#include "tests/support/http_client.h"
+#include "tests/support/run_program.h"
+
+namespace canalid::testing {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+constexpr int kChannels = 30;
+constexpr int kSamples = 20000;  // 20 s at 1 kHz
+
+void WriteLog(const fs::path& path) {
+  lcm::LogFile log(path.string(), "w");
+  ASSERT_TRUE(log.good());
+  const std::int64_t t0 = 1763700000000000;
+  std::int64_t number = 0;
+  const auto write = [&](const std::string& channel, const auto& message, std::int64_t utime) {
+    const std::vector<std::uint8_t> bytes = Encoded(message);
+    lcm::LogEvent event;
+    event.eventnum = number++;
+    event.timestamp = utime;
+    event.channel = channel;
+    event.datalen = static_cast<std::int32_t>(bytes.size());
+    event.data = const_cast<std::uint8_t*>(bytes.data());  // NOLINT: LCM's C-style event
+    ASSERT_EQ(log.writeEvent(&event), 0);
+  };
+  canalid::config_t config;
+  config.utime = t0;
+  std::ifstream in(std::string(CANALID_SOURCE_DIR) + "/config/canalidd-asce2.toml");
+  std::stringstream text;
+  text << in.rdbuf();
+  config.text = text.str();
+  config.version = "test";
+  write("CANALID_ASCE2_CONFIG", config, t0);
+  canalid::sample_t sample;
+  sample.source = "asce2";
+  sample.num_channels = kChannels;
+  for (int c = 0; c < kChannels; ++c) {
+    sample.channel_names.push_back(c == 0 ? "pool2_level" : "channel_" + std::to_string(c));
+  }
+  sample.values.assign(kChannels, 0.0);
+  sample.quality.assign(kChannels, canalid::sample_t::QUALITY_VALID);
+  for (int i = 0; i < kSamples; ++i) {
+    sample.utime = t0 + 1000 * (i + 1);
+    sample.sequence = i;
+    for (std::size_t c = 0; c < sample.values.size(); ++c) {
+      sample.values[c] = 2.0 + 1e-3 * static_cast<double>((static_cast<std::size_t>(i) + c) % 100);
+    }
+    write("CANALID_ASCE2_SAMPLE_asce2", sample, sample.utime);
+  }
+}
+
+long RssKiB(pid_t pid) {
+  std::ifstream status("/proc/" + std::to_string(pid) + "/status");
+  for (std::string line; std::getline(status, line);) {
+    if (line.rfind("VmRSS:", 0) == 0) return std::stol(line.substr(6));
+  }
+  return -1;
+}
+
+struct LoadRun {
+  long baseline_kib = 0;     ///< after the 50 pages have their snapshot, before the log ends
+  long peak_kib = 0;         ///< the most while the log plays
+  int pages_ok = 0;          ///< pages that loaded the page and dygraphs and got 20 updates
+  double dropped_slow = -1;  ///< from /metrics
+  double opened = -1;
+};
+
+LoadRun RunDashboard(const fs::path& dir, const fs::path& log, int queue_kib) {
+  LoadRun run;
+  ChildProcess dashboard(
+      {CanalidProgram(), "dashboard", "--log", log.string(), "--listen", "127.0.0.1:0",
+       "--update-period", "0.05", "--max-client-queue-kib", std::to_string(queue_kib)},
+      {}, dir / ("dashboard-" + std::to_string(queue_kib) + ".log"));
+  const std::string key = "serving http://127.0.0.1:";
+  const std::string line = dashboard.WaitForLine(key, 20000);
+  EXPECT_FALSE(line.empty()) << dashboard.output();
+  if (line.empty()) return run;
+  const int port = std::stoi(line.substr(line.find(key) + key.size()));
+
+  // The client that never reads: a small receive buffer, the upgrade, then nothing.
+  const int silent = ConnectLoopback(port);
+  const int small = 4096;
+  setsockopt(silent, SOL_SOCKET, SO_RCVBUF, &small, sizeof small);
+  const std::string upgrade = WebSocketUpgradeRequest("/ws");
+  EXPECT_EQ(send(silent, upgrade.data(), upgrade.size(), MSG_NOSIGNAL),
+            static_cast<ssize_t>(upgrade.size()));
+
+  // 50 pages at once: the page and dygraphs over HTTP, then the WebSocket's snapshot and 20
+  // updates each.
+  std::atomic<int> ok{0}, snapshots{0};
+  std::vector<std::thread> pages;
+  for (int p = 0; p < 50; ++p) {
+    pages.emplace_back([&] {
+      const std::string html = HttpGet(port, "/");
+      const std::string dygraphs = HttpGet(port, "/assets/dygraph.min.js");
+      if (HttpStatus(html) != 200 || HttpStatus(dygraphs) != 200 ||
+          HttpBody(dygraphs).size() !=
+              fs::file_size("/usr/share/javascript/dygraphs/dygraph.min.js")) {
+        return;
+      }
+      WebSocketClient ws;
+      std::string error, text;
+      if (!ws.Connect(port, "/ws", &error) || !ws.Read(&text)) return;
+      ++snapshots;
+      int updates = 0;
+      // Counted, not parsed: 50 parsers at once would make the pages, not the server, the
+      // bottleneck on a 2-core machine.
+      while (updates < 20 && ws.Read(&text)) {
+        updates += text.find(R"("type":"delta")") != std::string::npos ? 1 : 0;
+      }
+      if (updates == 20) ++ok;
+      ws.Close();
+    });
+  }
+  const auto start = std::chrono::steady_clock::now();
+  while (snapshots < 50 && std::chrono::steady_clock::now() - start < std::chrono::seconds(20)) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  run.baseline_kib = RssKiB(dashboard.pid());
+  // Until the log has played (20 s of it), sampling the memory every 50 ms.
+  while (dashboard.output().find("played:") == std::string::npos &&
+         std::chrono::steady_clock::now() - start < std::chrono::seconds(40)) {
+    run.peak_kib = std::max(run.peak_kib, RssKiB(dashboard.pid()));
+    dashboard.WaitUntil([] { return false; }, 50);
+  }
+  for (auto& t : pages) t.join();
+  run.pages_ok = ok;
+  const auto metrics = ParsedMetrics(HttpBody(HttpGet(port, "/metrics")), dir);
+  run.dropped_slow =
+      MetricValue(metrics, "canalid_dashboard_http_total", {{"event", "websocket_dropped_slow"}});
+  run.opened =
+      MetricValue(metrics, "canalid_dashboard_http_total", {{"event", "websocket_opened"}});
+  close(silent);
+  EXPECT_EQ(dashboard.Stop(SIGTERM, 10000), 0) << dashboard.output();
+  return run;
+}
+
+TEST(DashboardLoad, FiftyPagesAndAClientThatNeverReadsKeepMemoryBounded) {
+  const fs::path dir = TestDirectory("dashboard_load");
+  const fs::path log = dir / "load.lcmlog";
+  WriteLog(log);
+  const LoadRun bounded = RunDashboard(dir, log, 2048);
+  const LoadRun control = RunDashboard(dir, log, 1048576);
+  const long bounded_growth = bounded.peak_kib - bounded.baseline_kib;
+  const long control_growth = control.peak_kib - control.baseline_kib;
+  std::cout << "dashboard RSS growth with a client that never reads: " << bounded_growth
+            << " KiB with --max-client-queue-kib 2048 (peak " << bounded.peak_kib << " KiB), "
+            << control_growth << " KiB with 1 GiB (peak " << control.peak_kib << " KiB)\n";
+  EXPECT_EQ(bounded.pages_ok, 50);
+  EXPECT_EQ(control.pages_ok, 50);
+  EXPECT_EQ(bounded.dropped_slow, 1.0) << "the client that never reads, and only it";
+  EXPECT_EQ(control.dropped_slow, 0.0);
+  EXPECT_GE(bounded.opened, 51.0);
+  // The limit holds the client's queue at 2 MiB; the rest is the store (30 series x 7200 points
+  // x 16 B = 3.3 MiB) and the pages' own buffers.
+  EXPECT_LT(bounded_growth, 32 * 1024);
+  EXPECT_GT(control_growth, 2 * bounded_growth) << "the measurement sees the unbounded queue";
+}
+
+}  // namespace
+}  // namespace canalid::testing
