@@ -67,6 +67,7 @@ def load_targets(source_dir, build_dir):
     if not os.path.exists(path):
         sys.exit(f"{path}: missing; configure the build first (cmake -S {source_dir} -B {build_dir})")
     targets = {}
+    build_prefix = os.path.relpath(os.path.abspath(build_dir), os.path.abspath(source_dir)) + os.sep
     with open(path) as f:
         for number, line in enumerate(f, 1):
             if not line.strip():
@@ -82,7 +83,10 @@ def load_targets(source_dir, build_dir):
             targets[entry["name"]] = {
                 "type": entry["type"], "folder": folder,
                 "links": [l for l in entry["links"].split(";") if l],
-                "sources": [s for s in sources if not s.startswith("..")],
+                # Generated sources (the build tree: the dashboard's embedded page) belong to
+                # their target's folder and are not placed by layer.
+                "sources": [s for s in sources
+                            if not s.startswith("..") and not s.startswith(build_prefix)],
             }
     return targets
 

@@ -80,6 +80,10 @@ EXCEPTIONS = [
      "run; DaemonCanalsim.EveryOnlineKindIsReproducedByReplayAndIdentify runs it on one"),
     ("docs/model-json.md", "canalid identify --model frac-foptd --online --config", "reads the "
      "export of a live run (the line before); the daemon suite runs it"),
+    ("docs/dashboard.md", "canalid dashboard --lcm-url", "serves until stopped; "
+     "tests/dashboard/dashboard_live_test.cc runs it beside canalsim and canalidd"),
+    ("docs/dashboard.md", "canalid dashboard --config", "serves until stopped; "
+     "tests/dashboard/dashboard_app_test.cc and the live suite run it"),
     ("docs/reliability.md", "scripts/fuzz", "builds a second tree with clang and sanitizers "
      "(tens of minutes) and fuzzes for minutes per target; ctest -L fuzz replays what it keeps"),
 ]
