@@ -1,6 +1,7 @@
 #include "daemon/canalid/dashboard_command.h"
 
 #include <CLI/CLI.hpp>
+#include <cctype>
 #include <csignal>
 #include <iostream>
 #include <limits>
@@ -30,6 +31,13 @@ int RunDashboard(const DashboardCommandOptions& options) {
   settings.limits.history_s = options.history_hours * 3600.0;
   settings.limits.max_points = static_cast<std::size_t>(options.max_points);
   settings.http.max_connections = options.max_connections;
+  // IP addresses and localhost always; a name only when the operator gives it.
+  settings.http.allowed_hosts = {"localhost"};
+  for (const std::string& host : options.allow_hosts) {
+    std::string name = host;
+    for (char& c : name) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    settings.http.allowed_hosts.push_back(name);
+  }
   settings.http.max_websocket_queue_bytes =
       static_cast<std::size_t>(options.max_client_queue_kib) * 1024;
   settings.log = [](const std::string& text) {
@@ -96,6 +104,9 @@ void AddDashboardCommand(CLI::App& app, DashboardCommandOptions& options, int& e
                   "canalidd configuration(s): reaches and safety bands before the daemon's CONFIG "
                   "message is seen (it is published when canalidd starts)")
       ->check(CLI::ExistingFile);
+  cmd->add_option("--allow-host", options.allow_hosts,
+                  "A host name the page may be reached by (e.g. the reverse proxy's); IP addresses "
+                  "and localhost always may. Other Host headers get 403 (DNS rebinding)");
   cmd->add_option("--history-hours", options.history_hours, "Hours of points kept per series")
       ->check(FiniteIn(0.0, 24.0 * 365.0, true))
       ->capture_default_str();

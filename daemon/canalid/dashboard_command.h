@@ -15,6 +15,7 @@ struct DashboardCommandOptions {
   std::string log;
   double speed = 1.0;
   std::vector<std::string> configs;
+  std::vector<std::string> allow_hosts;
   double history_hours = 2.0;
   int max_points = 7200;
   int max_connections = 64;

@@ -47,7 +47,9 @@ DashboardApp::DashboardApp(boost::asio::io_context& io, DashboardOptions options
   if (!options_.log) options_.log = [](const std::string&) {};
   for (const std::string& path : options_.config_paths) {
     const std::string prefix = store_.SetLayoutFromConfig(ReadFile(path), path);
-    options_.log("layout of site " + prefix + " from " + path);
+    std::string text = "layout of site " + prefix;
+    text += " from " + path;
+    options_.log(text);
   }
   if (!options_.log_path.empty()) {
     playback_ = std::make_unique<LogPlayback>(
@@ -56,8 +58,10 @@ DashboardApp::DashboardApp(boost::asio::io_context& io, DashboardOptions options
           OnLogMessage(channel, data);
         },
         [this](std::int64_t events, const std::string& how) {
-          options_.log("log " + options_.log_path + " played: " + std::to_string(events) +
-                       " events, end: " + how);
+          std::string text = "log " + options_.log_path;
+          text += " played: " + std::to_string(events) + " events, end: ";
+          text += how;
+          options_.log(text);
         });
   } else {
     bus_ = std::make_unique<drivers::LcmBus>(options_.lcm_url);
@@ -73,7 +77,12 @@ DashboardApp::DashboardApp(boost::asio::io_context& io, DashboardOptions options
   }
 }
 
-DashboardApp::~DashboardApp() { Stop(); }
+DashboardApp::~DashboardApp() {
+  try {
+    Stop();
+  } catch (...) {  // closing sockets does not throw; nothing may escape a destructor
+  }
+}
 
 void DashboardApp::OnLogMessage(std::string_view channel, std::span<const std::uint8_t> data) {
   store_.OnMessage(channel, data);
@@ -108,8 +117,8 @@ void DashboardApp::Tick() {
   if (stopping_) return;
   // The writer advances even with nobody connected, so a page that connects later is not sent
   // the whole history twice (its snapshot has it).
-  auto delta = std::make_shared<const std::string>(deltas_.Next(store_, NowUtime()));
-  server_.Broadcast(std::move(delta));
+  server_.Broadcast(std::make_shared<const std::string>(
+      deltas_.Next(store_, NowUtime(), options_.snapshot_points)));
   tick_.expires_after(Seconds(options_.update_period_s));
   tick_.async_wait([this](const boost::system::error_code& error) {
     if (!error) Tick();

@@ -34,7 +34,8 @@ struct DashboardOptions {
 };
 
 /// `canalid dashboard`: the store fed from the bus (or a log), served over HTTP with a WebSocket
-/// for the page, on one Asio loop.  Routes: / (the page), /assets/* (embedded), /ws, /api,
+/// for the page, on one Asio loop.  Destroy it only once that loop has stopped (its timers'
+/// handlers hold `this`).  Routes: / (the page), /assets/* (embedded), /ws, /api,
 /// /api/state, /api/snapshot, /api/series/ID, /metrics.
 class DashboardApp final {
  public:

@@ -8,8 +8,9 @@ namespace {
 
 using nlohmann::json;
 
+// In doubles: times come from the bus, and their difference may not fit an int64.
 double AgeS(std::int64_t utime, std::int64_t now_utime) {
-  return static_cast<double>(now_utime - utime) * 1e-6;
+  return (static_cast<double>(now_utime) - static_cast<double>(utime)) * 1e-6;
 }
 
 json Number(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
@@ -194,8 +195,11 @@ json PointsJson(const Series& series, std::int64_t from, std::size_t max_points)
 std::string SnapshotJson(const DashboardStore& store, std::int64_t now_utime,
                          std::size_t max_points_per_series) {
   json points = json::object();
+  const std::size_t count = std::max<std::size_t>(store.series().size(), 1);
+  const std::size_t each =
+      std::min(max_points_per_series, std::max<std::size_t>(10, kSnapshotPointBudget / count));
   for (const auto& [id, series] : store.series()) {
-    points[std::to_string(id)] = PointsJson(*series, 0, max_points_per_series);
+    points[std::to_string(id)] = PointsJson(*series, 0, each);
   }
   const json message = {{"type", "snapshot"},
                         {"now", static_cast<double>(now_utime) * 1e-6},
@@ -204,13 +208,13 @@ std::string SnapshotJson(const DashboardStore& store, std::int64_t now_utime,
   return DumpJson(message);
 }
 
-std::string DeltaWriter::Next(const DashboardStore& store, std::int64_t now_utime) {
+std::string DeltaWriter::Next(const DashboardStore& store, std::int64_t now_utime,
+                              std::size_t max_points_per_series) {
   json points = json::object();
   for (const auto& [id, series] : store.series()) {
     std::int64_t& next = sent_[id];
     if (series->ring.appended() > next) {
-      points[std::to_string(id)] =
-          PointsJson(*series, next, static_cast<std::size_t>(series->ring.appended() - next));
+      points[std::to_string(id)] = PointsJson(*series, next, max_points_per_series);
       next = series->ring.appended();
     }
   }

@@ -24,8 +24,12 @@ nlohmann::json StateJson(const DashboardStore& store, std::int64_t now_utime);
 /// `from` on, at most `max_points` of them (evenly thinned, the newest always kept).
 nlohmann::json PointsJson(const Series& series, std::int64_t from, std::size_t max_points);
 
+/// Points in a snapshot at most, over every series (about 11 MB of JSON): with many series each
+/// gets fewer than max_points_per_series.
+inline constexpr std::size_t kSnapshotPointBudget = 250000;
+
 /// {"type": "snapshot", "now": s, "state": StateJson, "points": {id: PointsJson}}: what a page
-/// loads first.
+/// loads first; each series thinned to max_points_per_series (fewer when the budget asks it).
 std::string SnapshotJson(const DashboardStore& store, std::int64_t now_utime,
                          std::size_t max_points_per_series);
 
@@ -33,8 +37,10 @@ std::string SnapshotJson(const DashboardStore& store, std::int64_t now_utime,
 /// a few times a second.
 class DeltaWriter {
  public:
-  /// {"type": "delta", "now": s, "state": StateJson, "points": {id: new points}}.
-  std::string Next(const DashboardStore& store, std::int64_t now_utime);
+  /// {"type": "delta", "now": s, "state": StateJson, "points": {id: new points}}, each series'
+  /// new points thinned to at most max_points_per_series (a burst, a log played fast).
+  std::string Next(const DashboardStore& store, std::int64_t now_utime,
+                   std::size_t max_points_per_series);
 
  private:
   std::map<int, std::int64_t> sent_;  ///< series id -> the next sequence number to send

@@ -12,11 +12,52 @@ namespace {
 
 using Labels = std::initializer_list<std::pair<const char*, std::string_view>>;
 
-// A label value escaped as the text format asks: backslash, double quote and newline.
+// The length of the well-formed UTF-8 sequence starting at `s[i]`, 0 when it is not one.
+std::size_t Utf8Length(std::string_view s, std::size_t i) {
+  const auto byte = [&](std::size_t k) { return static_cast<unsigned char>(s[k]); };
+  const unsigned char c = byte(i);
+  std::size_t n = 0;
+  unsigned char low = 0x80, high = 0xBF;  // the second byte's range (RFC 3629 table)
+  if (c < 0x80) return 1;
+  if (c >= 0xC2 && c <= 0xDF) {
+    n = 2;
+  } else if (c >= 0xE0 && c <= 0xEF) {
+    n = 3;
+    if (c == 0xE0) low = 0xA0;
+    if (c == 0xED) high = 0x9F;
+  } else if (c >= 0xF0 && c <= 0xF4) {
+    n = 4;
+    if (c == 0xF0) low = 0x90;
+    if (c == 0xF4) high = 0x8F;
+  } else {
+    return 0;
+  }
+  if (i + n > s.size() || byte(i + 1) < low || byte(i + 1) > high) return 0;
+  for (std::size_t k = 2; k < n; ++k) {
+    if (byte(i + k) < 0x80 || byte(i + k) > 0xBF) return 0;
+  }
+  return n;
+}
+
+// A label value escaped as the text format asks (backslash, double quote and newline), and
+// made UTF-8: names come from the bus, and one invalid byte would make a scraper reject the
+// whole page, so such bytes become U+FFFD.
 std::string Escaped(std::string_view value) {
   std::string out;
   out.reserve(value.size());
-  for (const char c : value) {
+  for (std::size_t i = 0; i < value.size();) {
+    const std::size_t n = Utf8Length(value, i);
+    if (n == 0) {
+      out += "\xEF\xBF\xBD";
+      ++i;
+      continue;
+    }
+    if (n > 1) {
+      out.append(value.substr(i, n));
+      i += n;
+      continue;
+    }
+    const char c = value[i++];
     if (c == '\\') {
       out += "\\\\";
     } else if (c == '"') {
@@ -116,8 +157,8 @@ std::string MetricsText(const DashboardStore& store, const drivers::HttpServerSt
   Family queued("canalid_dashboard_websocket_queued_bytes", "gauge",
                 "Bytes waiting to be sent to every page.");
 
-  const auto age = [now_utime](std::int64_t utime) {
-    return static_cast<double>(now_utime - utime) * 1e-6;
+  const auto age = [now_utime](std::int64_t utime) {  // in doubles: bus times may be anything
+    return (static_cast<double>(now_utime) - static_cast<double>(utime)) * 1e-6;
   };
   for (const auto& [prefix, site] : store.sites()) {
     for (const auto& [component, h] : site.health) {
@@ -178,6 +219,9 @@ std::string MetricsText(const DashboardStore& store, const drivers::HttpServerSt
   messages.Add({{"result", "malformed"}}, static_cast<double>(c.malformed));
   messages.Add({{"result", "ignored"}}, static_cast<double>(c.ignored));
   messages.Add({{"result", "refused"}}, static_cast<double>(c.refused));
+  Family series_refused("canalid_dashboard_series_refused_total", "counter",
+                        "Series whose history was not kept: over the series limit.");
+  series_refused.Add({}, static_cast<double>(c.series_refused));
   const std::vector<std::pair<const char*, std::int64_t>> events = {
       {"connections_accepted", server.connections_accepted},
       {"connections_refused", server.connections_refused},
@@ -214,6 +258,7 @@ std::string MetricsText(const DashboardStore& store, const drivers::HttpServerSt
                                &experiment_steps,
                                &setpoint,
                                &messages,
+                               &series_refused,
                                &http,
                                &open,
                                &websockets,

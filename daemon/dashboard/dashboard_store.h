@@ -8,21 +8,27 @@
 #include <string_view>
 #include <vector>
 
+#include <canalid/config_t.hpp>
 #include <canalid/experiment_state_t.hpp>
 #include <canalid/health_t.hpp>
 #include <canalid/model_snapshot_t.hpp>
+#include <canalid/sample_t.hpp>
 
 #include "daemon/dashboard/series_ring.h"
 
 namespace canalid::dashboard {
 
 /// How much the dashboard keeps: memory is at most max_series x max_points x 16 bytes of points
-/// plus the latest message of each kind.
+/// (up to twice that while a ring grows) plus the latest message of each name, at most
+/// max_sites x max_names of each kind.
 struct StoreLimits {
   double history_s = 2.0 * 3600.0;  ///< points older than this before the newest are dropped
   std::size_t max_points = 7200;    ///< per series
   std::size_t max_series = 1024;    ///< in all; more are refused (counted)
   std::size_t max_sites = 32;       ///< channel prefixes; more are refused (counted)
+  /// Names in each map of a site: sources, channels of a source, reaches, estimators of a reach,
+  /// parameters of an estimator, health components.  More are refused (counted).
+  std::size_t max_names = 256;
 };
 
 /// One series of points with the id the page and the API name it by.
@@ -94,8 +100,8 @@ struct StoreCounters {
   std::int64_t used = 0;
   std::int64_t malformed = 0;  ///< a canalid channel whose bytes do not decode as its type
   std::int64_t ignored = 0;    ///< not a channel the dashboard shows (commands, heartbeats, ...)
-  std::int64_t refused = 0;    ///< over max_sites
-  std::int64_t series_refused = 0;
+  std::int64_t refused = 0;    ///< over max_sites or max_names
+  std::int64_t series_refused = 0;  ///< history not kept: over max_series
 };
 
 /// The dashboard's picture of every canalidd on the bus, built from their LCM messages
@@ -124,12 +130,20 @@ class DashboardStore {
  private:
   SiteState* Site(const std::string& prefix);
   Series* NewSeries();
-  void OnSample(SiteState& site, const std::string& source, std::span<const std::uint8_t> data,
-                Ingest& result);
-  void OnModel(SiteState& site, std::span<const std::uint8_t> data, Ingest& result);
-  void OnExperiment(SiteState& site, std::span<const std::uint8_t> data, Ingest& result);
-  void OnHealth(SiteState& site, std::span<const std::uint8_t> data, Ingest& result);
-  void OnConfig(SiteState& site, std::span<const std::uint8_t> data, Ingest& result);
+  Ingest OnSample(SiteState& site, const std::string& source, canalid::sample_t& sample);
+  Ingest OnModel(SiteState& site, canalid::model_snapshot_t& model);
+  Ingest OnExperiment(SiteState& site, canalid::experiment_state_t& state);
+  Ingest OnHealth(SiteState& site, canalid::health_t& health);
+  void OnConfig(SiteState& site, const canalid::config_t& config);
+  void Saw(SiteState& site, std::int64_t utime);
+  /// The entry `key` of `map`, made when absent and the map holds fewer than max_names; null
+  /// (the message refused) otherwise.
+  template <class Map>
+  typename Map::mapped_type* Entry(Map& map, const std::string& key) {
+    if (const auto it = map.find(key); it != map.end()) return &it->second;
+    if (map.size() >= limits_.max_names) return nullptr;
+    return &map[key];
+  }
 
   StoreLimits limits_;
   StoreCounters counters_;

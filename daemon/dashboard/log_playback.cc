@@ -1,5 +1,6 @@
 #include "daemon/dashboard/log_playback.h"
 
+#include <algorithm>
 #include <chrono>
 
 namespace canalid::dashboard {
@@ -39,10 +40,12 @@ void LogPlayback::Step() {
       if (events_ == 0) first_utime_ = event_.utime;
     }
     if (speed_ > 0.0) {
-      const auto due =
-          started_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                         std::chrono::duration<double>(
-                             static_cast<double>(event_.utime - first_utime_) * 1e-6 / speed_));
+      // In doubles and clamped to a year: log times may be anything.
+      const double wait_s = std::clamp(
+          (static_cast<double>(event_.utime) - static_cast<double>(first_utime_)) * 1e-6 / speed_,
+          0.0, 3.2e7);
+      const auto due = started_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                      std::chrono::duration<double>(wait_s));
       if (due > std::chrono::steady_clock::now()) {
         timer_.expires_at(due);
         timer_.async_wait([this](const boost::system::error_code& error) {

@@ -1,4 +1,5 @@
 #pragma once
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -25,6 +26,11 @@ class SeriesRing {
   void Append(const SeriesPoint& point) {
     if (capacity_ == 0) return;
     if (points_.size() < capacity_) {
+      // Grown by doubling up to the capacity, never past it (a vector's own growth could
+      // allocate up to twice the capacity).
+      if (points_.size() == points_.capacity()) {
+        points_.reserve(std::min(capacity_, std::max<std::size_t>(16, 2 * points_.size())));
+      }
       points_.push_back(point);
     } else {
       // The oldest slot: an aged-out one if any, else the oldest point held (evicted).

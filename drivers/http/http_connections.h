@@ -74,7 +74,7 @@ class WebSocketSession final : public HttpConnection,
   ~WebSocketSession() override;
   WebSocketSession(const WebSocketSession&) = delete;
   WebSocketSession& operator=(const WebSocketSession&) = delete;
-  void Start(boost::beast::http::request<boost::beast::http::empty_body> request);
+  void Start(const boost::beast::http::request<boost::beast::http::empty_body>& request);
   void Send(std::shared_ptr<const std::string> text);
   void Close() override;
 

@@ -9,7 +9,6 @@ namespace canalid::drivers {
 namespace {
 
 namespace asio = boost::asio;
-using tcp = asio::ip::tcp;
 
 void Accept(const std::shared_ptr<HttpServerState>& state, asio::io_context& io);
 
@@ -23,7 +22,7 @@ void AcceptLater(const std::shared_ptr<HttpServerState>& state, asio::io_context
 
 void Accept(const std::shared_ptr<HttpServerState>& state, asio::io_context& io) {
   state->acceptor->async_accept(
-      [state, &io](const boost::system::error_code& error, tcp::socket s) {
+      [state, &io](const boost::system::error_code& error, asio::ip::tcp::socket s) {
         if (state->stopped) return;
         if (error) {
           AcceptLater(state, io);
@@ -63,8 +62,9 @@ HttpServer::~HttpServer() { Stop(); }
 int HttpServer::Listen(const std::string& host, int port) {
   const std::string where = host + ":" + std::to_string(port);
   try {
-    const tcp::endpoint endpoint(asio::ip::make_address(host), static_cast<unsigned short>(port));
-    tcp::acceptor acceptor(io_);
+    const asio::ip::tcp::endpoint endpoint(asio::ip::make_address(host),
+                                           static_cast<unsigned short>(port));
+    asio::ip::tcp::acceptor acceptor(io_);
     acceptor.open(endpoint.protocol());
     acceptor.set_option(asio::socket_base::reuse_address(true));
     acceptor.bind(endpoint);
@@ -77,7 +77,7 @@ int HttpServer::Listen(const std::string& host, int port) {
   return state_->acceptor->local_endpoint().port();
 }
 
-void HttpServer::Broadcast(std::shared_ptr<const std::string> text) {
+void HttpServer::Broadcast(const std::shared_ptr<const std::string>& text) {
   std::erase_if(state_->websockets,
                 [](const std::weak_ptr<WebSocketSession>& w) { return w.expired(); });
   // Send may close a slow client, which only marks it: the list is not changed while walked.

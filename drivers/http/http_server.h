@@ -8,6 +8,7 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace canalid::drivers {
 
@@ -36,10 +37,14 @@ struct HttpServerLimits {
   double idle_timeout_s = 30.0;
   /// Messages waiting to be sent to one WebSocket client (bytes); a client that does not read
   /// (or reads too slowly) is disconnected when its queue would exceed this, so memory stays
-  /// bounded at max_connections times this plus one message (an empty queue takes any message).
+  /// bounded at max_connections times this plus the message each is being sent (not counted:
+  /// a first message larger than the limit is taken).
   std::size_t max_websocket_queue_bytes = std::size_t{8} << 20;
   /// The path on which WebSocket upgrades are accepted.
   std::string websocket_path = "/ws";
+  /// Names a request's Host header may give besides IP addresses (DNS rebinding: a page of
+  /// another site whose name resolves to this address must not read it); empty: any name.
+  std::vector<std::string> allowed_hosts;
 };
 
 /// What the server has done since it started.
@@ -47,7 +52,7 @@ struct HttpServerStats {
   std::int64_t connections_accepted = 0;
   std::int64_t connections_refused = 0;  ///< over max_connections
   std::int64_t requests = 0;             ///< HTTP requests answered (any status)
-  std::int64_t bad_requests = 0;         ///< answered 4xx (not 404) or closed as malformed
+  std::int64_t bad_requests = 0;         ///< refused: 400, 403, 405, 413, 431, an upgrade elsewhere
   std::int64_t handler_failures = 0;     ///< the handler threw: answered 500
   std::int64_t websocket_opened = 0;
   std::int64_t websocket_dropped_slow = 0;  ///< disconnected: queue over the limit
@@ -61,7 +66,9 @@ struct HttpServerState;
 
 /// A read-only HTTP/1.1 server with WebSocket broadcast (Boost.Beast) on the caller's
 /// io_context, single-threaded: GET and HEAD go to the handler, other methods get 405, a request
-/// with a body 413, headers over the limit 431, anything unparsable 400; upgrades
+/// with a body 413, headers over the limit 431, anything unparsable 400, a Host that is neither an
+/// IP address nor an allowed name 403, a WebSocket upgrade from a page of another origin (its
+/// Origin header not naming the Host) 403; upgrades
 /// on websocket_path become WebSocket clients that are sent the greeting and then every
 /// Broadcast.  Messages from clients are read and discarded (pings and closes are answered).
 class HttpServer final {
@@ -77,7 +84,7 @@ class HttpServer final {
   int Listen(const std::string& host, int port);
 
   /// Queues `text` to every WebSocket client (one shared copy).
-  void Broadcast(std::shared_ptr<const std::string> text);
+  void Broadcast(const std::shared_ptr<const std::string>& text);
 
   /// Stops accepting and closes every connection.
   void Stop();

@@ -1,3 +1,5 @@
+#include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <exception>
 
@@ -8,6 +10,38 @@ namespace {
 
 namespace beast = boost::beast;
 namespace http = beast::http;
+
+// The host name of a Host header or an origin's authority: without the port and brackets,
+// lower case.
+std::string HostName(std::string_view authority) {
+  std::string_view host = authority;
+  if (!host.empty() && host.front() == '[') {
+    host = host.substr(
+        1, host.find(']') == std::string_view::npos ? host.size() - 1 : host.find(']') - 1);
+  } else if (const std::size_t colon = host.find(':');
+             colon != std::string_view::npos &&
+             host.find(':', colon + 1) == std::string_view::npos) {
+    host = host.substr(0, colon);
+  }
+  std::string name(host);
+  for (char& c : name) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return name;
+}
+
+bool IsIpAddress(const std::string& host) {
+  boost::system::error_code error;
+  boost::asio::ip::make_address(host, error);
+  return !error;
+}
+
+std::string_view View(beast::string_view text) { return {text.data(), text.size()}; }
+
+// Lower case, for comparing authorities.
+std::string Lower(std::string_view text) {
+  std::string out(text);
+  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return out;
+}
 
 std::chrono::steady_clock::duration Seconds(double s) {
   return std::chrono::duration_cast<std::chrono::steady_clock::duration>(
@@ -82,7 +116,25 @@ void HttpSession::Refuse(http::status status, std::string text) {
 void HttpSession::Answer() {
   const http::request<http::empty_body>& request = parser_->get();
   const std::string target(request.target());
+  const std::string host = HostName(View(request[http::field::host]));
+  const auto& allowed = state_->limits.allowed_hosts;
+  if (!allowed.empty() && !IsIpAddress(host) &&
+      std::find(allowed.begin(), allowed.end(), host) == allowed.end()) {
+    Refuse(http::status::forbidden, "Host '" + host + "' is not served here\n");
+    return;
+  }
   if (beast::websocket::is_upgrade(request)) {
+    // A browser names the page's origin; a page of another site (cross-site WebSocket
+    // hijacking) is refused.  Clients that are not browsers send no Origin.
+    const std::string_view origin = View(request[http::field::origin]);
+    const std::size_t scheme = origin.find("://");
+    if (!origin.empty() &&
+        (scheme == std::string_view::npos ||
+         Lower(origin.substr(scheme + 3)) != Lower(View(request[http::field::host])))) {
+      Refuse(http::status::forbidden,
+             "WebSocket from origin '" + std::string(origin) + "' refused: not this server's\n");
+      return;
+    }
     if (target != state_->limits.websocket_path) {
       Refuse(http::status::not_found, "no WebSocket at " + target + "\n");
       return;
@@ -91,7 +143,7 @@ void HttpSession::Answer() {
     handed_over_ = true;
     auto session = std::make_shared<WebSocketSession>(std::move(stream_), state_);
     state_->Track(session);
-    session->Start(parser_->release());
+    session->Start(parser_->get());
     return;
   }
   if (request.method() != http::verb::get && request.method() != http::verb::head) {

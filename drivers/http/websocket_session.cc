@@ -22,7 +22,8 @@ WebSocketSession::~WebSocketSession() {
   state_->stats.websocket_queued_bytes -= queued_bytes_;
 }
 
-void WebSocketSession::Start(beast::http::request<beast::http::empty_body> request) {
+// Beast answers the upgrade from `request` when async_accept is called; it does not keep it.
+void WebSocketSession::Start(const beast::http::request<beast::http::empty_body>& request) {
   ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
   ws_.read_message_max(kMaxIncomingBytes);
   ws_.set_option(websocket::stream_base::decorator([](websocket::response_type& response) {
@@ -55,9 +56,12 @@ void WebSocketSession::ReadAndDiscard() {
 
 void WebSocketSession::Send(std::shared_ptr<const std::string> text) {
   if (closed_ || !open_ || !text) return;
-  // A message is always taken into an empty queue (a snapshot may be larger than the limit), so
-  // a client holds at most the limit plus one message.
-  if (!queue_.empty() && queued_bytes_ + text->size() > state_->limits.max_websocket_queue_bytes) {
+  // The message being written does not count (a snapshot may be larger than the limit, and a
+  // page on a slow link is still writing it when the next update comes), so a client holds at
+  // most the limit plus the message in flight.
+  const std::size_t in_flight = writing_ ? queue_.front()->size() : 0;
+  if (queued_bytes_ - in_flight + text->size() > state_->limits.max_websocket_queue_bytes &&
+      queue_.size() > (writing_ ? 1U : 0U)) {
     ++state_->stats.websocket_dropped_slow;
     Close();
     return;

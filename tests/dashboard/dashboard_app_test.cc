@@ -33,7 +33,7 @@ std::string Bytes(const fs::path& path) {
 
 // A log of the demo's CONFIG and three samples, written by LCM's own writer.
 fs::path WriteLog(const fs::path& dir) {
-  const fs::path path = dir / "small.lcmlog";
+  fs::path path = dir / "small.lcmlog";
   lcm::LogFile log(path.string(), "w");
   std::int64_t number = 0;
   const auto write = [&](const std::string& channel, const std::vector<std::uint8_t>& bytes) {
@@ -64,7 +64,11 @@ class DashboardAppTest : public ::testing::Test {
     options.port = 0;
     app_ = std::make_unique<DashboardApp>(io_, options);
     app_->Start();
-    io_.run_for(std::chrono::milliseconds(300));  // plays the log
+    // Plays the log: its 4 messages, bounded by 10 s.
+    for (int i = 0; i < 1000 && app_->store().counters().used < 4; ++i) {
+      io_.run_for(std::chrono::milliseconds(10));
+    }
+    ASSERT_EQ(app_->store().counters().used, 4);
   }
   fs::path dir_;
   boost::asio::io_context io_;

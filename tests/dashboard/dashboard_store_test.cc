@@ -95,6 +95,47 @@ TEST(DashboardStore, MalformedMessagesAreCountedAndChangeNothing) {
   EXPECT_NO_THROW(DumpJson(StateJson(store, 0)));
 }
 
+TEST(DashboardStore, JunkOnTheBusMakesNoSiteAndAKeywordPrefixFindsItsSite) {
+  StoreLimits limits;
+  limits.max_sites = 2;
+  DashboardStore store(limits);
+  // Other programs' channels that happen to end in a keyword, their bytes not ours.
+  for (const char* channel : {"ROBOT_HEALTH", "CAM_SAMPLE_front", "X_MODEL_a", "Y_CONFIG"}) {
+    EXPECT_EQ(store.OnMessage(channel, std::vector<std::uint8_t>(32, 0x11)), Ingest::kMalformed);
+  }
+  EXPECT_TRUE(store.sites().empty());
+  // A daemon whose prefix holds a keyword: its HEALTH names it, then its samples follow it.
+  EXPECT_EQ(store.OnMessage("MODEL_RIG_HEALTH", Encoded(MakeHealth())), Ingest::kUsed);
+  EXPECT_EQ(store.OnMessage("MODEL_RIG_SAMPLE_plc", Encoded(MakeSample(1))), Ingest::kUsed);
+  EXPECT_EQ(store.OnMessage("MODEL_RIG_MODEL_pool2", Encoded(MakeModel())), Ingest::kUsed);
+  ASSERT_EQ(store.sites().size(), 1U);
+  const SiteState& site = store.sites().at("MODEL_RIG_");
+  EXPECT_EQ(site.sources.count("plc"), 1U);
+  EXPECT_EQ(site.reaches.count("pool2"), 1U);
+  // A second real daemon still has a place.
+  EXPECT_EQ(store.OnMessage("B_HEALTH", Encoded(MakeHealth())), Ingest::kUsed);
+}
+
+TEST(DashboardStore, NamesBeyondTheLimitAreRefusedPerMap) {
+  StoreLimits limits;
+  limits.max_names = 3;
+  DashboardStore store(limits);
+  for (int s = 0; s < 5; ++s) {
+    const Ingest result =
+        store.OnMessage("S_SAMPLE_plc" + std::to_string(s), Encoded(MakeSample(1)));
+    EXPECT_EQ(result, s < 3 ? Ingest::kUsed : Ingest::kRefused) << s;
+  }
+  canalid::health_t health = MakeHealth();
+  for (int c = 0; c < 5; ++c) {
+    health.component = "component" + std::to_string(c);
+    store.OnMessage("S_HEALTH", Encoded(health));
+  }
+  const SiteState& site = store.sites().at("S_");
+  EXPECT_EQ(site.sources.size(), 3U);
+  EXPECT_EQ(site.health.size(), 3U);
+  EXPECT_EQ(store.counters().refused, 4);
+}
+
 TEST(DashboardStore, SequenceGapsAreCountedAsDroppedSamples) {
   DashboardStore store;
   for (const int sequence : {1, 2, 5, 6, 10}) {
@@ -184,24 +225,32 @@ TEST(DashboardJson, DeltasCarryOnlyTheNewPointsAndSnapshotsAreThinned) {
   for (int i = 1; i <= 100; ++i) store.OnMessage("S_SAMPLE_p", Encoded(MakeSample(i)));
   const int level = store.sites().at("S_").sources.at("p").channels.at("level_m").series->id;
   DeltaWriter writer;
-  const auto first = nlohmann::json::parse(writer.Next(store, 0));
+  const auto first = nlohmann::json::parse(writer.Next(store, 0, 100000));
   EXPECT_EQ(first["type"], "delta");
   EXPECT_EQ(first["points"][std::to_string(level)].size(), 100U);
-  const auto second = nlohmann::json::parse(writer.Next(store, 0));
+  const auto second = nlohmann::json::parse(writer.Next(store, 0, 100000));
   EXPECT_FALSE(second["points"].contains(std::to_string(level)));
   store.OnMessage("S_SAMPLE_p", Encoded(MakeSample(101)));
-  const auto third = nlohmann::json::parse(writer.Next(store, 0));
+  const auto third = nlohmann::json::parse(writer.Next(store, 0, 100000));
   ASSERT_EQ(third["points"][std::to_string(level)].size(), 1U);
   EXPECT_DOUBLE_EQ(third["points"][std::to_string(level)][0][0].get<double>(),
                    static_cast<double>(MakeSample(101).utime) * 1e-6);
   EXPECT_EQ(third["state"]["sites"][0]["sources"][0]["sequence"], 101);
+
+  // A burst is thinned like a snapshot, the newest point kept.
+  for (int i = 102; i <= 400; ++i) store.OnMessage("S_SAMPLE_p", Encoded(MakeSample(i)));
+  const auto burst = nlohmann::json::parse(writer.Next(store, 0, 10));
+  const auto& burst_points = burst["points"][std::to_string(level)];
+  EXPECT_LE(burst_points.size(), 10U);
+  EXPECT_DOUBLE_EQ(burst_points.back()[0].get<double>(),
+                   static_cast<double>(MakeSample(400).utime) * 1e-6);
 
   const auto snapshot = nlohmann::json::parse(SnapshotJson(store, 0, 10));
   const auto& thinned = snapshot["points"][std::to_string(level)];
   EXPECT_LE(thinned.size(), 10U);
   EXPECT_GE(thinned.size(), 9U);
   EXPECT_DOUBLE_EQ(thinned.back()[0].get<double>(),
-                   static_cast<double>(MakeSample(101).utime) * 1e-6)
+                   static_cast<double>(MakeSample(400).utime) * 1e-6)
       << "the newest point is always sent";
 }
 
@@ -212,7 +261,7 @@ TEST(DashboardMetrics, TheReferenceParserReadsWhatTheMessagesSaid) {
   const auto dir = canalid::testing::TestDirectory("dashboard_metrics_parse");
   DashboardStore store;
   canalid::health_t health = MakeHealth();
-  health.component = "plc.\"odd\\name\n";
+  health.component = "plc.\"odd\\name\n\xff";  // quotes, backslash, newline, not UTF-8
   store.OnMessage("S_HEALTH", Encoded(health));
   store.OnMessage("S_MODEL_pool2", Encoded(MakeModel()));
   store.OnMessage("S_SAMPLE_plc", Encoded(MakeSample(3)));
@@ -221,19 +270,18 @@ TEST(DashboardMetrics, TheReferenceParserReadsWhatTheMessagesSaid) {
   drivers::HttpServerStats server;
   server.websocket_dropped_slow = 3;
   const auto samples = ParsedMetrics(MetricsText(store, server, 1763700001000000), dir);
+  const std::string shown = "plc.\"odd\\name\n\xEF\xBF\xBD";  // the invalid byte as U+FFFD
   ASSERT_FALSE(samples.empty());
   for (std::size_t i = 0; i < health.counter_names.size(); ++i) {
     EXPECT_EQ(
-        MetricValue(
-            samples, "canalid_health_counter_total",
-            {{"site", "S_"}, {"component", health.component}, {"name", health.counter_names[i]}}),
+        MetricValue(samples, "canalid_health_counter_total",
+                    {{"site", "S_"}, {"component", shown}, {"name", health.counter_names[i]}}),
         static_cast<double>(health.counter_values[i]))
         << health.counter_names[i];
   }
   for (std::size_t i = 0; i < health.gauge_names.size(); ++i) {
-    const double value =
-        MetricValue(samples, "canalid_health_gauge",
-                    {{"component", health.component}, {"name", health.gauge_names[i]}});
+    const double value = MetricValue(samples, "canalid_health_gauge",
+                                     {{"component", shown}, {"name", health.gauge_names[i]}});
     if (std::isnan(health.gauge_values[i])) {
       EXPECT_TRUE(std::isnan(value));
     } else {

@@ -38,7 +38,8 @@ inline std::vector<nlohmann::json> ParsedMetrics(const std::string& metrics,
   return samples;
 }
 
-/// The value of the sample `name` whose labels include `labels` (NaN when there is none).
+/// The value of the sample `name` whose labels include `labels`; fails the test when there is
+/// none (and returns NaN), so a missing metric is never taken for a NaN one.
 inline double MetricValue(const std::vector<nlohmann::json>& samples, const std::string& name,
                           const nlohmann::json& labels) {
   for (const auto& s : samples) {
@@ -49,6 +50,7 @@ inline double MetricValue(const std::vector<nlohmann::json>& samples, const std:
     }
     if (all) return s["value"].is_null() ? std::nan("") : s["value"].get<double>();
   }
+  ADD_FAILURE() << "no metric " << name << " with labels " << labels.dump();
   return std::nan("");
 }
 

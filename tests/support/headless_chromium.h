@@ -100,7 +100,7 @@ class HeadlessChromium {
     }
     std::string text;
     while (page_.Read(&text)) {
-      const auto reply = nlohmann::json::parse(text, nullptr, false);
+      auto reply = nlohmann::json::parse(text, nullptr, false);
       if (reply.is_object() && reply.value("id", -1) == id) return reply;
     }
     return nlohmann::json::object();

@@ -9,11 +9,10 @@
 #include <unistd.h>
 
 #include <cerrno>
-#include <cstdlib>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <system_error>
 #include <vector>
 
 #include "tests/support/child_process.h"
@@ -71,24 +70,31 @@ inline std::string EnterPrivateNetwork() {
   const gid_t gid = getegid();
   if (uid == 0) {
     if (unshare(CLONE_NEWNET) != 0) {
-      return std::string("unshare(CLONE_NEWNET): ") + std::strerror(errno) +
+      return "unshare(CLONE_NEWNET): " + std::generic_category().message(errno) +
              " (a container without CAP_SYS_ADMIN?)";
     }
   } else {
     if (unshare(CLONE_NEWUSER | CLONE_NEWNET) != 0) {
-      return std::string("unshare(CLONE_NEWUSER | CLONE_NEWNET): ") + std::strerror(errno) +
+      return "unshare(CLONE_NEWUSER | CLONE_NEWNET): " + std::generic_category().message(errno) +
              "; run the tests as root or where user namespaces are allowed";
     }
-    std::ofstream("/proc/self/setgroups") << "deny";
-    std::ofstream("/proc/self/uid_map") << "0 " << uid << " 1";
-    std::ofstream("/proc/self/gid_map") << "0 " << gid << " 1";
+    for (const auto& [file, text] :
+         {std::pair<const char*, std::string>{"/proc/self/setgroups", "deny"},
+          {"/proc/self/uid_map", "0 " + std::to_string(uid) + " 1"},
+          {"/proc/self/gid_map", "0 " + std::to_string(gid) + " 1"}}) {
+      std::ofstream out(file);
+      out << text;
+      out.close();
+      if (!out) return std::string("cannot write ") + file + " for the user namespace";
+    }
   }
-  const int status = std::system(  // NOLINT(cert-env33-c): a fixed command, no user input
-      "ip link set lo up && ip route add 224.0.0.0/4 dev lo");
-  if (status != 0) {
+  ChildOptions options;
+  options.argv = {"/bin/sh", "-c", "ip link set lo up && ip route add 224.0.0.0/4 dev lo"};
+  ChildProcess ip(options);
+  if (const int status = ip.WaitExit(10000); status != 0) {
     return "`ip link set lo up && ip route add 224.0.0.0/4 dev lo` failed in the new namespace "
-           "(status " +
-           std::to_string(status) + "; Debian package iproute2)";
+           "(exit " +
+           std::to_string(status) + ": " + ip.output() + "; Debian package iproute2)";
   }
   return {};
 }
