@@ -278,10 +278,10 @@ TEST(DashboardLive, ChromiumShowsTheReachLevelPhaseAndModelsAsTheyUpdate) {
   ASSERT_EQ(kill(rig->daemon().pid(), SIGCONT), 0);
 }
 
-TEST(DashboardLive, OutlivesTheDaemonsRestartAndMalformedMessages) {
+TEST(DashboardLive, MalformedMessagesAreCountedAndChangeNothing) {
   std::unique_ptr<LiveRig> rig;
   try {
-    rig = std::make_unique<LiveRig>("dashboard_live_restart", "manual");
+    rig = std::make_unique<LiveRig>("dashboard_live_malformed", "manual");
   } catch (const std::exception& e) {
     FAIL() << e.what();
   }
@@ -318,6 +318,37 @@ TEST(DashboardLive, OutlivesTheDaemonsRestartAndMalformedMessages) {
   ASSERT_TRUE(rig->PumpUntil([&] { return malformed() == 6; }, 10)) << state.dump();
   EXPECT_TRUE(rig->dashboard().Running());
   EXPECT_FALSE(state["sites"][0]["layout"].is_null()) << "the layout survives a bad CONFIG";
+  EXPECT_EQ(state["sites"].size(), 1U);
+  EXPECT_EQ(state["sites"][0]["sources"].size(), 1U);
+  EXPECT_EQ(state["sites"][0]["malformed"], 6);
+
+  // The page connection goes on.
+  std::string next;
+  EXPECT_TRUE(page.Read(&next));
+  EXPECT_EQ(json::parse(next)["type"], "delta");
+}
+
+TEST(DashboardLive, OutlivesTheDaemonsRestart) {
+  std::unique_ptr<LiveRig> rig;
+  try {
+    rig = std::make_unique<LiveRig>("dashboard_live_restart", "manual");
+  } catch (const std::exception& e) {
+    FAIL() << e.what();
+  }
+  json state;
+  const auto sequence = [&] {
+    state = rig->State();
+    if (!state.is_object() || state["sites"].empty()) return std::int64_t{-1};
+    const auto& sources = state["sites"][0]["sources"];
+    return sources.empty() ? std::int64_t{-1} : sources[0]["sequence"].get<std::int64_t>();
+  };
+  ASSERT_TRUE(rig->PumpUntil([&] { return sequence() > 20; }, 30)) << state.dump();
+  WebSocketClient page;
+  std::string error;
+  ASSERT_TRUE(page.Connect(rig->port(), "/ws", &error)) << error;
+  std::string text;
+  ASSERT_TRUE(page.Read(&text));
+  EXPECT_EQ(json::parse(text)["type"], "snapshot");
 
   // The daemon restarts: the same page connection goes on with the new daemon's samples.
   const std::int64_t before = sequence();

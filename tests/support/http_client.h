@@ -1,6 +1,6 @@
 #pragma once
-// Blocking HTTP and WebSocket clients for tests of the dashboard's server, every wait bounded
-// (socket receive timeouts), on 127.0.0.1.
+// HTTP and WebSocket clients for tests of the dashboard's server, on 127.0.0.1, every wait
+// bounded (socket timeouts for the raw HTTP exchange; run_for for the WebSocket client).
 #include <sys/socket.h>
 #include <sys/time.h>
 #include <unistd.h>
@@ -69,43 +69,42 @@ inline int HttpStatus(const std::string& reply) {
   return std::stoi(reply.substr(9, 3));
 }
 
-/// A WebSocket client with bounded waits (the socket's receive timeout).
+/// A WebSocket client whose every wait is bounded: each operation runs asynchronously on the
+/// client's own io_context for at most the timeout given to Connect, then is cancelled (Asio's
+/// blocking operations poll past a socket's receive timeout, so that cannot bound them).  After
+/// a timeout or an error the connection is closed and every later call returns false.
 class WebSocketClient {
  public:
   /// Connects and upgrades on `path`; false (with `error`) when it cannot.
   bool Connect(int port, const std::string& path, std::string* error, double timeout_s = 10.0) {
-    try {
-      ws_ = std::make_unique<Stream>(io_);
-      ws_->next_layer().connect(
-          {boost::asio::ip::make_address("127.0.0.1"), static_cast<unsigned short>(port)});
-      SetSocketTimeouts(ws_->next_layer().native_handle(), timeout_s);
-      ws_->handshake("127.0.0.1:" + std::to_string(port), path);
-      return true;
-    } catch (const std::exception& e) {
-      *error = e.what();
-      return false;
+    timeout_ = std::chrono::milliseconds(static_cast<int>(timeout_s * 1000));
+    ws_ = std::make_unique<Stream>(io_);
+    boost::system::error_code code;
+    const boost::asio::ip::tcp::endpoint endpoint(boost::asio::ip::make_address("127.0.0.1"),
+                                                  static_cast<unsigned short>(port));
+    bool ok = Run([&](auto done) { ws_->next_layer().async_connect(endpoint, done); }, code);
+    if (ok) {
+      ok = Run(
+          [&](auto done) { ws_->async_handshake("127.0.0.1:" + std::to_string(port), path, done); },
+          code);
     }
+    if (!ok) *error = code ? code.message() : "timed out";
+    return ok;
   }
   /// The next message; false when none comes in time or the connection is gone.
   bool Read(std::string* text) {
-    try {
-      boost::beast::flat_buffer buffer;
-      ws_->read(buffer);
-      *text = boost::beast::buffers_to_string(buffer.data());
-      return true;
-    } catch (const std::exception&) {
-      return false;
-    }
+    boost::beast::flat_buffer buffer;
+    boost::system::error_code code;
+    if (!ws_ || !Run([&](auto done) { ws_->async_read(buffer, done); }, code)) return false;
+    *text = boost::beast::buffers_to_string(buffer.data());
+    return true;
   }
   /// Sends one text message; false when the connection is gone.
   bool Write(const std::string& text) {
-    try {
-      ws_->text(true);
-      ws_->write(boost::asio::buffer(text));
-      return true;
-    } catch (const std::exception&) {
-      return false;
-    }
+    boost::system::error_code code;
+    if (!ws_) return false;
+    ws_->text(true);
+    return Run([&](auto done) { ws_->async_write(boost::asio::buffer(text), done); }, code);
   }
   void Close() {
     boost::system::error_code ignored;
@@ -114,8 +113,29 @@ class WebSocketClient {
 
  private:
   using Stream = boost::beast::websocket::stream<boost::asio::ip::tcp::socket>;
+
+  // Starts `start(handler)` and runs it for at most the timeout; true when it completed without
+  // error.  On a timeout or an error the socket is closed (the operation then ends, aborted).
+  template <class Start>
+  bool Run(Start start, boost::system::error_code& code) {
+    bool finished = false;
+    start([&](const boost::system::error_code& e, auto&&...) {
+      code = e;
+      finished = true;
+    });
+    io_.restart();
+    io_.run_for(timeout_);
+    if (finished && !code) return true;
+    Close();
+    io_.restart();
+    io_.run_for(std::chrono::seconds(5));  // the aborted operation completes
+    ws_.reset();
+    return false;
+  }
+
   boost::asio::io_context io_;
   std::unique_ptr<Stream> ws_;
+  std::chrono::milliseconds timeout_{10000};
 };
 
 /// The upgrade request a WebSocket client sends first (RFC 6455's example key).
