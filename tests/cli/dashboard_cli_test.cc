@@ -9,7 +9,6 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
-#include <lcm/lcm-cpp.hpp>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
@@ -28,33 +27,15 @@ using nlohmann::json;
 
 constexpr std::int64_t kT0 = 1763700000000000;
 
-std::string ShippedConfig() {
-  std::ifstream in(std::string(CANALID_SOURCE_DIR) + "/config/canalidd-asce2.toml");
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-// A log of `samples` samples of PLC asce2 (channel pool2_level), `step_s` apart, written by
-// LCM's own writer; with `config`, the daemon's CONFIG message first.
+// A log of `samples` samples of PLC asce2 (channel pool2_level), `step_s` apart; with
+// `config`, the daemon's CONFIG message first.
 fs::path WriteLog(const fs::path& path, int samples, double step_s, bool config) {
-  lcm::LogFile log(path.string(), "w");
-  std::int64_t number = 0;
-  const auto write = [&](const std::string& channel, const std::vector<std::uint8_t>& bytes,
-                         std::int64_t utime) {
-    lcm::LogEvent event;
-    event.eventnum = number++;
-    event.timestamp = utime;
-    event.channel = channel;
-    event.datalen = static_cast<std::int32_t>(bytes.size());
-    event.data = const_cast<std::uint8_t*>(bytes.data());  // NOLINT: LCM's C-style event
-    log.writeEvent(&event);
-  };
+  TestLog log(path);
   if (config) {
     canalid::config_t message;
     message.utime = kT0;
-    message.text = ShippedConfig();
-    write("CANALID_ASCE2_CONFIG", Encoded(message), kT0);
+    message.text = ShippedConfigText("canalidd-asce2.toml");
+    log.Write("CANALID_ASCE2_CONFIG", message, kT0);
   }
   canalid::sample_t sample;
   sample.source = "asce2";
@@ -65,7 +46,7 @@ fs::path WriteLog(const fs::path& path, int samples, double step_s, bool config)
     sample.utime = kT0 + static_cast<std::int64_t>(step_s * 1e6 * i);
     sample.sequence = i;
     sample.values = {2.0 + 0.001 * i};
-    write("CANALID_ASCE2_SAMPLE_asce2", Encoded(sample), sample.utime);
+    log.Write("CANALID_ASCE2_SAMPLE_asce2", sample, sample.utime);
   }
   return path;
 }
@@ -135,7 +116,7 @@ TEST(DashboardCli, MaxPointsAndHistoryHoursBoundEachSeries) {
 TEST(DashboardCli, ConfigGivesTheLayoutBeforeTheDaemonsConfigMessage) {
   const fs::path dir = TestDirectory("dashboard_cli_config");
   const fs::path log = WriteLog(dir / "no-config.lcmlog", 3, 1.0, false);
-  WriteFile(dir / "asce2.toml", ShippedConfig());
+  WriteFile(dir / "asce2.toml", ShippedConfigText("canalidd-asce2.toml"));
   Dashboard without(dir, {"--log", log.string(), "--speed", "0"});
   ASSERT_TRUE(without.Played(20000));
   EXPECT_TRUE(without.Get("/api/state")["sites"][0]["layout"].is_null());

@@ -9,7 +9,6 @@
 #include <canalid/sample_t.hpp>
 
 #include <fstream>
-#include <lcm/lcm-cpp.hpp>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -31,24 +30,16 @@ std::string Bytes(const fs::path& path) {
   return text.str();
 }
 
-// A log of the demo's CONFIG and three samples, written by LCM's own writer.
+// A log of the demo's CONFIG and three samples.
 fs::path WriteLog(const fs::path& dir) {
   fs::path path = dir / "small.lcmlog";
-  lcm::LogFile log(path.string(), "w");
-  std::int64_t number = 0;
-  const auto write = [&](const std::string& channel, const std::vector<std::uint8_t>& bytes) {
-    lcm::LogEvent event;
-    event.eventnum = number++;
-    event.timestamp = 1763700000000000 + number;
-    event.channel = channel;
-    event.datalen = static_cast<std::int32_t>(bytes.size());
-    event.data = const_cast<std::uint8_t*>(bytes.data());  // NOLINT: LCM's C-style event
-    log.writeEvent(&event);
-  };
+  canalid::testing::TestLog log(path);
   canalid::config_t config;
-  config.text = Bytes(fs::path(CANALID_SOURCE_DIR) / "config/canalidd-asce2.toml");
-  write("CANALID_ASCE2_CONFIG", Encoded(config));
-  for (int i = 1; i <= 3; ++i) write("CANALID_ASCE2_SAMPLE_asce2", Encoded(testing::MakeSample(i)));
+  config.text = canalid::testing::ShippedConfigText("canalidd-asce2.toml");
+  log.Write("CANALID_ASCE2_CONFIG", config, 1763700000000000);
+  for (int i = 1; i <= 3; ++i) {
+    log.Write("CANALID_ASCE2_SAMPLE_asce2", testing::MakeSample(i), 1763700000000000 + i);
+  }
   return path;
 }
 

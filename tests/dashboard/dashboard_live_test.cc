@@ -278,95 +278,87 @@ TEST(DashboardLive, ChromiumShowsTheReachLevelPhaseAndModelsAsTheyUpdate) {
   ASSERT_EQ(kill(rig->daemon().pid(), SIGCONT), 0);
 }
 
-TEST(DashboardLive, MalformedMessagesAreCountedAndChangeNothing) {
-  std::unique_ptr<LiveRig> rig;
-  try {
-    rig = std::make_unique<LiveRig>("dashboard_live_malformed", "manual");
-  } catch (const std::exception& e) {
-    FAIL() << e.what();
+// The rig with the experiment left manual, once the daemon's samples flow, and a page connected
+// (its snapshot read).
+class DashboardLiveWithPage : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    try {
+      rig_ = std::make_unique<LiveRig>(
+          std::string("dashboard_live_") +
+              ::testing::UnitTest::GetInstance()->current_test_info()->name(),
+          "manual");
+    } catch (const std::exception& e) {
+      FAIL() << e.what();
+    }
+    ASSERT_TRUE(rig_->PumpUntil([&] { return Sequence() > 20; }, 30)) << state_.dump();
+    std::string error;
+    ASSERT_TRUE(page_.Connect(rig_->port(), "/ws", &error)) << error;
+    std::string text;
+    ASSERT_TRUE(page_.Read(&text));
+    EXPECT_EQ(json::parse(text)["type"], "snapshot");
   }
-  json state;
-  const auto sequence = [&] {
-    state = rig->State();
-    if (!state.is_object() || state["sites"].empty()) return std::int64_t{-1};
-    const auto& sources = state["sites"][0]["sources"];
-    return sources.empty() ? std::int64_t{-1} : sources[0]["sequence"].get<std::int64_t>();
-  };
-  ASSERT_TRUE(rig->PumpUntil([&] { return sequence() > 20; }, 30)) << state.dump();
-  WebSocketClient page;
-  std::string error;
-  ASSERT_TRUE(page.Connect(rig->port(), "/ws", &error)) << error;
-  std::string text;
-  ASSERT_TRUE(page.Read(&text));
-  EXPECT_EQ(json::parse(text)["type"], "snapshot");
+  // The dashboard's last sequence number of the PLC (-1 before any); its state kept in state_.
+  std::int64_t Sequence() {
+    state_ = rig_->State();
+    if (!state_.is_object() || state_["sites"].empty()) return -1;
+    const auto& sources = state_["sites"][0]["sources"];
+    return sources.empty() ? -1 : sources[0]["sequence"].get<std::int64_t>();
+  }
 
+  std::unique_ptr<LiveRig> rig_;
+  WebSocketClient page_;
+  json state_;
+};
+
+TEST_F(DashboardLiveWithPage, MalformedMessagesAreCountedAndChangeNothing) {
   // Malformed messages on the daemon's channels: counted, ignored, nothing else changes.
   const std::vector<std::uint8_t> garbage(200, 0xA5);
-  canalid::sample_t sample = rig->truth().sample;
+  canalid::sample_t sample = rig_->truth().sample;
   std::vector<std::uint8_t> huge_count = Encoded(sample);
   huge_count.resize(40);  // the header and a count that claims far more than the bytes hold
   const std::vector<std::string> channels = {"SAMPLE_asce2", "MODEL_pool2", "EXPERIMENT_pool2",
                                              "HEALTH", "CONFIG"};
   for (const std::string& channel : channels) {
-    ASSERT_TRUE(rig->bus().Publish(kPrefix + channel, garbage));
+    ASSERT_TRUE(rig_->bus().Publish(kPrefix + channel, garbage));
   }
-  ASSERT_TRUE(rig->bus().Publish(std::string(kPrefix) + "SAMPLE_asce2", huge_count));
+  ASSERT_TRUE(rig_->bus().Publish(std::string(kPrefix) + "SAMPLE_asce2", huge_count));
   const auto malformed = [&] {
-    state = rig->State();
-    return state.is_object() ? state["messages"]["malformed"].get<int>() : -1;
+    state_ = rig_->State();
+    return state_.is_object() ? state_["messages"]["malformed"].get<int>() : -1;
   };
-  ASSERT_TRUE(rig->PumpUntil([&] { return malformed() == 6; }, 10)) << state.dump();
-  EXPECT_TRUE(rig->dashboard().Running());
-  EXPECT_FALSE(state["sites"][0]["layout"].is_null()) << "the layout survives a bad CONFIG";
-  EXPECT_EQ(state["sites"].size(), 1U);
-  EXPECT_EQ(state["sites"][0]["sources"].size(), 1U);
-  EXPECT_EQ(state["sites"][0]["malformed"], 6);
+  ASSERT_TRUE(rig_->PumpUntil([&] { return malformed() == 6; }, 10)) << state_.dump();
+  EXPECT_TRUE(rig_->dashboard().Running());
+  EXPECT_FALSE(state_["sites"][0]["layout"].is_null()) << "the layout survives a bad CONFIG";
+  EXPECT_EQ(state_["sites"].size(), 1U);
+  EXPECT_EQ(state_["sites"][0]["sources"].size(), 1U);
+  EXPECT_EQ(state_["sites"][0]["malformed"], 6);
 
   // The page connection goes on.
   std::string next;
-  EXPECT_TRUE(page.Read(&next));
+  EXPECT_TRUE(page_.Read(&next));
   EXPECT_EQ(json::parse(next)["type"], "delta");
 }
 
-TEST(DashboardLive, OutlivesTheDaemonsRestart) {
-  std::unique_ptr<LiveRig> rig;
-  try {
-    rig = std::make_unique<LiveRig>("dashboard_live_restart", "manual");
-  } catch (const std::exception& e) {
-    FAIL() << e.what();
-  }
-  json state;
-  const auto sequence = [&] {
-    state = rig->State();
-    if (!state.is_object() || state["sites"].empty()) return std::int64_t{-1};
-    const auto& sources = state["sites"][0]["sources"];
-    return sources.empty() ? std::int64_t{-1} : sources[0]["sequence"].get<std::int64_t>();
-  };
-  ASSERT_TRUE(rig->PumpUntil([&] { return sequence() > 20; }, 30)) << state.dump();
-  WebSocketClient page;
-  std::string error;
-  ASSERT_TRUE(page.Connect(rig->port(), "/ws", &error)) << error;
+TEST_F(DashboardLiveWithPage, OutlivesTheDaemonsRestart) {
   std::string text;
-  ASSERT_TRUE(page.Read(&text));
-  EXPECT_EQ(json::parse(text)["type"], "snapshot");
-
   // The daemon restarts: the same page connection goes on with the new daemon's samples.
-  const std::int64_t before = sequence();
-  ASSERT_EQ(rig->daemon().Stop(SIGTERM, 20000), 0) << rig->daemon().output();
-  rig->StartDaemon();
-  ASSERT_TRUE(rig->PumpUntil(
+  const std::int64_t before = Sequence();
+  ASSERT_EQ(rig_->daemon().Stop(SIGTERM, 20000), 0) << rig_->daemon().output();
+  rig_->StartDaemon();
+  ASSERT_TRUE(rig_->PumpUntil(
       [&] {
-        const std::int64_t now = sequence();
+        const std::int64_t now = Sequence();
         return now >= 0 && now < before && now > 5;
       },
       30))
-      << state.dump();
-  EXPECT_TRUE(rig->dashboard().Running());
+      << state_.dump();
+  EXPECT_TRUE(rig_->dashboard().Running());
   // The deltas queued meanwhile, then new ones; bounded by 60 s.
   std::int64_t newest = -1;
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
   while (newest < 0 && std::chrono::steady_clock::now() < deadline) {
-    ASSERT_TRUE(page.Read(&text)) << "the page connection was lost";
+    ASSERT_TRUE(page_.Read(&text)) << "the page connection was lost";
     const json delta = json::parse(text);
     const auto& sources = delta["state"]["sites"][0]["sources"];
     if (delta["type"] == "delta" && !sources.empty() &&

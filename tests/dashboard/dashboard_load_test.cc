@@ -12,7 +12,6 @@
 #include <atomic>
 #include <chrono>
 #include <fstream>
-#include <lcm/lcm-cpp.hpp>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
@@ -34,28 +33,13 @@ constexpr int kChannels = 30;
 constexpr int kSamples = 20000;  // 20 s at 1 kHz
 
 void WriteLog(const fs::path& path) {
-  lcm::LogFile log(path.string(), "w");
-  ASSERT_TRUE(log.good());
+  TestLog log(path);
   const std::int64_t t0 = 1763700000000000;
-  std::int64_t number = 0;
-  const auto write = [&](const std::string& channel, const auto& message, std::int64_t utime) {
-    const std::vector<std::uint8_t> bytes = Encoded(message);
-    lcm::LogEvent event;
-    event.eventnum = number++;
-    event.timestamp = utime;
-    event.channel = channel;
-    event.datalen = static_cast<std::int32_t>(bytes.size());
-    event.data = const_cast<std::uint8_t*>(bytes.data());  // NOLINT: LCM's C-style event
-    ASSERT_EQ(log.writeEvent(&event), 0);
-  };
   canalid::config_t config;
   config.utime = t0;
-  std::ifstream in(std::string(CANALID_SOURCE_DIR) + "/config/canalidd-asce2.toml");
-  std::stringstream text;
-  text << in.rdbuf();
-  config.text = text.str();
+  config.text = ShippedConfigText("canalidd-asce2.toml");
   config.version = "test";
-  write("CANALID_ASCE2_CONFIG", config, t0);
+  log.Write("CANALID_ASCE2_CONFIG", config, t0);
   canalid::sample_t sample;
   sample.source = "asce2";
   sample.num_channels = kChannels;
@@ -70,7 +54,7 @@ void WriteLog(const fs::path& path) {
     for (std::size_t c = 0; c < sample.values.size(); ++c) {
       sample.values[c] = 2.0 + 1e-3 * static_cast<double>((static_cast<std::size_t>(i) + c) % 100);
     }
-    write("CANALID_ASCE2_SAMPLE_asce2", sample, sample.utime);
+    log.Write("CANALID_ASCE2_SAMPLE_asce2", sample, sample.utime);
   }
 }
 

@@ -28,13 +28,7 @@ using canalid::testing::MakeModel;
 using canalid::testing::MakeSample;
 using canalid::testing::MetricValue;
 using canalid::testing::ParsedMetrics;
-
-std::string ShippedConfig(const std::string& name) {
-  std::ifstream in(std::string(CANALID_SOURCE_DIR) + "/config/" + name);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
+using canalid::testing::ShippedConfigText;
 
 TEST(DashboardStore, RoutesEachMessageToItsSiteByChannelPrefix) {
   DashboardStore store;
@@ -151,7 +145,7 @@ TEST(DashboardStore, TheConfigMessageGivesReachesAndSafetyBandsAndABadOneIsRepor
   config.utime = 1;
   config.path = "/etc/canalid/canalidd.toml";
   config.version = "9.9.9";
-  config.text = ShippedConfig("canalidd-asce2.toml");
+  config.text = ShippedConfigText("canalidd-asce2.toml");
   ASSERT_EQ(store.OnMessage("CANALID_ASCE2_CONFIG", Encoded(config)), Ingest::kUsed);
   const SiteState& site = store.sites().at("CANALID_ASCE2_");
   ASSERT_TRUE(site.layout.has_value());
@@ -171,7 +165,7 @@ TEST(DashboardStore, TheConfigMessageGivesReachesAndSafetyBandsAndABadOneIsRepor
 
   // --config: the same from a file, for the site its [lcm] channel_prefix names.
   DashboardStore from_file;
-  EXPECT_EQ(from_file.SetLayoutFromConfig(ShippedConfig("canalidd-asce2.toml"), "asce2.toml"),
+  EXPECT_EQ(from_file.SetLayoutFromConfig(ShippedConfigText("canalidd-asce2.toml"), "asce2.toml"),
             "CANALID_ASCE2_");
   EXPECT_EQ(from_file.sites().at("CANALID_ASCE2_").layout->source, "asce2.toml");
   EXPECT_THROW(from_file.SetLayoutFromConfig("[lcm]\nurl = 3\n", "bad.toml"), std::runtime_error);
