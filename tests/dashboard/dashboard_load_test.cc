@@ -11,7 +11,9 @@
 
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <fstream>
+#include <mutex>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
@@ -101,7 +103,16 @@ LoadRun RunDashboard(const fs::path& dir, const fs::path& log, int queue_kib, in
 
   // 50 pages at once: the page and dygraphs over HTTP, then the WebSocket's snapshot and 20
   // updates each.
-  std::atomic<int> ok{0}, snapshots{0};
+  std::atomic<int> ok{0};
+  // Pages that have their snapshot or have failed: the main thread waits for all of them.
+  std::mutex settled_mutex;
+  std::condition_variable settled_changed;
+  int settled = 0;
+  const auto settle = [&] {
+    const std::lock_guard<std::mutex> lock(settled_mutex);
+    ++settled;
+    settled_changed.notify_all();
+  };
   std::vector<std::thread> pages;
   pages.reserve(static_cast<std::size_t>(pages_count));
   for (int p = 0; p < pages_count; ++p) {
@@ -111,12 +122,14 @@ LoadRun RunDashboard(const fs::path& dir, const fs::path& log, int queue_kib, in
       if (HttpStatus(html) != 200 || HttpStatus(dygraphs) != 200 ||
           HttpBody(dygraphs).size() !=
               fs::file_size("/usr/share/javascript/dygraphs/dygraph.min.js")) {
+        settle();
         return;
       }
       WebSocketClient ws;
       std::string error, text;
-      if (!ws.Connect(port, "/ws", &error) || !ws.Read(&text)) return;
-      ++snapshots;
+      const bool snapshot = ws.Connect(port, "/ws", &error) && ws.Read(&text);
+      settle();
+      if (!snapshot) return;
       int updates = 0;
       // Counted, not parsed: 50 parsers at once would make the pages, not the server, the
       // bottleneck on a 2-core machine.
@@ -128,9 +141,11 @@ LoadRun RunDashboard(const fs::path& dir, const fs::path& log, int queue_kib, in
     });
   }
   const auto start = std::chrono::steady_clock::now();
-  while (snapshots < pages_count &&
-         std::chrono::steady_clock::now() - start < std::chrono::seconds(20)) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  {
+    std::unique_lock<std::mutex> lock(settled_mutex);
+    EXPECT_TRUE(settled_changed.wait_for(lock, std::chrono::seconds(20),
+                                         [&] { return settled == pages_count; }))
+        << settled << " of " << pages_count << " pages settled in 20 s";
   }
   run.baseline_kib = RssKiB(dashboard.pid());
   // Until the log has played (20 s of it), sampling the memory every 50 ms.

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <functional>
 #include <future>
 #include <iostream>
 #include <string>
@@ -64,14 +65,39 @@ class ServerFixture : public ::testing::Test {
   void Broadcast(const std::string& text) {
     OnIo([this, text] { server_->Broadcast(std::make_shared<const std::string>(text)); });
   }
-  // Polls `done` every 10 ms for up to 10 s.
-  template <class F>
-  bool WaitFor(F done) {
-    for (int i = 0; i < 1000; ++i) {
-      if (done()) return true;
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  // Waits (at most 10 s) until `done(stats)` holds.  The check runs on the server's own
+  // thread, between its other handlers (a 2 ms timer paces it there), and the test thread blocks
+  // on a future: no sleep, and the stats are read where they are written.
+  bool WaitForStats(std::function<bool(const HttpServerStats&)> done) {
+    auto wait = std::make_shared<StatsWait>(std::move(done), io_);
+    auto reached = wait->reached.get_future();
+    boost::asio::post(io_, [this, wait] { Check(*server_, wait); });
+    const bool ok = reached.wait_for(std::chrono::seconds(10)) == std::future_status::ready;
+    OnIo([wait] {
+      wait->over = true;
+      wait->timer.cancel();
+    });
+    return ok;
+  }
+
+  struct StatsWait {
+    StatsWait(std::function<bool(const HttpServerStats&)> d, boost::asio::io_context& io)
+        : done(std::move(d)), timer(io) {}
+    std::function<bool(const HttpServerStats&)> done;
+    std::promise<void> reached;
+    boost::asio::steady_timer timer;
+    bool over = false;  ///< on the server's thread only
+  };
+  static void Check(HttpServer& server, const std::shared_ptr<StatsWait>& wait) {
+    if (wait->over) return;
+    if (wait->done(server.stats())) {
+      wait->over = true;
+      wait->reached.set_value();
+      return;
     }
-    return false;
+    wait->timer.expires_after(std::chrono::milliseconds(2));
+    wait->timer.async_wait(
+        [&server, wait](const boost::system::error_code&) { Check(server, wait); });
   }
 
   boost::asio::io_context io_;
@@ -145,7 +171,7 @@ TEST_F(ServerFixture, ConnectionsOverTheLimitAreClosedAtOnce) {
   std::vector<int> held;
   held.reserve(3);
   for (int i = 0; i < 3; ++i) held.push_back(ConnectLoopback(port_));
-  ASSERT_TRUE(WaitFor([&] { return Stats().open_connections == 3; }));
+  ASSERT_TRUE(WaitForStats([](const HttpServerStats& s) { return s.open_connections == 3; }));
   const int extra = ConnectLoopback(port_);
   ASSERT_GE(extra, 0);
   SetSocketTimeouts(extra, 10.0);
@@ -154,7 +180,7 @@ TEST_F(ServerFixture, ConnectionsOverTheLimitAreClosedAtOnce) {
   close(extra);
   EXPECT_EQ(Stats().connections_refused, 1);
   for (const int fd : held) close(fd);
-  ASSERT_TRUE(WaitFor([&] { return Stats().open_connections == 0; }));
+  ASSERT_TRUE(WaitForStats([](const HttpServerStats& s) { return s.open_connections == 0; }));
   EXPECT_EQ(HttpStatus(HttpGet(port_, "/hello")), 200) << "slots are given back";
 }
 
@@ -182,7 +208,7 @@ TEST_F(ServerFixture, FiftyWebSocketClientsGetTheGreetingAndEveryBroadcastInOrde
     ASSERT_TRUE(client.Read(&text));
     EXPECT_EQ(text, "hi");
   }
-  ASSERT_TRUE(WaitFor([&] { return Stats().websocket_clients == 50; }));
+  ASSERT_TRUE(WaitForStats([](const HttpServerStats& s) { return s.websocket_clients == 50; }));
   for (int i = 0; i < 5; ++i) Broadcast("update " + std::to_string(i));
   for (auto& client : clients) {
     for (int i = 0; i < 5; ++i) {
@@ -192,7 +218,7 @@ TEST_F(ServerFixture, FiftyWebSocketClientsGetTheGreetingAndEveryBroadcastInOrde
     }
   }
   for (auto& client : clients) client.Close();
-  ASSERT_TRUE(WaitFor([&] { return Stats().websocket_clients == 0; }));
+  ASSERT_TRUE(WaitForStats([](const HttpServerStats& s) { return s.websocket_clients == 0; }));
 }
 
 // A client that upgrades and then never reads: once the kernel's buffers are full its queue
@@ -214,7 +240,7 @@ TEST_F(ServerFixture, AClientThatNeverReadsIsDroppedAtItsQueueLimit) {
   ASSERT_TRUE(reader.Connect(port_, "/ws", &error)) << error;
   std::string text;
   ASSERT_TRUE(reader.Read(&text));
-  ASSERT_TRUE(WaitFor([&] { return Stats().websocket_clients == 2; }));
+  ASSERT_TRUE(WaitForStats([](const HttpServerStats& s) { return s.websocket_clients == 2; }));
 
   const std::string message(std::size_t{256} * 1024, 'x');
   std::size_t most_queued = 0;
@@ -228,7 +254,7 @@ TEST_F(ServerFixture, AClientThatNeverReadsIsDroppedAtItsQueueLimit) {
   EXPECT_EQ(stats.websocket_dropped_slow, 1) << "after " << sent << " messages";
   // The limit, plus the message being written (not counted against it).
   EXPECT_LE(most_queued, limits.max_websocket_queue_bytes + message.size());
-  ASSERT_TRUE(WaitFor([&] { return Stats().websocket_clients == 1; }));
+  ASSERT_TRUE(WaitForStats([](const HttpServerStats& s) { return s.websocket_clients == 1; }));
   Broadcast("still here");
   ASSERT_TRUE(reader.Read(&text));
   EXPECT_EQ(text, "still here");
