@@ -2,10 +2,9 @@
 
 #include <charconv>
 #include <chrono>
-#include <fstream>
-#include <sstream>
 #include <stdexcept>
 
+#include "daemon/config/config_loader.h"
 #include "daemon/dashboard/dashboard_assets.h"
 #include "daemon/dashboard/dashboard_metrics.h"
 
@@ -16,14 +15,6 @@ constexpr const char* kJson = "application/json";
 
 drivers::HttpResponse JsonResponse(int status, const nlohmann::json& body) {
   return {status, kJson, DumpJson(body), "no-store"};
-}
-
-std::string ReadFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error(path + ": cannot be read");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
 }
 
 std::chrono::steady_clock::duration Seconds(double s) {
@@ -46,7 +37,7 @@ DashboardApp::DashboardApp(boost::asio::io_context& io, DashboardOptions options
       tick_(io) {
   if (!options_.log) options_.log = [](const std::string&) {};
   for (const std::string& path : options_.config_paths) {
-    const std::string prefix = store_.SetLayoutFromConfig(ReadFile(path), path);
+    const std::string prefix = store_.SetLayout(daemon::LoadDaemonConfig(path), path);
     std::string text = "layout of site " + prefix;
     text += " from " + path;
     options_.log(text);

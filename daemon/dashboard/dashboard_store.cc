@@ -282,12 +282,12 @@ void DashboardStore::Saw(SiteState& site, std::int64_t utime) {
   newest_utime_ = std::max(newest_utime_, utime);
 }
 
-std::string DashboardStore::SetLayoutFromConfig(std::string_view text, const std::string& source) {
-  const config::DaemonConfig parsed = daemon::ParseDaemonConfig(text, source);
-  SiteState* site = Site(parsed.lcm.channel_prefix);
+std::string DashboardStore::SetLayout(const config::DaemonConfig& config,
+                                      const std::string& source) {
+  SiteState* site = Site(config.lcm.channel_prefix);
   if (site == nullptr) throw std::runtime_error(source + ": too many sites");
-  site->layout = LayoutOf(parsed, source);
-  return parsed.lcm.channel_prefix;
+  site->layout = LayoutOf(config, source);
+  return config.lcm.channel_prefix;
 }
 
 }  // namespace canalid::dashboard

@@ -14,6 +14,7 @@
 #include <canalid/model_snapshot_t.hpp>
 #include <canalid/sample_t.hpp>
 
+#include "daemon/config/daemon_config.h"
 #include "daemon/dashboard/series_ring.h"
 
 namespace canalid::dashboard {
@@ -114,10 +115,10 @@ class DashboardStore {
 
   Ingest OnMessage(std::string_view channel, std::span<const std::uint8_t> data);
 
-  /// Sets the layout of the site `prefix` from a daemon configuration's text (a CONFIG message's
-  /// or a file's).  @throws std::runtime_error naming `source` when the text is not a valid
-  /// canalidd configuration.  Returns the prefix the configuration names ([lcm] channel_prefix).
-  std::string SetLayoutFromConfig(std::string_view text, const std::string& source);
+  /// Sets the layout of the site a daemon configuration names ([lcm] channel_prefix; `source`
+  /// says where it came from, e.g. the file given to --config) and returns that prefix.
+  /// @throws std::runtime_error when the site would be one too many.
+  std::string SetLayout(const config::DaemonConfig& config, const std::string& source);
 
   const std::map<std::string, SiteState>& sites() const { return sites_; }
   const StoreCounters& counters() const { return counters_; }
