@@ -40,6 +40,11 @@ HealthReport PlcHealth(const std::string& plc_name, const drivers::PollerCounter
         std::string("read_errors.") + ReadErrorCounterName(static_cast<drivers::PlcErrorKind>(k)),
         c.read_errors[static_cast<std::size_t>(k)]);
   }
+  for (int k = 1; k < drivers::kReplyFaultCount; ++k) {
+    report.counters.emplace_back(
+        std::string("bad_replies.") + drivers::ReplyFaultName(static_cast<drivers::ReplyFault>(k)),
+        c.reply_faults[static_cast<std::size_t>(k)]);
+  }
   report.gauges = {{"last_round_trip_s", c.last_round_trip_s},
                    {"connected", c.connected ? 1.0 : 0.0},
                    {"current_backoff_s", c.current_backoff_s}};

@@ -59,4 +59,28 @@ const char* PlcErrorKindName(PlcErrorKind kind) {
   return "unknown";
 }
 
+const char* ReplyFaultName(ReplyFault fault) {
+  switch (fault) {
+    case ReplyFault::kNone:
+      return "none";
+    case ReplyFault::kTransactionId:
+      return "transaction_id";
+    case ReplyFault::kProtocolId:
+      return "protocol_id";
+    case ReplyFault::kLength:
+      return "length";
+    case ReplyFault::kUnitId:
+      return "unit_id";
+    case ReplyFault::kFunction:
+      return "function";
+    case ReplyFault::kByteCount:
+      return "byte_count";
+    case ReplyFault::kEcho:
+      return "echo";
+    case ReplyFault::kTruncated:
+      return "truncated";
+  }
+  return "unknown";
+}
+
 }  // namespace canalid::drivers

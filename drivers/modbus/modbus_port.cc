@@ -1,8 +1,12 @@
 #include "drivers/modbus/modbus_port.h"
 
 #include <modbus/modbus.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <sys/types.h>
 
 #include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -43,6 +47,73 @@ PlcStatus ConfigError(int errnum) {
   PlcStatus s;
   s.kind = PlcErrorKind::kConfig;
   s.sys_errno = errnum;
+  return s;
+}
+
+using Clock = std::chrono::steady_clock;
+
+enum class Io { kDone, kTimeout, kClosed, kError };
+
+// Waits until `fd` is ready for `events` or the deadline passes; kError carries errno in `err`.
+Io WaitReady(int fd, short events, Clock::time_point deadline, int& err) {
+  for (;;) {
+    const auto left = std::chrono::ceil<std::chrono::milliseconds>(deadline - Clock::now());
+    if (left.count() <= 0) return Io::kTimeout;
+    pollfd p{fd, events, 0};
+    const int rc = poll(&p, 1, static_cast<int>(left.count()));
+    if (rc > 0) return Io::kDone;  // readable, writable, or an error that send/recv will report
+    if (rc == 0) return Io::kTimeout;
+    if (errno != EINTR) {
+      err = errno;
+      return Io::kError;
+    }
+  }
+}
+
+Io SendAll(int fd, std::span<const uint8_t> bytes, Clock::time_point deadline, int& err) {
+  std::size_t sent = 0;
+  while (sent < bytes.size()) {
+    const ssize_t n =
+        send(fd, bytes.data() + sent, bytes.size() - sent, MSG_NOSIGNAL | MSG_DONTWAIT);
+    if (n > 0) {
+      sent += static_cast<std::size_t>(n);
+      continue;
+    }
+    if (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) {
+      err = errno;
+      return Io::kError;
+    }
+    const Io ready = WaitReady(fd, POLLOUT, deadline, err);
+    if (ready != Io::kDone) return ready;
+  }
+  return Io::kDone;
+}
+
+// Reads exactly bytes.size() bytes; `got` counts those that arrived, whatever the outcome.
+Io ReceiveExactly(int fd, std::span<uint8_t> bytes, Clock::time_point deadline, std::size_t& got,
+                  int& err) {
+  got = 0;
+  while (got < bytes.size()) {
+    const ssize_t n = recv(fd, bytes.data() + got, bytes.size() - got, MSG_DONTWAIT);
+    if (n > 0) {
+      got += static_cast<std::size_t>(n);
+      continue;
+    }
+    if (n == 0) return Io::kClosed;
+    if (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) {
+      err = errno;
+      return Io::kError;
+    }
+    const Io ready = WaitReady(fd, POLLIN, deadline, err);
+    if (ready != Io::kDone) return ready;
+  }
+  return Io::kDone;
+}
+
+PlcStatus BadReply(ReplyFault fault) {
+  PlcStatus s;
+  s.kind = PlcErrorKind::kBadData;
+  s.reply_fault = fault;
   return s;
 }
 
@@ -138,12 +209,65 @@ PlcStatus ModbusPort::Failed() noexcept {
   PlcStatus s = TranslateModbusErrno(errno);
   // A failure without errno leaves the link state unknown: treat it as lost.
   if (s.ok()) s.kind = PlcErrorKind::kDisconnected;
-  if (s.kind == PlcErrorKind::kDisconnected) {
+  return Recover(s);
+}
+
+PlcStatus ModbusPort::Recover(PlcStatus status) noexcept {
+  if (status.kind == PlcErrorKind::kDisconnected) {
     Close();
-  } else if (s.kind == PlcErrorKind::kTimeout || s.kind == PlcErrorKind::kBadData) {
+  } else if (status.kind == PlcErrorKind::kTimeout || status.kind == PlcErrorKind::kBadData) {
     modbus_flush(ctx_);
   }
-  return s;
+  return status;
+}
+
+PlcStatus ModbusPort::TcpExchange(const TcpRequest& request) noexcept {
+  const int fd = modbus_get_socket(ctx_);
+  const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                           std::chrono::duration<double>(response_timeout_s_));
+  reply_size_ = 0;
+  int err = 0;
+  Io io = SendAll(fd, request.adu(), deadline, err);
+  if (io == Io::kDone) {
+    std::size_t got = 0;
+    io =
+        ReceiveExactly(fd, std::span<uint8_t>(reply_.data(), kMbapHeaderBytes), deadline, got, err);
+    reply_size_ = got;
+    if (io == Io::kDone) {
+      // A header that is not this request's, or cannot be framed, ends the exchange here: its
+      // length cannot be trusted to find the end of the reply, so the rest is flushed.
+      if (reply_[0] != (request.transaction_id >> 8) ||
+          reply_[1] != (request.transaction_id & 0xff)) {
+        return Recover(BadReply(ReplyFault::kTransactionId));
+      }
+      const HeaderCheck header = CheckReplyHeader(std::span(reply_.data(), kMbapHeaderBytes));
+      if (header.fault != ReplyFault::kNone) return Recover(BadReply(header.fault));
+      io =
+          ReceiveExactly(fd, std::span<uint8_t>(reply_.data() + kMbapHeaderBytes, header.pdu_bytes),
+                         deadline, got, err);
+      reply_size_ += got;
+    }
+  }
+  PlcStatus s;
+  switch (io) {
+    case Io::kDone:
+      s = CheckReply(request, std::span(reply_.data(), reply_size_));
+      return s.kind == PlcErrorKind::kBadData ? Recover(s) : s;
+    case Io::kTimeout:
+      s.kind = PlcErrorKind::kTimeout;
+      s.sys_errno = ETIMEDOUT;
+      if (reply_size_ > 0) s.reply_fault = ReplyFault::kTruncated;
+      return Recover(s);
+    case Io::kClosed:
+      s.kind = PlcErrorKind::kDisconnected;
+      s.sys_errno = ECONNRESET;
+      return Recover(s);
+    case Io::kError:
+      s = TranslateModbusErrno(err);
+      if (s.kind != PlcErrorKind::kTimeout) s.kind = PlcErrorKind::kDisconnected;
+      return Recover(s);
+  }
+  return Recover(PlcStatus{PlcErrorKind::kDisconnected, 0, 0, ReplyFault::kNone});
 }
 
 PlcStatus ModbusPort::ReadRegisters(RegisterKind kind, int address,
@@ -153,6 +277,13 @@ PlcStatus ModbusPort::ReadRegisters(RegisterKind kind, int address,
     return ConfigError(EINVAL);
   }
   if (!connected_) return TranslateModbusErrno(ENOTCONN);
+  if (tcp()) {
+    const PlcStatus s = TcpExchange(
+        ReadRegistersRequest(next_transaction_id_++, static_cast<uint8_t>(unit_id_), kind,
+                             static_cast<uint16_t>(address), static_cast<uint16_t>(count)));
+    if (s.ok()) ReplyRegisters(std::span(reply_.data(), reply_size_), out);
+    return s;
+  }
   errno = 0;
   const int rc = kind == RegisterKind::kHolding
                      ? modbus_read_registers(ctx_, address, count, out.data())
@@ -169,6 +300,10 @@ PlcStatus ModbusPort::ReadRegisters(RegisterKind kind, int address,
 PlcStatus ModbusPort::WriteRegister(int address, uint16_t value) noexcept {
   if (address < 0 || address > 65535) return ConfigError(EINVAL);
   if (!connected_) return TranslateModbusErrno(ENOTCONN);
+  if (tcp()) {
+    return TcpExchange(WriteRegisterRequest(next_transaction_id_++, static_cast<uint8_t>(unit_id_),
+                                            static_cast<uint16_t>(address), value));
+  }
   errno = 0;
   if (modbus_write_register(ctx_, address, value) != 1) return Failed();
   return PlcStatus::Ok();
@@ -180,6 +315,10 @@ PlcStatus ModbusPort::WriteRegisters(int address, std::span<const uint16_t> valu
     return ConfigError(EINVAL);
   }
   if (!connected_) return TranslateModbusErrno(ENOTCONN);
+  if (tcp()) {
+    return TcpExchange(WriteRegistersRequest(next_transaction_id_++, static_cast<uint8_t>(unit_id_),
+                                             static_cast<uint16_t>(address), values));
+  }
   errno = 0;
   if (modbus_write_registers(ctx_, address, count, values.data()) != count) return Failed();
   return PlcStatus::Ok();

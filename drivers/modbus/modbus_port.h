@@ -1,7 +1,10 @@
 #pragma once
+#include <array>
+#include <cstddef>
 #include <string>
 #include <variant>
 
+#include "drivers/modbus/modbus_tcp_frame.h"
 #include "drivers/modbus/plc_port.h"
 
 // libmodbus's context type, kept out of our headers (its name is libmodbus's).
@@ -37,6 +40,11 @@ void ValidateModbusConfig(const ModbusRtuConfig& config);
 /// (so on the thread that will use it) and freed by the destructor. Not thread-safe. Errors go
 /// through TranslateModbusErrno; after kDisconnected the link is closed, after kTimeout or
 /// kBadData pending bytes are flushed so a late reply is not taken for the next one.
+///
+/// Over TCP libmodbus connects, but the requests are framed and the replies read and checked
+/// here (modbus_tcp_frame.h: every MBAP field, the PDU length, the echo of a write), each request
+/// with its own transaction id, the whole exchange bounded by the response timeout. RTU requests
+/// go through libmodbus, which checks the slave address and the CRC.
 class ModbusPort final : public PlcPort {
  public:
   /// @throws std::invalid_argument on a bad config (see ValidateModbusConfig).
@@ -58,6 +66,11 @@ class ModbusPort final : public PlcPort {
  private:
   PlcStatus CreateContext() noexcept;
   PlcStatus Failed() noexcept;  // translates errno and applies the recovery described above
+  /// TCP: sends `request` and reads its reply into reply_ (reply_size_ bytes), checked.
+  PlcStatus TcpExchange(const TcpRequest& request) noexcept;
+  /// After a failed TCP exchange: close on kDisconnected, flush on kTimeout and kBadData.
+  PlcStatus Recover(PlcStatus status) noexcept;
+  bool tcp() const noexcept { return std::holds_alternative<ModbusTcpConfig>(config_); }
 
   std::variant<ModbusTcpConfig, ModbusRtuConfig> config_;
   // The fields both configs share, copied out so that reading them cannot throw (std::visit can).
@@ -65,6 +78,9 @@ class ModbusPort final : public PlcPort {
   double response_timeout_s_ = 0.0;
   _modbus* ctx_ = nullptr;
   bool connected_ = false;
+  uint16_t next_transaction_id_ = 1;
+  std::array<uint8_t, kMaxAduBytes> reply_{};
+  std::size_t reply_size_ = 0;
 };
 
 }  // namespace canalid::drivers

@@ -210,7 +210,7 @@ void PlcPoller::PollOnce() {
     // Blocks after a lost link are not attempted, so not counted as read errors either.
     const bool attempted = port_->connected();
     const PlcStatus r = attempted ? port_->ReadRegisters(block.kind, block.start, out)
-                                  : PlcStatus{PlcErrorKind::kDisconnected, 0, 0};
+                                  : PlcStatus{PlcErrorKind::kDisconnected, 0, 0, ReplyFault::kNone};
     if (r.ok()) {
       counters_.block_reads_ok.fetch_add(1, std::memory_order_relaxed);
       consecutive_timeouts_ = 0;
@@ -218,6 +218,7 @@ void PlcPoller::PollOnce() {
       if (attempted) {
         counters_.read_errors[static_cast<std::size_t>(r.kind)].fetch_add(
             1, std::memory_order_relaxed);
+        CountReplyFault(r);
       }
       if (s.status.ok()) s.status = r;
       // Zero the block so a failed read can never be decoded as data.
@@ -335,12 +336,13 @@ void PlcPoller::ExecuteWrite(const WriteRequest& request) {
       r.outcome = WriteOutcome::kEncodeFailed;
     } else {
       if (!port_->connected()) {
-        r.plc = PlcStatus{PlcErrorKind::kDisconnected, 0, 0};
+        r.plc = PlcStatus{PlcErrorKind::kDisconnected, 0, 0, ReplyFault::kNone};
       } else if (n == 1) {
         r.plc = port_->WriteRegister(c.address, regs[0]);
       } else {
         r.plc = port_->WriteRegisters(c.address, std::span<const uint16_t>(regs.data(), 2));
       }
+      CountReplyFault(r.plc);
       if (r.plc.ok()) {
         r.outcome = WriteOutcome::kWritten;
         r.written = limited.value;
@@ -361,12 +363,22 @@ void PlcPoller::ExecuteWrite(const WriteRequest& request) {
   Notify();
 }
 
+void PlcPoller::CountReplyFault(const PlcStatus& status) {
+  if (status.reply_fault != ReplyFault::kNone) {
+    counters_.reply_faults[static_cast<std::size_t>(status.reply_fault)].fetch_add(
+        1, std::memory_order_relaxed);
+  }
+}
+
 PollerCounters PlcPoller::counters() const {
   PollerCounters c;
   c.polls = counters_.polls.load();
   c.block_reads_ok = counters_.block_reads_ok.load();
   for (std::size_t k = 0; k < c.read_errors.size(); ++k) {
     c.read_errors[k] = counters_.read_errors[k].load();
+  }
+  for (std::size_t k = 0; k < c.reply_faults.size(); ++k) {
+    c.reply_faults[k] = counters_.reply_faults[k].load();
   }
   c.connect_failures = counters_.connect_failures.load();
   c.reconnects = counters_.reconnects.load();

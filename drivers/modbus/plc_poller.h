@@ -93,6 +93,8 @@ struct PollerCounters {
   int64_t polls = 0;
   int64_t block_reads_ok = 0;
   std::array<int64_t, kPlcErrorKindCount> read_errors{};  ///< by PlcErrorKind
+  /// Replies (to reads and writes) that did not match their request, by ReplyFault ([0] unused).
+  std::array<int64_t, kReplyFaultCount> reply_faults{};
   int64_t connect_failures = 0;
   int64_t reconnects = 0;  ///< successful connects after the first
   int64_t samples_dropped = 0;
@@ -177,6 +179,7 @@ class PlcPoller final {
         samples_dropped{0}, overruns{0}, writes_ok{0}, writes_failed{0}, write_results_dropped{0},
         notify_failures{0};
     std::array<std::atomic<int64_t>, kPlcErrorKindCount> read_errors{};
+    std::array<std::atomic<int64_t>, kReplyFaultCount> reply_faults{};
     std::atomic<double> last_round_trip_s{0.0}, current_backoff_s{0.0};
     std::atomic<bool> connected{false};
   };
@@ -186,6 +189,7 @@ class PlcPoller final {
   void ExecuteWrites();
   void ExecuteWrite(const WriteRequest& request);
   void Notify();
+  void CountReplyFault(const PlcStatus& status);
   /// Waits until `deadline_s` (steady seconds), running writes that arrive; false when stopping.
   bool WaitUntil(double deadline_s);
   double SteadyNow() const;

@@ -25,6 +25,24 @@ enum class PlcErrorKind {
 };
 inline constexpr int kPlcErrorKindCount = 6;
 
+/// Which part of a Modbus TCP reply did not match its request (ModbusPort checks every MBAP
+/// header field itself; libmodbus does not). Counted by the poller under these names.
+enum class ReplyFault {
+  kNone,
+  kTransactionId,  ///< not the transaction id of the request (e.g. a late reply to an old one)
+  kProtocolId,     ///< MBAP protocol id other than 0
+  kLength,         ///< MBAP length outside 2..254, or not the length the function implies
+  kUnitId,         ///< not the unit id of the request
+  kFunction,       ///< a function code other than the request's (or its exception form)
+  kByteCount,      ///< a read reply whose byte count is not 2 x the registers asked for
+  kEcho,           ///< a write reply that does not echo the address, value or count written
+  kTruncated,      ///< the response timeout struck inside a reply (fewer bytes than announced)
+};
+inline constexpr int kReplyFaultCount = 9;
+
+/// The counter suffix of a fault ("transaction_id", "protocol_id", ... as docs/lcm-channels.md).
+const char* ReplyFaultName(ReplyFault fault);
+
 /// Outcome of one PLC request. Plain value, never thrown.
 struct PlcStatus {
   PlcErrorKind kind = PlcErrorKind::kNone;
@@ -33,6 +51,8 @@ struct PlcStatus {
   int exception_code = 0;
   /// The errno the adapter saw (0 if none), kept for logs only.
   int sys_errno = 0;
+  /// For kBadData (and a kTimeout inside a reply) over Modbus TCP: the field that was wrong.
+  ReplyFault reply_fault = ReplyFault::kNone;
 
   bool ok() const { return kind == PlcErrorKind::kNone; }
   static PlcStatus Ok() { return {}; }
