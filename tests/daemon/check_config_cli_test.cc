@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "tests/support/child_process.h"
+#include "tests/support/run_program.h"
 
 namespace canalid::testing {
 namespace {
@@ -30,10 +31,6 @@ namespace fs = std::filesystem;
 
 constexpr int kExitConfig = 78;
 constexpr int kTimeoutMs = 20000;  // validation only: well under a second when the box is idle
-
-std::string DaemonProgram() {
-  return std::string(CANALID_BINARY_DIR) + "/daemon/canalidd/canalidd";
-}
 
 class CheckConfigCli : public ::testing::Test {
  protected:

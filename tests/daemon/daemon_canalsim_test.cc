@@ -55,13 +55,6 @@ constexpr int kSpikeAmplitude = 15;
 constexpr int kSpikePeriod = 16;
 constexpr double kTimeScale = 600.0;
 
-std::string DaemonProgram() {
-  return std::string(CANALID_BINARY_DIR) + "/daemon/canalidd/canalidd";
-}
-std::string CommandProgram() {
-  return std::string(CANALID_BINARY_DIR) + "/daemon/command/canalid-command";
-}
-
 std::string ReadText(const fs::path& path) {
   std::ifstream in(path);
   std::stringstream s;

@@ -356,7 +356,7 @@ class CommandProgram : public ::testing::Test {
   std::filesystem::path dir_ =
       testing::TestDirectory(std::string("canalid_command.") +
                              ::testing::UnitTest::GetInstance()->current_test_info()->name());
-  std::string program_ = std::string(CANALID_BINARY_DIR) + "/daemon/command/canalid-command";
+  std::string program_ = canalid::testing::CommandProgram();
 
   std::filesystem::path KeyFile(const std::string& name, const std::string& text, mode_t mode) {
     auto path = dir_ / name;

@@ -105,8 +105,7 @@ inline DaemonExperimentRun RunDaemonExperiment(const std::filesystem::path& dir,
   DaemonExperimentRun run;
   WriteFile(dir / "canalidd.toml", config);
   {
-    ChildProcess daemon({std::string(CANALID_BINARY_DIR) + "/daemon/canalidd/canalidd", "--config",
-                         (dir / "canalidd.toml").string()},
+    ChildProcess daemon({DaemonProgram(), "--config", (dir / "canalidd.toml").string()},
                         {"LCM_DEFAULT_URL=file://" + (dir / "run.lcmlog").string() + "?mode=w"},
                         dir / "canalidd.log");
     EXPECT_FALSE(daemon.WaitForLine("reach " + reach + ": experiment done", timeout_ms).empty())

@@ -63,4 +63,14 @@ inline std::string CanalidProgram() {
   return std::string(CANALID_BINARY_DIR) + "/daemon/canalid/canalid";
 }
 
+/// The canalidd daemon of this build.
+inline std::string DaemonProgram() {
+  return std::string(CANALID_BINARY_DIR) + "/daemon/canalidd/canalidd";
+}
+
+/// The canalid-command program of this build.
+inline std::string CommandProgram() {
+  return std::string(CANALID_BINARY_DIR) + "/daemon/command/canalid-command";
+}
+
 }  // namespace canalid::testing
