@@ -110,13 +110,6 @@ Io ReceiveExactly(int fd, std::span<uint8_t> bytes, Clock::time_point deadline, 
   return Io::kDone;
 }
 
-PlcStatus BadReply(ReplyFault fault) {
-  PlcStatus s;
-  s.kind = PlcErrorKind::kBadData;
-  s.reply_fault = fault;
-  return s;
-}
-
 }  // namespace
 
 void ValidateModbusConfig(const ModbusTcpConfig& c) {
@@ -225,49 +218,69 @@ PlcStatus ModbusPort::TcpExchange(const TcpRequest& request) noexcept {
   const int fd = modbus_get_socket(ctx_);
   const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                            std::chrono::duration<double>(response_timeout_s_));
-  reply_size_ = 0;
   int err = 0;
-  Io io = SendAll(fd, request.adu(), deadline, err);
-  if (io == Io::kDone) {
+  // A request only partly sent leaves the PLC mid-frame: the stream cannot be trusted any more.
+  if (const Io sent = SendAll(fd, request.adu(), deadline, err); sent != Io::kDone) {
+    PlcStatus s = sent == Io::kError ? TranslateModbusErrno(err) : PlcStatus{};
+    s.kind = PlcErrorKind::kDisconnected;
+    return Recover(s);
+  }
+  // Frames are read one after the other until this request's: a whole frame of another
+  // transaction (the late reply to a request that timed out) is skipped, so one late reply does
+  // not put every later exchange one reply behind.
+  bool skipped = false;
+  for (;;) {
+    reply_size_ = 0;
     std::size_t got = 0;
-    io =
+    Io io =
         ReceiveExactly(fd, std::span<uint8_t>(reply_.data(), kMbapHeaderBytes), deadline, got, err);
     reply_size_ = got;
+    HeaderCheck header;
     if (io == Io::kDone) {
-      // A header that is not this request's, or cannot be framed, ends the exchange here: its
-      // length cannot be trusted to find the end of the reply, so the rest is flushed.
-      if (reply_[0] != (request.transaction_id >> 8) ||
-          reply_[1] != (request.transaction_id & 0xff)) {
-        return Recover(BadReply(ReplyFault::kTransactionId));
+      header = CheckReplyHeader(std::span(reply_.data(), kMbapHeaderBytes));
+      if (header.fault != ReplyFault::kNone) {
+        // No length to find the frame's end by: the stream is lost, so the link is dropped.
+        return Recover(PlcStatus{PlcErrorKind::kDisconnected, 0, 0, header.fault});
       }
-      const HeaderCheck header = CheckReplyHeader(std::span(reply_.data(), kMbapHeaderBytes));
-      if (header.fault != ReplyFault::kNone) return Recover(BadReply(header.fault));
       io =
           ReceiveExactly(fd, std::span<uint8_t>(reply_.data() + kMbapHeaderBytes, header.pdu_bytes),
                          deadline, got, err);
       reply_size_ += got;
     }
+    PlcStatus s;
+    switch (io) {
+      case Io::kDone:
+        break;
+      case Io::kTimeout:
+        if (reply_size_ > 0) {
+          // A frame cut short: its rest may come later, in the middle of the next reply.
+          return Recover(
+              PlcStatus{PlcErrorKind::kDisconnected, 0, ETIMEDOUT, ReplyFault::kTruncated});
+        }
+        s.kind = PlcErrorKind::kTimeout;
+        s.sys_errno = ETIMEDOUT;
+        if (skipped) s.reply_fault = ReplyFault::kTransactionId;
+        return Recover(s);
+      case Io::kClosed:
+        s.kind = PlcErrorKind::kDisconnected;
+        s.sys_errno = ECONNRESET;
+        return Recover(s);
+      case Io::kError:
+        s = TranslateModbusErrno(err);
+        s.kind = PlcErrorKind::kDisconnected;
+        return Recover(s);
+    }
+    if (reply_[0] == (request.transaction_id >> 8) &&
+        reply_[1] == (request.transaction_id & 0xff)) {
+      break;
+    }
+    skipped = true;
   }
-  PlcStatus s;
-  switch (io) {
-    case Io::kDone:
-      s = CheckReply(request, std::span(reply_.data(), reply_size_));
-      return s.kind == PlcErrorKind::kBadData ? Recover(s) : s;
-    case Io::kTimeout:
-      s.kind = PlcErrorKind::kTimeout;
-      s.sys_errno = ETIMEDOUT;
-      if (reply_size_ > 0) s.reply_fault = ReplyFault::kTruncated;
-      return Recover(s);
-    case Io::kClosed:
-      s.kind = PlcErrorKind::kDisconnected;
-      s.sys_errno = ECONNRESET;
-      return Recover(s);
-    case Io::kError:
-      s = TranslateModbusErrno(err);
-      if (s.kind != PlcErrorKind::kTimeout) s.kind = PlcErrorKind::kDisconnected;
-      return Recover(s);
-  }
-  return Recover(PlcStatus{PlcErrorKind::kDisconnected, 0, 0, ReplyFault::kNone});
+  PlcStatus s = CheckReply(request, std::span(reply_.data(), reply_size_));
+  if (s.kind == PlcErrorKind::kBadData) return Recover(s);
+  // An answer after a skipped frame still counts that frame (ReplyFault on a good status).
+  if (skipped && s.reply_fault == ReplyFault::kNone) s.reply_fault = ReplyFault::kTransactionId;
+  return s;
 }
 
 PlcStatus ModbusPort::ReadRegisters(RegisterKind kind, int address,

@@ -43,8 +43,11 @@ void ValidateModbusConfig(const ModbusRtuConfig& config);
 ///
 /// Over TCP libmodbus connects, but the requests are framed and the replies read and checked
 /// here (modbus_tcp_frame.h: every MBAP field, the PDU length, the echo of a write), each request
-/// with its own transaction id, the whole exchange bounded by the response timeout. RTU requests
-/// go through libmodbus, which checks the slave address and the CRC.
+/// with its own transaction id, the whole exchange bounded by the response timeout. A whole frame
+/// of another transaction (a reply that came after its request timed out) is skipped; a frame
+/// that cannot be delimited (bad protocol id or MBAP length, cut short by the timeout) or a
+/// request only partly sent drops the link (kDisconnected), since what follows on the stream
+/// cannot be trusted. RTU requests go through libmodbus, which checks the slave address and CRC.
 class ModbusPort final : public PlcPort {
  public:
   /// @throws std::invalid_argument on a bad config (see ValidateModbusConfig).

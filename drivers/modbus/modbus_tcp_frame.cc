@@ -49,9 +49,12 @@ PlcStatus Bad(ReplyFault fault) {
 
 // The PDU of an accepted header, against the request's function.
 PlcStatus CheckPdu(const TcpRequest& request, std::span<const uint8_t> pdu) {
+  if (pdu.size() < 2) return Bad(ReplyFault::kLength);  // every reply has a function and data
   const uint8_t function = pdu[0];
   if (function == (request.function | kExceptionBit)) {
     if (pdu.size() != 2) return Bad(ReplyFault::kLength);
+    // Codes 1..11 are the Modbus exceptions (application protocol 1.1b3, 7); others are noise.
+    if (pdu[1] < 1 || pdu[1] > 11) return Bad(ReplyFault::kFunction);
     PlcStatus s;
     s.kind = PlcErrorKind::kException;
     s.exception_code = pdu[1];

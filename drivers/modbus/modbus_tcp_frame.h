@@ -57,8 +57,9 @@ struct HeaderCheck {
 HeaderCheck CheckReplyHeader(std::span<const uint8_t> header);
 
 /// A whole reply (header and the PDU its length announced) checked against its request, in
-/// this order: transaction id, protocol id, length, unit id, then the PDU: an exception reply
-/// (function | 0x80, one code byte) gives PlcErrorKind::kException with its code; any other
+/// this order: at least a header and one byte, transaction id, protocol id, length, unit id, then
+/// the PDU: an exception reply (function | 0x80, one code byte of 1..11) gives
+/// PlcErrorKind::kException with its code; any other
 /// function than the request's, a byte count other than 2 x count, a PDU length that does not fit
 /// the function, or a write reply that does not echo the request is kBadData with the fault.
 PlcStatus CheckReply(const TcpRequest& request, std::span<const uint8_t> reply);

@@ -211,6 +211,7 @@ void PlcPoller::PollOnce() {
     const bool attempted = port_->connected();
     const PlcStatus r = attempted ? port_->ReadRegisters(block.kind, block.start, out)
                                   : PlcStatus{PlcErrorKind::kDisconnected, 0, 0, ReplyFault::kNone};
+    if (attempted) CountReplyFault(r);  // a skipped late reply comes with a good one too
     if (r.ok()) {
       counters_.block_reads_ok.fetch_add(1, std::memory_order_relaxed);
       consecutive_timeouts_ = 0;
@@ -218,7 +219,6 @@ void PlcPoller::PollOnce() {
       if (attempted) {
         counters_.read_errors[static_cast<std::size_t>(r.kind)].fetch_add(
             1, std::memory_order_relaxed);
-        CountReplyFault(r);
       }
       if (s.status.ok()) s.status = r;
       // Zero the block so a failed read can never be decoded as data.

@@ -33,7 +33,7 @@ enum class ReplyFault {
   kProtocolId,     ///< MBAP protocol id other than 0
   kLength,         ///< MBAP length outside 2..254, or not the length the function implies
   kUnitId,         ///< not the unit id of the request
-  kFunction,       ///< a function code other than the request's (or its exception form)
+  kFunction,       ///< a function other than the request's (or its exception form with code 1..11)
   kByteCount,      ///< a read reply whose byte count is not 2 x the registers asked for
   kEcho,           ///< a write reply that does not echo the address, value or count written
   kTruncated,      ///< the response timeout struck inside a reply (fewer bytes than announced)
@@ -51,7 +51,10 @@ struct PlcStatus {
   int exception_code = 0;
   /// The errno the adapter saw (0 if none), kept for logs only.
   int sys_errno = 0;
-  /// For kBadData (and a kTimeout inside a reply) over Modbus TCP: the field that was wrong.
+  /// Over Modbus TCP, the reply field that was wrong: with kBadData, the refused reply's; with
+  /// kDisconnected, the framing that was lost (protocol id, MBAP length, a reply cut short), after
+  /// which the link is dropped; kTransactionId with any kind (even kNone), a whole frame of
+  /// another transaction (a late reply) that was skipped while waiting for this one.
   ReplyFault reply_fault = ReplyFault::kNone;
 
   bool ok() const { return kind == PlcErrorKind::kNone; }

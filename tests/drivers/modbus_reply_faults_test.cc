@@ -15,6 +15,7 @@
 
 #include <array>
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <deque>
 #include <memory>
@@ -45,6 +46,7 @@ enum class Mutation {
   kEcho,             // a write reply echoing value + 1
   kException,        // exception 2 instead of the reply
   kConstantUnitOne,  // every reply says unit 1 (a gateway behind another unit id)
+  kLate,             // the right reply, 0.45 s late (after the port's 0.3 s response timeout)
 };
 
 /// A one-connection Modbus TCP slave on a loopback port: holding and input register i reads
@@ -54,11 +56,13 @@ class HostileSlave {
  public:
   HostileSlave() {
     listen_fd_ = socket(AF_INET, SOCK_STREAM, 0);
+    if (listen_fd_ < 0) throw std::runtime_error("hostile slave: no socket");
     sockaddr_in addr{};
     addr.sin_family = AF_INET;
     addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
     if (bind(listen_fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0 ||
         listen(listen_fd_, 4) != 0) {
+      close(listen_fd_);
       throw std::runtime_error("hostile slave: cannot listen on loopback");
     }
     socklen_t len = sizeof addr;
@@ -117,7 +121,10 @@ class HostileSlave {
       while (ReadExactly(fd, request.data(), 7)) {
         const std::size_t pdu = (static_cast<std::size_t>(request[4]) << 8 | request[5]) - 1;
         if (pdu < 1 || pdu > 253 || !ReadExactly(fd, request.data() + 7, pdu)) break;
-        const std::vector<uint8_t> reply = Reply(request.data(), Next());
+        const Mutation m = Next();
+        // The fault injected: a reply held back past the master's timeout (not a wait).
+        if (m == Mutation::kLate) std::this_thread::sleep_for(std::chrono::milliseconds(450));
+        const std::vector<uint8_t> reply = Reply(request.data(), m);
         if (send(fd, reply.data(), reply.size(), MSG_NOSIGNAL) < 0) break;
       }
       close(fd);
@@ -198,6 +205,7 @@ struct Case {
   Mutation mutation;
   PlcErrorKind kind;
   ReplyFault fault;
+  bool keeps_link;  // false: the frame could not be delimited, so the port dropped the link
 };
 
 TEST(ModbusReplyFaults, EachWrongFieldIsRefusedAndNamedAndTheLinkCarriesOn) {
@@ -206,29 +214,35 @@ TEST(ModbusReplyFaults, EachWrongFieldIsRefusedAndNamedAndTheLinkCarriesOn) {
   ASSERT_TRUE(plc.Connect().ok());
   ASSERT_TRUE(ReadsCleanly(plc));
   using enum Mutation;
+  using K = PlcErrorKind;
   const Case cases[] = {
-      {kTransactionId, PlcErrorKind::kBadData, ReplyFault::kTransactionId},
-      {kProtocolId, PlcErrorKind::kBadData, ReplyFault::kProtocolId},
-      {kUnitId, PlcErrorKind::kBadData, ReplyFault::kUnitId},
-      {kLengthShort, PlcErrorKind::kBadData, ReplyFault::kLength},
-      {kLengthLong, PlcErrorKind::kTimeout, ReplyFault::kTruncated},
-      {kLengthHuge, PlcErrorKind::kBadData, ReplyFault::kLength},
-      {kFunction, PlcErrorKind::kBadData, ReplyFault::kFunction},
-      {kByteCount, PlcErrorKind::kBadData, ReplyFault::kByteCount},
-      {kException, PlcErrorKind::kException, ReplyFault::kNone},
+      // Another transaction's whole frame is skipped; none of this one's comes before the timeout.
+      {kTransactionId, K::kTimeout, ReplyFault::kTransactionId, true},
+      {kProtocolId, K::kDisconnected, ReplyFault::kProtocolId, false},
+      {kUnitId, K::kBadData, ReplyFault::kUnitId, true},
+      {kLengthShort, K::kBadData, ReplyFault::kLength, true},
+      {kLengthLong, K::kDisconnected, ReplyFault::kTruncated, false},
+      {kLengthHuge, K::kDisconnected, ReplyFault::kLength, false},
+      {kFunction, K::kBadData, ReplyFault::kFunction, true},
+      {kByteCount, K::kBadData, ReplyFault::kByteCount, true},
+      {kException, K::kException, ReplyFault::kNone, true},
   };
   for (const Case& c : cases) {
+    const int m = static_cast<int>(c.mutation);
     slave.Queue(c.mutation);
     std::array<uint16_t, 3> regs{};
     const PlcStatus s = plc.ReadRegisters(RegisterKind::kHolding, 20, regs);
-    EXPECT_EQ(s.kind, c.kind) << "mutation " << static_cast<int>(c.mutation);
-    EXPECT_EQ(s.reply_fault, c.fault) << "mutation " << static_cast<int>(c.mutation);
-    EXPECT_TRUE(plc.connected());
-    EXPECT_TRUE(ReadsCleanly(plc)) << "after mutation " << static_cast<int>(c.mutation);
+    EXPECT_EQ(s.kind, c.kind) << "mutation " << m;
+    EXPECT_EQ(s.reply_fault, c.fault) << "mutation " << m;
+    EXPECT_EQ(plc.connected(), c.keeps_link) << "mutation " << m;
+    if (!plc.connected()) {
+      ASSERT_TRUE(plc.Connect().ok()) << "mutation " << m;
+    }
+    EXPECT_TRUE(ReadsCleanly(plc)) << "after mutation " << m;
   }
   slave.Queue(kEcho);
   const PlcStatus echo = plc.WriteRegister(5, 42);
-  EXPECT_EQ(echo.kind, PlcErrorKind::kBadData);
+  EXPECT_EQ(echo.kind, K::kBadData);
   EXPECT_EQ(echo.reply_fault, ReplyFault::kEcho);
   slave.Queue(kEcho);
   const std::array<uint16_t, 2> pair = {1, 2};
@@ -237,6 +251,25 @@ TEST(ModbusReplyFaults, EachWrongFieldIsRefusedAndNamedAndTheLinkCarriesOn) {
   EXPECT_EQ(plc.WriteRegister(5, 42).reply_fault, ReplyFault::kUnitId);
   EXPECT_TRUE(plc.WriteRegister(5, 42).ok());
   EXPECT_TRUE(ReadsCleanly(plc));
+}
+
+// A reply that comes after its request timed out is skipped by its transaction id when the next
+// request's reply follows it, so one late reply does not put every later read one reply behind.
+TEST(ModbusReplyFaults, ALateReplyIsSkippedAndTheNextReadIsAnswered) {
+  HostileSlave slave;
+  ModbusPort plc(Config(slave.port()));
+  ASSERT_TRUE(plc.Connect().ok());
+  slave.Queue(Mutation::kLate);
+  std::array<uint16_t, 3> regs{};
+  const PlcStatus late = plc.ReadRegisters(RegisterKind::kHolding, 20, regs);
+  EXPECT_EQ(late.kind, PlcErrorKind::kTimeout);
+  EXPECT_EQ(late.reply_fault, ReplyFault::kNone);
+  ASSERT_TRUE(plc.connected());
+  const PlcStatus next = plc.ReadRegisters(RegisterKind::kHolding, 20, regs);
+  EXPECT_TRUE(next.ok()) << PlcErrorKindName(next.kind);
+  EXPECT_EQ(next.reply_fault, ReplyFault::kTransactionId) << "the skipped late reply is counted";
+  EXPECT_EQ(regs, (std::array<uint16_t, 3>{1020, 1021, 1022}));
+  for (int i = 0; i < 3; ++i) EXPECT_TRUE(ReadsCleanly(plc)) << i;
 }
 
 // Why canalid frames TCP itself: libmodbus 3.1.6's read takes these replies as good data. If a
@@ -259,7 +292,7 @@ TEST(ModbusReplyFaults, LibmodbusAloneAcceptsAWrongUnitProtocolAndLength) {
   modbus_free(ctx);
 }
 
-TEST(ModbusReplyFaults, ThePollerCountsEachFaultByField) {
+TEST(ModbusReplyFaults, ThePollerCountsAReplyFaultByItsField) {
   HostileSlave slave;
   PollerConfig config;
   config.plc_name = "hostile";

@@ -78,6 +78,10 @@ TEST(ModbusTcpFrame, AnExceptionReplyCarriesItsCode) {
   EXPECT_EQ(s.reply_fault, ReplyFault::kNone);
   EXPECT_EQ(FaultOf(SpecRead(), Adu({0x83, 0x02, 0x00})), ReplyFault::kLength)
       << "an exception PDU is two bytes";
+  EXPECT_EQ(FaultOf(SpecRead(), Adu({0x83, 0x00})), ReplyFault::kFunction) << "no exception 0";
+  EXPECT_EQ(FaultOf(SpecRead(), Adu({0x83, 0x0C})), ReplyFault::kFunction) << "no exception 12";
+  EXPECT_EQ(CheckReply(SpecRead(), Adu({0x83, 0x0B})).exception_code, 11)
+      << "gateway target device failed to respond";
 }
 
 TEST(ModbusTcpFrame, EachWrongHeaderFieldIsNamed) {
@@ -138,6 +142,7 @@ TEST(ModbusTcpFrame, APduThatAnswersAnotherQuestionIsNamed) {
       FaultOf(WriteRegistersRequest(0x1501, 0x11, 0x0001, values), Adu({0x10, 0x00, 0x01, 0x00})),
       ReplyFault::kLength);
   EXPECT_EQ(FaultOf(SpecRead(), Adu({})), ReplyFault::kLength) << "no PDU at all";
+  EXPECT_EQ(FaultOf(SpecRead(), Adu({0x03})), ReplyFault::kLength) << "a function and no data";
 }
 
 }  // namespace
