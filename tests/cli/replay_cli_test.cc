@@ -90,7 +90,7 @@ Event SampleEvent(std::int64_t sequence, std::int64_t utime, const Row& row) {
                      "pool2_level", "gate1_position", "gate1_setpoint"};
   s.values = {0.0, row.q_in, row.q_out, row.level, 1.5, 1.5};
   s.num_channels = static_cast<std::int32_t>(s.values.size());
-  s.quality.assign(s.values.size(), canalid::sample_t::QUALITY_VALID);
+  s.quality.assign(s.values.size(), int8_t{canalid::sample_t::QUALITY_VALID});
   return {"CANALID_ASCE2_SAMPLE_asce2", Encode(s), utime};
 }
 

@@ -49,7 +49,7 @@ void WriteLog(const fs::path& path) {
     sample.channel_names.push_back(c == 0 ? "pool2_level" : "channel_" + std::to_string(c));
   }
   sample.values.assign(kChannels, 0.0);
-  sample.quality.assign(kChannels, canalid::sample_t::QUALITY_VALID);
+  sample.quality.assign(kChannels, int8_t{canalid::sample_t::QUALITY_VALID});
   for (int i = 0; i < kSamples; ++i) {
     sample.utime = t0 + std::int64_t{1000} * (i + 1);
     sample.sequence = i;

@@ -52,7 +52,8 @@ TEST(DashboardStore, RoutesEachMessageToItsSiteByChannelPrefix) {
   // Only the valid channel got a point; the others keep their quality and no point.
   EXPECT_EQ(source.channels.at("level_m").series->ring.size(), 1U);
   EXPECT_EQ(source.channels.at("flow_m3s").series->ring.size(), 0U);
-  EXPECT_EQ(source.channels.at("flow_m3s").quality, canalid::sample_t::QUALITY_OUT_OF_RANGE);
+  EXPECT_EQ(source.channels.at("flow_m3s").quality,
+            int8_t{canalid::sample_t::QUALITY_OUT_OF_RANGE});
   const ReachState& reach = site.reaches.at("pool2");
   ASSERT_TRUE(reach.experiment.has_value());
   EXPECT_EQ(reach.experiment->step, MakeExperiment().step);
