@@ -107,6 +107,13 @@ class ChildProcess {
     }
   }
 
+  /// Reads what the child has written so far, without waiting. A child that logs for long while
+  /// the test waits on something else blocks once its pipe is full (64 kB): call this meanwhile.
+  void Drain() {
+    while (ReadSome(0)) {
+    }
+  }
+
   /// Sends `signal` and waits at most `timeout_ms` for the exit (then SIGKILL).  Returns the exit
   /// code, or 128 + the signal that ended it.
   int Stop(int signal = SIGTERM, int timeout_ms = 20000) {
