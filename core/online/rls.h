@@ -165,6 +165,11 @@ Rls<N>::Rls(const RlsOptions& options, int num_params)
     has_box_ = true;
   }
   u_.setIdentity(n_, n_);
+  // Eigen 3.4's decompositions leave their status uninitialized until a first compute(), and
+  // moving an Rls (a vector of them growing) copies it: an invalid enum value (UBSan). Compute
+  // once here, on the identity, so every copy is of a defined state.
+  llt_.compute(u_);
+  eig_.compute(u_, Eigen::EigenvaluesOnly);
   d_.setZero(n_);
   p_.setZero(n_, n_);
   f_.setZero(n_);
