@@ -105,6 +105,9 @@ class Rls final {
   template <typename Derived>
   double Excitation(const Eigen::MatrixBase<Derived>& phi);
   void UpdateUdFactors(double measurement_variance);
+  /// num_params after checking it and the options, before any member is sized by it (Eigen
+  /// asserts on a fixed size given another, or a negative one).
+  static int CheckedSize(const RlsOptions& options, int num_params);
   void UpdateNoise(double e, double scale);
   void Symmetrise();
   double Trace() const;
@@ -146,13 +149,18 @@ class Rls final {
 // Implementation (a template on N, so it lives in the header).
 
 template <int N>
-Rls<N>::Rls(const RlsOptions& options, int num_params)
-    : options_(options), n_(num_params), llt_(num_params), eig_(num_params) {
+int Rls<N>::CheckedSize(const RlsOptions& options, int num_params) {
   if (N != Eigen::Dynamic && num_params != N) {
     throw std::invalid_argument("Rls: num_params = " + std::to_string(num_params) +
                                 " must equal the template size " + std::to_string(N));
   }
-  options_.Validate(num_params);
+  options.Validate(num_params);
+  return num_params;
+}
+
+template <int N>
+Rls<N>::Rls(const RlsOptions& options, int num_params)
+    : options_(options), n_(CheckedSize(options, num_params)), llt_(n_), eig_(n_) {
   theta_.setZero(n_);
   lower_.setConstant(n_, -std::numeric_limits<double>::infinity());
   upper_.setConstant(n_, std::numeric_limits<double>::infinity());
