@@ -252,14 +252,15 @@ TEST(DaemonSoak, DaysOfPollingAndExperimentsLeaveMemoryDescriptorsAndCountersFla
   EXPECT_EQ(fds_max, fds_min) << "open descriptors change after day 1";
 
   // Counters: no reconnect, no failed write, no reply fault but the late replies that timeouts
-  // leave, and timeouts (a 15 ms response timeout on a shared machine) in at most 1 poll in 1000.
+  // leave, and timeouts (a 15 ms response timeout on a shared machine) in at most 1 poll in 1000
+  // (10 in a short run: a few polls of the 2-day run may meet a busy moment of the test command).
   // At most a fifth of the polls may be skipped as overruns of the 20 ms period on a busy machine.
   ASSERT_EQ(bus.health.count("plc.asce2"), 1U) << "no PLC health heard";
   const auto& plc_counters = bus.health.at("plc.asce2");
   const int64_t polls = plc_counters.at("polls");
   EXPECT_GT(polls, static_cast<int64_t>(0.8 * days * kDayWall / kPollPeriod));
   const int64_t timeouts = plc_counters.at("read_errors.timeout");
-  EXPECT_LE(timeouts, std::max<int64_t>(2, polls / 1000));
+  EXPECT_LE(timeouts, std::max<int64_t>(10, polls / 1000));
   for (const auto& [name, value] : plc_counters) {
     if (name == "bad_replies.transaction_id") {
       EXPECT_LE(value, timeouts) << name;
