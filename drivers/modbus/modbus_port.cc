@@ -219,67 +219,74 @@ PlcStatus ModbusPort::TcpExchange(const TcpRequest& request) noexcept {
   const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                            std::chrono::duration<double>(response_timeout_s_));
   int err = 0;
+  // Every return below leaves the stream at a frame boundary or drops the link, so nothing is
+  // flushed: a flush could eat the first half of a late reply and lose the framing after it.
+  auto lost = [this](PlcStatus s) {
+    s.kind = PlcErrorKind::kDisconnected;
+    Close();
+    return s;
+  };
   // A request only partly sent leaves the PLC mid-frame: the stream cannot be trusted any more.
   if (const Io sent = SendAll(fd, request.adu(), deadline, err); sent != Io::kDone) {
-    PlcStatus s = sent == Io::kError ? TranslateModbusErrno(err) : PlcStatus{};
-    s.kind = PlcErrorKind::kDisconnected;
-    return Recover(s);
+    return lost(sent == Io::kError ? TranslateModbusErrno(err) : PlcStatus{});
   }
-  // Frames are read one after the other until this request's: a whole frame of another
-  // transaction (the late reply to a request that timed out) is skipped, so one late reply does
-  // not put every later exchange one reply behind.
-  bool skipped = false;
-  for (;;) {
+  // Frames are read one after the other until this request's. A whole frame answering one of the
+  // last kMaxLateReplies requests (a reply that came after its request timed out) is skipped, so
+  // one late reply does not put every later exchange one reply behind; at most that many are
+  // skipped, and never past the deadline.
+  constexpr int kMaxLateReplies = 8;
+  const auto skipped_fault = [](int skipped) {
+    return skipped > 0 ? ReplyFault::kTransactionId : ReplyFault::kNone;
+  };
+  int skipped = 0;
+  for (;; ++skipped) {
+    if (skipped > kMaxLateReplies) {
+      return lost(PlcStatus{PlcErrorKind::kDisconnected, 0, 0, ReplyFault::kTransactionId});
+    }
     reply_size_ = 0;
     std::size_t got = 0;
-    Io io =
-        ReceiveExactly(fd, std::span<uint8_t>(reply_.data(), kMbapHeaderBytes), deadline, got, err);
+    Io io = Clock::now() < deadline || skipped == 0
+                ? ReceiveExactly(fd, std::span<uint8_t>(reply_.data(), kMbapHeaderBytes), deadline,
+                                 got, err)
+                : Io::kTimeout;
     reply_size_ = got;
-    HeaderCheck header;
     if (io == Io::kDone) {
-      header = CheckReplyHeader(std::span(reply_.data(), kMbapHeaderBytes));
-      if (header.fault != ReplyFault::kNone) {
-        // No length to find the frame's end by: the stream is lost, so the link is dropped.
-        return Recover(PlcStatus{PlcErrorKind::kDisconnected, 0, 0, header.fault});
-      }
+      const HeaderCheck header = CheckReplyHeader(std::span(reply_.data(), kMbapHeaderBytes));
+      // No length to find the frame's end by: the stream is lost.
+      if (header.fault != ReplyFault::kNone) return lost(PlcStatus{{}, 0, 0, header.fault});
       io =
           ReceiveExactly(fd, std::span<uint8_t>(reply_.data() + kMbapHeaderBytes, header.pdu_bytes),
                          deadline, got, err);
       reply_size_ += got;
     }
-    PlcStatus s;
     switch (io) {
       case Io::kDone:
         break;
       case Io::kTimeout:
-        if (reply_size_ > 0) {
-          // A frame cut short: its rest may come later, in the middle of the next reply.
-          return Recover(
-              PlcStatus{PlcErrorKind::kDisconnected, 0, ETIMEDOUT, ReplyFault::kTruncated});
-        }
-        s.kind = PlcErrorKind::kTimeout;
-        s.sys_errno = ETIMEDOUT;
-        if (skipped) s.reply_fault = ReplyFault::kTransactionId;
-        return Recover(s);
+        // A frame cut short: its rest may come later, in the middle of the next reply.
+        if (reply_size_ > 0) return lost(PlcStatus{{}, 0, ETIMEDOUT, ReplyFault::kTruncated});
+        return PlcStatus{PlcErrorKind::kTimeout, 0, ETIMEDOUT, skipped_fault(skipped)};
       case Io::kClosed:
-        s.kind = PlcErrorKind::kDisconnected;
-        s.sys_errno = ECONNRESET;
-        return Recover(s);
-      case Io::kError:
-        s = TranslateModbusErrno(err);
-        s.kind = PlcErrorKind::kDisconnected;
-        return Recover(s);
+        return lost(PlcStatus{{}, 0, ECONNRESET, skipped_fault(skipped)});
+      case Io::kError: {
+        PlcStatus s = TranslateModbusErrno(err);
+        s.reply_fault = skipped_fault(skipped);
+        return lost(s);
+      }
     }
-    if (reply_[0] == (request.transaction_id >> 8) &&
-        reply_[1] == (request.transaction_id & 0xff)) {
-      break;
-    }
-    skipped = true;
+    const auto id = static_cast<uint16_t>(reply_[0] << 8 | reply_[1]);
+    const auto age = static_cast<uint16_t>(request.transaction_id - id);
+    if (age == 0) break;
+    // Not one of the last requests': no late reply, another transaction's (or a forged) frame.
+    if (age > kMaxLateReplies)
+      return PlcStatus{PlcErrorKind::kBadData, 0, 0, ReplyFault::kTransactionId};
   }
   PlcStatus s = CheckReply(request, std::span(reply_.data(), reply_size_));
-  if (s.kind == PlcErrorKind::kBadData) return Recover(s);
-  // An answer after a skipped frame still counts that frame (ReplyFault on a good status).
-  if (skipped && s.reply_fault == ReplyFault::kNone) s.reply_fault = ReplyFault::kTransactionId;
+  // A PDU whose length does not fit its function: the MBAP length that framed it is wrong, so
+  // the next frame may start elsewhere (a tail still to come).
+  if (s.kind == PlcErrorKind::kBadData && s.reply_fault == ReplyFault::kLength) return lost(s);
+  // An answer after a skipped late reply still counts it (ReplyFault on a good status).
+  if (s.reply_fault == ReplyFault::kNone) s.reply_fault = skipped_fault(skipped);
   return s;
 }
 

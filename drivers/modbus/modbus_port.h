@@ -37,17 +37,21 @@ void ValidateModbusConfig(const ModbusTcpConfig& config);
 void ValidateModbusConfig(const ModbusRtuConfig& config);
 
 /// PlcPort over libmodbus (TCP or RTU). The libmodbus context is created by the first Connect()
-/// (so on the thread that will use it) and freed by the destructor. Not thread-safe. Errors go
-/// through TranslateModbusErrno; after kDisconnected the link is closed, after kTimeout or
-/// kBadData pending bytes are flushed so a late reply is not taken for the next one.
+/// (so on the thread that will use it) and freed by the destructor. Not thread-safe. After
+/// kDisconnected the link is closed.
 ///
 /// Over TCP libmodbus connects, but the requests are framed and the replies read and checked
 /// here (modbus_tcp_frame.h: every MBAP field, the PDU length, the echo of a write), each request
 /// with its own transaction id, the whole exchange bounded by the response timeout. A whole frame
-/// of another transaction (a reply that came after its request timed out) is skipped; a frame
-/// that cannot be delimited (bad protocol id or MBAP length, cut short by the timeout) or a
-/// request only partly sent drops the link (kDisconnected), since what follows on the stream
-/// cannot be trusted. RTU requests go through libmodbus, which checks the slave address and CRC.
+/// answering one of the last 8 requests (a reply that came after its request timed out) is
+/// skipped, at most 8 of them; a frame that cannot be delimited (bad protocol id or MBAP length,
+/// a PDU length its function does not allow, cut short by the timeout), more late frames than
+/// that, or a request only partly sent drops the link (kDisconnected), since what follows on the
+/// stream cannot be trusted. Nothing is flushed: each exchange ends at a frame boundary.
+///
+/// RTU requests go through libmodbus, which checks the slave address and the CRC; its errno
+/// values go through TranslateModbusErrno, and after kTimeout or kBadData pending bytes are
+/// flushed so a late reply is not taken for the next one.
 class ModbusPort final : public PlcPort {
  public:
   /// @throws std::invalid_argument on a bad config (see ValidateModbusConfig).
@@ -71,7 +75,7 @@ class ModbusPort final : public PlcPort {
   PlcStatus Failed() noexcept;  // translates errno and applies the recovery described above
   /// TCP: sends `request` and reads its reply into reply_ (reply_size_ bytes), checked.
   PlcStatus TcpExchange(const TcpRequest& request) noexcept;
-  /// After a failed TCP exchange: close on kDisconnected, flush on kTimeout and kBadData.
+  /// After a failed libmodbus (RTU) call: close on kDisconnected, flush on kTimeout and kBadData.
   PlcStatus Recover(PlcStatus status) noexcept;
   bool tcp() const noexcept { return std::holds_alternative<ModbusTcpConfig>(config_); }
 

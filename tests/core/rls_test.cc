@@ -308,6 +308,9 @@ TEST(Rls, BadOptionsThrowNamingTheOption) {
     EXPECT_NE(std::string(e.what()).find("forgetting"), std::string::npos) << e.what();
   }
   EXPECT_THROW(Rls<2>(RlsOptions{}, 3), std::invalid_argument);
+  // Refused before any workspace is sized (a sanitized build keeps Eigen's size assertions).
+  EXPECT_THROW(Rls<Eigen::Dynamic>(RlsOptions{}, 0), std::invalid_argument);
+  EXPECT_THROW(Rls<Eigen::Dynamic>(RlsOptions{}, -1), std::invalid_argument);
 }
 
 }  // namespace
