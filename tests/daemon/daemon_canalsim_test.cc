@@ -821,13 +821,10 @@ TEST(DaemonCanalsim, StepExperimentStepsHoldsReturnsAndFitsAFoptd) {
 // as the nominal, and its own experiment is centred on the true nominal.
 TEST(DaemonCanalsim, KilledMidPrbsRestartRestoresThePersistedNominalFirst) {
   const fs::path dir = TestDir();
-  std::string plc_text = ReadText(SourcePath("config/sim/plc/asce2.toml"));
-  const std::string watchdog = "heartbeat_timeout_s = 300.0";
-  ASSERT_NE(plc_text.find(watchdog), std::string::npos);
-  plc_text.replace(plc_text.find(watchdog), watchdog.size(), "heartbeat_timeout_s = 36000.0");
-  std::ofstream(dir / "plc.toml") << plc_text;
-  ServeProcess serve({"--canal", SourcePath("config/sim/asce-canal2.toml"), "--plc",
-                      (dir / "plc.toml").string(), "--time-scale", "600"},
+  const fs::path plc = Asce2PlcWithWatchdog(dir, "36000.0");
+  ASSERT_FALSE(plc.empty()) << "config/sim/plc/asce2.toml has no heartbeat_timeout_s = 300.0";
+  ServeProcess serve({"--canal", SourcePath("config/sim/asce-canal2.toml"), "--plc", plc.string(),
+                      "--time-scale", "600"},
                      dir / "canalsim.err");
   Master master(serve.port(), 2.0);
   const double nominal = ReadSetpoint(master);

@@ -150,13 +150,10 @@ TEST(DaemonSoak, DaysOfPollingAndExperimentsLeaveMemoryDescriptorsAndCountersFla
 
   // The PLC's watchdog at 3000 x would be 0.1 wall s (300 plant s): ten times that, so that a
   // loaded test machine does not trip it; the watchdog is not under test here.
-  std::string plc = ReadFile(SourcePath("config/sim/plc/asce2.toml"));
-  const std::string watchdog = "heartbeat_timeout_s = 300.0";
-  ASSERT_NE(plc.find(watchdog), std::string::npos);
-  plc.replace(plc.find(watchdog), watchdog.size(), "heartbeat_timeout_s = 3000.0");
-  std::ofstream(dir / "plc.toml") << plc;
-  ServeProcess canal({"--canal", SourcePath("config/sim/asce-canal2.toml"), "--plc",
-                      (dir / "plc.toml").string(), "--time-scale", "3000"},
+  const fs::path plc = Asce2PlcWithWatchdog(dir, "3000.0");
+  ASSERT_FALSE(plc.empty()) << "config/sim/plc/asce2.toml has no heartbeat_timeout_s = 300.0";
+  ServeProcess canal({"--canal", SourcePath("config/sim/asce-canal2.toml"), "--plc", plc.string(),
+                      "--time-scale", "3000"},
                      dir / "canalsim.err");
 
   const fs::path key = dir / "command.key";

@@ -9,6 +9,8 @@
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -20,6 +22,25 @@ namespace canalid::testing {
 inline std::string CanalsimProgram() { return std::string(CANALID_BINARY_DIR) + "/sim/canalsim"; }
 inline std::string SourcePath(const std::string& relative) {
   return std::string(CANALID_SOURCE_DIR) + "/" + relative;
+}
+
+/// config/sim/plc/asce2.toml written to `dir`/plc.toml with the PLC's heartbeat watchdog set to
+/// `timeout` plant seconds (for runs that are not about the watchdog, at time scales where its
+/// 300 s would be a fraction of a wall second).  Returns the path; empty when the shipped file no
+/// longer has the line this replaces.
+inline std::filesystem::path Asce2PlcWithWatchdog(const std::filesystem::path& dir,
+                                                  const std::string& timeout) {
+  std::ifstream in(SourcePath("config/sim/plc/asce2.toml"));
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string plc = text.str();
+  const std::string watchdog = "heartbeat_timeout_s = 300.0";
+  const std::size_t at = plc.find(watchdog);
+  if (at == std::string::npos) return {};
+  plc.replace(at, watchdog.size(), "heartbeat_timeout_s = " + timeout);
+  std::filesystem::path path = dir / "plc.toml";
+  std::ofstream(path) << plc;
+  return path;
 }
 
 /// A running `canalsim serve --listen 127.0.0.1:0 <args>` (a ChildProcess); the destructor stops
