@@ -202,16 +202,12 @@ PlcStatus ModbusPort::Failed() noexcept {
   PlcStatus s = TranslateModbusErrno(errno);
   // A failure without errno leaves the link state unknown: treat it as lost.
   if (s.ok()) s.kind = PlcErrorKind::kDisconnected;
-  return Recover(s);
-}
-
-PlcStatus ModbusPort::Recover(PlcStatus status) noexcept {
-  if (status.kind == PlcErrorKind::kDisconnected) {
+  if (s.kind == PlcErrorKind::kDisconnected) {
     Close();
-  } else if (status.kind == PlcErrorKind::kTimeout || status.kind == PlcErrorKind::kBadData) {
+  } else if (s.kind == PlcErrorKind::kTimeout || s.kind == PlcErrorKind::kBadData) {
     modbus_flush(ctx_);
   }
-  return status;
+  return s;
 }
 
 PlcStatus ModbusPort::TcpExchange(const TcpRequest& request) noexcept {

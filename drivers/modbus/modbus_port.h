@@ -72,11 +72,11 @@ class ModbusPort final : public PlcPort {
 
  private:
   PlcStatus CreateContext() noexcept;
-  PlcStatus Failed() noexcept;  // translates errno and applies the recovery described above
+  /// After a failed libmodbus (RTU) call: translates errno, closes on kDisconnected, flushes on
+  /// kTimeout and kBadData.
+  PlcStatus Failed() noexcept;
   /// TCP: sends `request` and reads its reply into reply_ (reply_size_ bytes), checked.
   PlcStatus TcpExchange(const TcpRequest& request) noexcept;
-  /// After a failed libmodbus (RTU) call: close on kDisconnected, flush on kTimeout and kBadData.
-  PlcStatus Recover(PlcStatus status) noexcept;
   bool tcp() const noexcept { return std::holds_alternative<ModbusTcpConfig>(config_); }
 
   std::variant<ModbusTcpConfig, ModbusRtuConfig> config_;
