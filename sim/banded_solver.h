@@ -18,7 +18,12 @@ class BandedMatrix final {
   /// Every stored coefficient to 0.
   void SetZero() { a_.setZero(); }
   /// Sets (row, col).  @pre |col - row| inside the band (checked: std::out_of_range).
-  void Set(Eigen::Index row, Eigen::Index col, double value);
+  void Set(Eigen::Index row, Eigen::Index col, double value) {
+    if (row < 0 || row >= n_ || col < 0 || col >= n_ || col < row - kl_ || col > row + ku_) {
+      ThrowOutsideBand(row, col);
+    }
+    At(row, col) = value;
+  }
   double Get(Eigen::Index row, Eigen::Index col) const;
 
   /// Solves A x = b in place (b becomes x) and destroys A (it holds the U factor after).
@@ -26,7 +31,10 @@ class BandedMatrix final {
   bool SolveInPlace(Eigen::VectorXd& b);
 
  private:
+  [[noreturn]] static void ThrowOutsideBand(Eigen::Index row, Eigen::Index col);
   double& At(Eigen::Index row, Eigen::Index col) { return a_(row, col - row + kl_); }
+  /// Row r addressed by column: RowByColumn(r)[c] is (r, c) for c in r - kl .. r + ku + kl.
+  double* RowByColumn(Eigen::Index r) { return a_.data() + r * a_.cols() + kl_ - r; }
   Eigen::Index n_;
   int kl_;
   int ku_;
