@@ -184,11 +184,18 @@ TEST(DaemonResultsMap, ScadaMastersReadWhatTheDaemonPublishes) {
   ASSERT_FALSE(daemon.WaitForLine("reach pool2: experiment exciting", 60000).empty())
       << daemon.output();
   const int base = core::ResultsReachAddress(0);
-  std::uint16_t status[core::kReachStatusWords];
-  ASSERT_EQ(modbus_read_input_registers(ctx, base, core::kReachStatusWords, status),
-            core::kReachStatusWords);
-  // Exciting: the designed experiment excites for minutes of wall time after this line.
-  EXPECT_EQ(status[core::kReachExperimentState], 3);
+  std::uint16_t status[core::kReachStatusWords] = {};
+  // The map takes the new phase at its next update after the log line (under load, a read at
+  // once can still see "settling", 2): read until it shows exciting (bounded; the designed
+  // experiment excites for minutes of wall time after the line).
+  EXPECT_TRUE(daemon.WaitUntil(
+      [&] {
+        return modbus_read_input_registers(ctx, base, core::kReachStatusWords, status) ==
+                   core::kReachStatusWords &&
+               status[core::kReachExperimentState] == 3;
+      },
+      10000, 50))
+      << "reach status word " << status[core::kReachExperimentState];
   const float progress = F32(status + core::kReachProgress);
   EXPECT_GT(progress, 0.0f);
   EXPECT_LT(progress, 1.0f);

@@ -191,10 +191,18 @@ TEST(DashboardLoad, AClientThatNeverReadsIsDroppedAndMemoryStaysBounded) {
   EXPECT_EQ(control.pages_ok, 5);
   EXPECT_EQ(bounded.dropped_slow, 1.0) << "the client that never reads, and only it";
   EXPECT_EQ(control.dropped_slow, 0.0);
+#if defined(__SANITIZE_ADDRESS__)
+  // Under AddressSanitizer (scripts/sanitize) the dashboard's RSS holds ASan's quarantine of
+  // freed memory (256 MiB by default) and its shadow: 373 MB of growth with either limit, so
+  // the bounds below, which are for the program as shipped, say nothing there. The drop itself
+  // is checked above in every build.
+  std::cout << "RSS bounds not checked under AddressSanitizer\n";
+#else
   // The limit holds the client's queue at 1 MiB (plus the update being written); the rest is
   // the store filling (30 series x 7200 points x 16 B = 3.3 MiB) and the pages' own buffers.
   EXPECT_LT(bounded_growth, 16 * 1024);
   EXPECT_GT(control_growth, 2 * bounded_growth) << "the measurement sees the unbounded queue";
+#endif
 }
 
 }  // namespace
