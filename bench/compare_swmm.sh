@@ -42,7 +42,8 @@ canalsim=$build/sim/canalsim
 peer=$build/swmm-peer
 log=$peer.log
 if [ -f "$peer/CMakeCache.txt" ] &&
-   ! grep -qx "CMAKE_HOME_DIRECTORY:INTERNAL=$(cd "$source_dir" && pwd)" "$peer/CMakeCache.txt"; then
+   ! grep -qx "CMAKE_HOME_DIRECTORY:INTERNAL=$(cd "$source_dir" && pwd)" \
+       "$peer/CMakeCache.txt"; then
   rm -rf "$peer"  # built from another SWMM checkout
 fi
 if ! { cmake -S "$source_dir" -B "$peer" -G Ninja -DCMAKE_BUILD_TYPE=Release &&
@@ -53,7 +54,8 @@ if ! { cmake -S "$source_dir" -B "$peer" -G Ninja -DCMAKE_BUILD_TYPE=Release &&
 fi
 runswmm=$(find "$peer" -name runswmm -type f -perm -u+x -print -quit)
 [ -n "$runswmm" ] || { echo "compare_swmm: the SWMM build made no runswmm" >&2; exit 1; }
-echo "compare_swmm: SWMM $(git -C "$source_dir" describe --tags --always 2>/dev/null || echo '?')," \
+swmm_version=$(git -C "$source_dir" describe --tags --always 2>/dev/null || echo '?')
+echo "compare_swmm: SWMM $swmm_version," \
   "canalsim $(git -C "$root" describe --always --dirty 2>/dev/null || echo '?')"
 
 work=$(mktemp -d)

@@ -45,7 +45,8 @@ def pool_from_canal(path):
         "length": pool["length_m"], "b": pool["bottom_width_m"], "m": pool["side_slope"],
         "s0": pool["bed_slope"], "n": pool["manning_n"], "depth": pool["target_depth_m"],
         "flow": canal["upstream"]["flow_m3s"], "dx": canal.get("max_dx_m", 100.0),
-        "theta": canal.get("theta", 0.6), "gate_w": structure.get("width_m", pool["bottom_width_m"]),
+        "theta": canal.get("theta", 0.6),
+        "gate_w": structure.get("width_m", pool["bottom_width_m"]),
         "cd": structure.get("coefficient", 0.6),
     }
 
@@ -284,7 +285,8 @@ def main():
             cpu[name].append(after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime)
     y_ours, y_peer = canalsim_depths(csv), swmm_depths(out)
     per_hour = int(3600 / REPORT_S)
-    print(f"pool: {p['length']:.0f} m, {cells} cells of {p['length'] / cells:.0f} m, dt {STEP_S:g} s,"
+    print(f"pool: {p['length']:.0f} m, {cells} cells of {p['length'] / cells:.0f} m,"
+          f" dt {STEP_S:g} s,"
           f" {HOURS} h; inflow {p['flow']:g} -> {p['flow'] + 1:g} m3/s at 1 h, back at 12 h;"
           f" SWMM continuity error {continuity_error(rpt):.3f} %")
     for hour in (1, 6, 12, 18, 24):
