@@ -11,10 +11,12 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <condition_variable>
 #include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <lcm/lcm-cpp.hpp>
+#include <mutex>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <thread>
@@ -106,8 +108,9 @@ void ExpectSlotEquals(const Slot& slot, const std::string& kind_name,
   }
 }
 
-// Masters polling the reach's status block without pause (20 ms apart) until stopped; the
-// destructor stops and joins them (also when an assertion returns early).
+// Masters polling the reach's status block every 20 ms, as a SCADA scan would, until stopped; the
+// destructor stops and joins them (also when an assertion returns early). The scan period is a
+// wait on the stop signal, so Stop() ends every master at once.
 class Pollers {
  public:
   Pollers(int port, int count) {
@@ -119,11 +122,14 @@ class Pollers {
           failures_.fetch_add(1);
         } else {
           std::uint16_t words[125];
-          while (!stop_.load()) {
+          std::unique_lock<std::mutex> lock(mutex_);
+          while (!stop_) {
+            lock.unlock();
             const bool ok =
                 modbus_read_registers(c, core::ResultsReachAddress(0), 125, words) == 125;
             (ok ? reads_ : failures_).fetch_add(1);
-            std::this_thread::sleep_for(std::chrono::milliseconds(20));
+            lock.lock();
+            stopped_.wait_for(lock, std::chrono::milliseconds(20), [this] { return stop_; });
           }
         }
         modbus_close(c);
@@ -135,7 +141,11 @@ class Pollers {
   Pollers(const Pollers&) = delete;
   Pollers& operator=(const Pollers&) = delete;
   void Stop() {
-    stop_.store(true);
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    stopped_.notify_all();
     for (std::thread& t : threads_) {
       if (t.joinable()) t.join();
     }
@@ -144,7 +154,9 @@ class Pollers {
   long failures() const { return failures_.load(); }
 
  private:
-  std::atomic<bool> stop_{false};
+  std::mutex mutex_;
+  std::condition_variable stopped_;
+  bool stop_ = false;  // guarded by mutex_
   std::atomic<long> reads_{0}, failures_{0};
   std::vector<std::thread> threads_;
 };
