@@ -2,6 +2,7 @@
 // nodes) at dt = 10 s (and 60 s). x_real_time = simulated seconds per wall-clock second.
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <string>
 
 #include "sim/canal_config.h"
@@ -16,15 +17,22 @@ void BM_Canal2OneHour(benchmark::State& state) {
   const double dt = static_cast<double>(state.range(0));
   const int steps = static_cast<int>(3600.0 / dt);
   bool high = false;
+  long iterations = 0, steps_taken = 0;
   for (auto _ : state) {
     // Alternate the inflow every simulated hour so that Newton has real work to do.
     high = !high;
     plant.SetUpstream(high ? 12.0 : 11.0);
-    for (int k = 0; k < steps; ++k) plant.Step(dt);
+    for (int k = 0; k < steps; ++k) {
+      plant.Step(dt);
+      iterations += plant.last_iterations();
+    }
+    steps_taken += steps;
     benchmark::DoNotOptimize(plant.DownstreamDepth(7));
   }
   state.counters["x_real_time"] = benchmark::Counter(
       3600.0 * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+  state.counters["newton_per_step"] =
+      static_cast<double>(iterations) / static_cast<double>(std::max(steps_taken, 1L));
   state.counters["nodes"] = [&] {
     int n = 0;
     for (int p = 0; p < plant.num_pools(); ++p) n += plant.num_nodes(p);

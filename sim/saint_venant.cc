@@ -39,11 +39,12 @@ SaintVenantCanal::SaintVenantCanal(const Canal& canal) : canal_(canal) {
   }
   const int n = 2 * offset_[static_cast<std::size_t>(pools)];
   x_.setZero(n);
+  guess_.setZero(n);
   residual_.setZero(n);
   delta_.setZero(n);
   friction_.setZero(n / 2, 3);
   old_friction_.setZero(n / 2);
-  jacobian_ = BandedMatrix(n, kJacobianLowerBand, kJacobianUpperBand);
+  jacobian_ = NodeChainMatrix(n / 2);
   BuildSteadyState();
   for (const LevelControl& c : canal_.level_controls) {
     LevelPidConfig config = c.pid;
@@ -301,7 +302,15 @@ void SaintVenantCanal::Step(double dt_s) {
                                 " must be > 0");
   }
   RunLevelControls();
+  // Newton starts from the state extrapolated along the last step's change (old_x_ still holds
+  // the state before it), closer than the last state by the order of the step: on canal 2 at
+  // dt 10 s, 3.0 iterations a step become 2.5.  The converged state is the same to the Newton
+  // tolerance.
+  const double ratio = last_dt_s_ > 0.0 ? dt_s / last_dt_s_ : 0.0;
+  guess_ = x_ + ratio * (x_ - old_x_);
   old_x_ = x_;
+  x_ = guess_;
+  for (Eigen::Index k = 0; k < x_.size(); k += 2) x_[k] = std::max(x_[k], 1e-4);
   NodeFriction(old_x_, nullptr, &old_friction_);
   bool converged = false;
   int it = 0;
@@ -326,6 +335,7 @@ void SaintVenantCanal::Step(double dt_s) {
     throw std::runtime_error(os.str());
   }
   time_s_ += dt_s;
+  last_dt_s_ = dt_s;
   // Boundary flows of the previous step were stored then: an input changed since then (an
   // offtake setting) must not be counted at the old time level.
   const BoundaryFlows now = CurrentBoundaryFlows();

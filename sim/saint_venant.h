@@ -2,10 +2,10 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "sim/banded_solver.h"
 #include "sim/canal.h"
 #include "sim/hydraulics.h"
 #include "sim/level_pid.h"
+#include "sim/node_chain_matrix.h"
 
 namespace canalid::sim {
 
@@ -27,9 +27,10 @@ struct MassBalance {
 /// with z the water surface elevation, discretised with the Preissmann four-point box scheme
 /// (space weight 1/2, time weight theta) and solved at each step by Newton iterations on all the
 /// depths and flows at once.  With depths and flows interleaved (h0, Q0, h1, Q1, ...) and one
-/// row per equation in the same order, every equation involves at most the two unknowns before
-/// and after its own: the Jacobian is a band matrix (kJacobianLowerBand, kJacobianUpperBand),
-/// solved by banded Gaussian elimination with partial pivoting (BandedMatrix).
+/// row per equation in the same order, the first equation involves the first node only, each
+/// next pair of equations two neighbouring nodes, and the last one the last node: the Jacobian
+/// is a chain of 2 x 2 blocks, solved by a double sweep (NodeChainMatrix).  Newton starts from
+/// the state extrapolated along the last step.
 /// The structure between two pools adds two algebraic equations (flow continuity with the
 /// offtake, structure law); the upstream end takes a flow or a level, the downstream end of the
 /// last pool its structure law against the tailwater.
@@ -137,15 +138,15 @@ class SaintVenantCanal final {
   std::vector<double> offtake_setting_;
   double upstream_value_ = 0.0;
   double time_s_ = 0.0;
-  Eigen::VectorXd x_;  // depth and flow interleaved: h0, Q0, h1, Q1, ...
-  Eigen::VectorXd old_x_;
+  Eigen::VectorXd x_;       // depth and flow interleaved: h0, Q0, h1, Q1, ...
+  Eigen::VectorXd old_x_;   // the state at the start of this step (of the last one, between steps)
+  Eigen::VectorXd guess_;   // Newton's starting state
+  double last_dt_s_ = 0.0;  // the last converged step's length; 0 before the first
   Eigen::VectorXd residual_;
   Eigen::VectorXd delta_;
   Eigen::MatrixX3d friction_;     // per node at x_: G, dG/dh, dG/dQ (this iteration)
   Eigen::VectorXd old_friction_;  // per node at old_x_: G (this step)
-  static constexpr int kJacobianLowerBand = 2;
-  static constexpr int kJacobianUpperBand = 2;
-  BandedMatrix jacobian_{1, kJacobianLowerBand, kJacobianUpperBand};
+  NodeChainMatrix jacobian_{1};
   int last_iterations_ = 0;
   double initial_volume_m3_ = 0.0;
   MassBalance mass_;

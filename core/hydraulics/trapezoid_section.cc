@@ -5,6 +5,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/numerics/cube_root.h"
+
 namespace canalid::core {
 
 TrapezoidSection::TrapezoidSection(double bottom_width_m, double side_slope, double manning_n)
@@ -31,7 +33,7 @@ void TrapezoidSection::Friction(double depth_m, double flow_m3s, double* g, doub
   const double t = TopWidth(depth_m);
   const double a2 = a * a;
   // One cube root per call: P^(4/3) / A^(7/3) = cbrt(P^4 / A^7).
-  const double k = n2_ * std::cbrt((p * p) * (p * p) / (a2 * a2 * a2 * a));  // G = k Q|Q|
+  const double k = n2_ * CubeRoot((p * p) * (p * p) / (a2 * a2 * a2 * a));  // G = k Q|Q|
   const double qq = flow_m3s * std::abs(flow_m3s);
   *g = k * qq;
   // d ln k / dh = 4/3 P'/P - 7/3 T/A, with P' = 2 sqrt(1 + m^2).
