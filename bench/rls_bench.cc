@@ -10,6 +10,7 @@
 #include "core/online/online_fractional.h"
 #include "core/online/online_integrator_delay.h"
 #include "core/online/rls.h"
+#include "core/online/rls_bank.h"
 #include "core/online/rls_iv.h"
 
 namespace canalid::core {
@@ -105,6 +106,46 @@ BENCHMARK_TEMPLATE(BM_RlsUpdate, 2)->Apply(Methods);
 BENCHMARK_TEMPLATE(BM_RlsUpdate, 4)->Apply(Methods);
 BENCHMARK_TEMPLATE(BM_RlsUpdate, 8)->Apply(Methods);
 BENCHMARK_TEMPLATE(BM_RlsUpdate, 16)->Apply(Methods);
+
+// One sample through `lanes` estimators of n = N parameters with the same output: an RlsBank
+// (structure of arrays, range(1) = 1) or the same number of Rls<N> one after the other (0, the
+// peer).  UD directional forgetting, lambda 0.99.  per_update: time per estimator update.
+template <int N>
+void BM_LaneUpdates(benchmark::State& state) {
+  const int lanes = static_cast<int>(state.range(0));
+  const bool soa = state.range(1) != 0;
+  RlsOptions options;
+  options.forgetting = 0.99;
+  RlsBank<N> bank(options, lanes);
+  std::vector<Rls<N>> scalar(static_cast<std::size_t>(lanes), Rls<N>(options));
+  std::vector<double> values(kPool * N);
+  std::vector<double> ys(kPool);
+  std::uint64_t seed = 1;
+  for (double& v : values) v = Lcg(seed);
+  for (double& y : ys) y = Lcg(seed);
+  std::size_t k = 0;
+  for (auto _ : state) {
+    for (int l = 0; l < lanes; ++l) {
+      // Each lane's regressor: the pool's samples at another offset (a delay bank's candidates).
+      const std::size_t at = ((k + static_cast<std::size_t>(l)) & (kPool - 1)) * N;
+      const Eigen::Map<const Eigen::Matrix<double, N, 1>> phi(&values[at]);
+      if (soa) {
+        bank.regressors().col(l) = phi;
+      } else {
+        benchmark::DoNotOptimize(scalar[static_cast<std::size_t>(l)].Update(phi, ys[k]));
+      }
+    }
+    if (soa) bank.Update(ys[k]);
+    benchmark::ClobberMemory();
+    k = (k + 1) & (kPool - 1);
+  }
+  state.counters["per_update"] = benchmark::Counter(
+      lanes, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  state.SetLabel(soa ? "RlsBank" : "Rls one by one");
+}
+BENCHMARK_TEMPLATE(BM_LaneUpdates, 3)->ArgsProduct({{24}, {0, 1}});
+BENCHMARK_TEMPLATE(BM_LaneUpdates, 4)->ArgsProduct({{24, 64}, {0, 1}});
+BENCHMARK_TEMPLATE(BM_LaneUpdates, 8)->ArgsProduct({{24}, {0, 1}});
 
 // One IvRls<N> update (closed-loop variant; P not symmetric, plus the instruments' moment R).
 template <int N>

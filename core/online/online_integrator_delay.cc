@@ -120,8 +120,10 @@ OnlineIntegratorDelayBank::OnlineIntegratorDelayBank(const OnlineIntegratorDelay
   iv_active_ = options_.closed_loop != ClosedLoopMode::kOff;
   health_.closed_loop = options_.closed_loop == ClosedLoopMode::kOn || three_step_active_;
   health_.closed_loop_decided = options_.closed_loop != ClosedLoopMode::kAuto;
-  if (ls_active_ && options_.wave_front_term) wave_estimators_.assign(un, Rls<4>(options_.rls));
-  if (ls_active_ && !options_.wave_front_term) estimators_.assign(un, Rls<3>(options_.rls));
+  if (ls_active_ && options_.wave_front_term) wave_estimators_.emplace(options_.rls, n);
+  if (ls_active_ && !options_.wave_front_term) estimators_.emplace(options_.rls, n);
+  constrained_error_.assign(un, 0.0);
+  constrained_.assign(un, 0);
   if (iv_active_ && options_.wave_front_term) {
     iv_wave_estimators_.assign(un, IvRls<4>(options_.rls));
   }
@@ -188,8 +190,8 @@ bool OnlineIntegratorDelayBank::Update(double q_in_m3s, double q_out_m3s, double
     }
     if (level_ok) {
       const double y = y_fit;
-      if (ls_active_ && options_.wave_front_term) UpdateCandidates(wave_estimators_, t, y);
-      if (ls_active_ && !options_.wave_front_term) UpdateCandidates(estimators_, t, y);
+      if (ls_active_ && options_.wave_front_term) UpdateCandidates(*wave_estimators_, t, y);
+      if (ls_active_ && !options_.wave_front_term) UpdateCandidates(*estimators_, t, y);
       if (iv_active_ && options_.wave_front_term) UpdateIvCandidates(iv_wave_estimators_, t, y);
       if (iv_active_ && !options_.wave_front_term) UpdateIvCandidates(iv_estimators_, t, y);
       if (ls_active_) selector_.Commit();
@@ -249,47 +251,57 @@ void OnlineIntegratorDelayBank::UpdateIvCandidates(std::vector<IvRls<N>>& estima
 }
 
 template <int N>
-void OnlineIntegratorDelayBank::UpdateCandidates(std::vector<Rls<N>>& estimators, double t,
-                                                 double level_m) {
+void OnlineIntegratorDelayBank::UpdateCandidates(RlsBank<N>& estimators, double t, double level_m) {
+  typename RlsBank<N>::Regressors& phi = estimators.regressors();
   for (int i = 0; i < num_candidates(); ++i) {
     const auto ui = static_cast<std::size_t>(i);
     const int nk = options_.min_delay_samples + i;
-    Eigen::Matrix<double, N, 1> phi;
+    phi(0, i) = q_integrated_[ui] - q_centre_[ui];
     if constexpr (N == 4) {
-      phi << q_integrated_[ui] - q_centre_[ui], q_in_history_[nk], 1.0, t - t_centre_;
+      phi(1, i) = q_in_history_[nk];
+      phi(2, i) = 1.0;
+      phi(3, i) = t - t_centre_;
     } else {
-      phi << q_integrated_[ui] - q_centre_[ui], 1.0, t - t_centre_;
+      phi(1, i) = 1.0;
+      phi(2, i) = t - t_centre_;
     }
-    Rls<N>& rls = estimators[ui];
-    if (selector_.criterion() == BankCriterion::kResidual) {
-      rls.Update(phi, level_m);
-      selector_.SetLoss(i, ResidualLoss<N>(rls));
-      continue;
-    }
-    double constrained_error = 0.0;
-    const bool constrained = N == 4 && options_.wave_front_non_negative && rls.theta()(1) < 0.0;
-    if (constrained) {
+  }
+  if (selector_.criterion() == BankCriterion::kResidual) {
+    estimators.Update(level_m);
+    for (int i = 0; i < num_candidates(); ++i) selector_.SetLoss(i, ResidualLoss<N>(estimators, i));
+    return;
+  }
+  // The selector sees the error of the estimate the snapshot reports (p21 >= 0): for a candidate
+  // whose p21 is negative, that of the constrained estimate before the update.
+  for (int i = 0; i < num_candidates(); ++i) {
+    const auto ui = static_cast<std::size_t>(i);
+    constrained_[ui] = N == 4 && options_.wave_front_non_negative && estimators.theta(i, 1) < 0.0;
+    if (constrained_[ui] != 0) {
+      const Rls<N>& rls = estimators.Lane(i);
       Eigen::Matrix<double, N, N> p;
       rls.Covariance(p);
-      constrained_error = level_m - phi.dot(Constrained<N>(rls.theta(), p));
+      const Eigen::Matrix<double, N, 1> phi_i = phi.col(i);
+      constrained_error_[ui] = level_m - phi_i.dot(Constrained<N>(rls.theta(), p));
     }
-    const auto result = rls.Update(phi, level_m);
-    // The selector sees the error of the estimate the snapshot reports (p21 >= 0).
-    selector_.Record(i, constrained && std::isfinite(result.prediction_error)
-                            ? constrained_error
-                            : result.prediction_error);
+  }
+  estimators.Update(level_m);
+  for (int i = 0; i < num_candidates(); ++i) {
+    const auto ui = static_cast<std::size_t>(i);
+    const double error = estimators.result(i).prediction_error;
+    selector_.Record(
+        i, constrained_[ui] != 0 && std::isfinite(error) ? constrained_error_[ui] : error);
   }
 }
 
 template <int N>
-double OnlineIntegratorDelayBank::ResidualLoss(const Rls<N>& rls) const {
-  const double loss = rls.residual_sum_of_squares();
+double OnlineIntegratorDelayBank::ResidualLoss(const RlsBank<N>& bank, int candidate) const {
+  const double loss = bank.residual_sum_of_squares(candidate);
   if constexpr (N == 4) {
     // The snapshot reports the p21 = 0 fit when p21 < 0: its residual sum of squares is the free
     // fit's plus p21^2 / P22 (the equality-constrained least squares, P relative to sigma2).
-    const double p21 = rls.theta()(1);
+    const double p21 = bank.theta(candidate, 1);
     if (options_.wave_front_non_negative && p21 < 0.0) {
-      const double p21_variance = rls.CovarianceDiagonal(1);
+      const double p21_variance = bank.CovarianceDiagonal(candidate, 1);
       return p21_variance > 0.0 ? loss + p21 * p21 / p21_variance : loss;
     }
   }
@@ -332,8 +344,8 @@ void OnlineIntegratorDelayBank::Recentre() {
     const double dq = q_integrated_[ui] - q_centre_[ui];
     const double dqin = qin_integrated_[ui] - qin_centre_[ui];
     if (ls_active_ && options_.wave_front_term)
-      wave_estimators_[ui].Transform(CentreShift<4>(dq, dt));
-    if (ls_active_ && !options_.wave_front_term) estimators_[ui].Transform(CentreShift<3>(dq, dt));
+      wave_estimators_->Transform(i, CentreShift<4>(dq, dt));
+    if (ls_active_ && !options_.wave_front_term) estimators_->Transform(i, CentreShift<3>(dq, dt));
     if (iv_active_ && options_.wave_front_term) {
       iv_wave_estimators_[ui].Transform(CentreShift<4>(dq, dt), CentreShift<4>(dqin, dt));
     }
@@ -374,9 +386,9 @@ IntegratorDelaySnapshot OnlineIntegratorDelayBank::CandidateSnapshot(int delay_s
       FillSnapshot<3>(iv_estimators_[ui], ui, s);
     }
   } else if (options_.wave_front_term) {
-    FillSnapshot<4>(wave_estimators_[ui], ui, s);
+    FillSnapshot<4>(wave_estimators_->Lane(i), ui, s);
   } else {
-    FillSnapshot<3>(estimators_[ui], ui, s);
+    FillSnapshot<3>(estimators_->Lane(i), ui, s);
   }
   s.loss = reported_selector().loss(i);
   s.flags = IntegratorDelaySnapshotFlags(s, options_);

@@ -1,5 +1,6 @@
 #pragma once
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -9,6 +10,7 @@
 #include "core/online/estimator_bank.h"
 #include "core/online/online_three_step.h"
 #include "core/online/rls.h"
+#include "core/online/rls_bank.h"
 #include "core/online/rls_iv.h"
 
 namespace canalid::core {
@@ -224,14 +226,14 @@ class OnlineIntegratorDelayBank final {
 
  private:
   template <int N>
-  void UpdateCandidates(std::vector<Rls<N>>& estimators, double t, double level_m);
+  void UpdateCandidates(RlsBank<N>& estimators, double t, double level_m);
   template <int N>
   void UpdateIvCandidates(std::vector<IvRls<N>>& estimators, double t, double level_m);
   template <int N>
   static Eigen::Matrix<double, N, N> CentreShift(double dq, double dt);
   /// The candidate's least-squares loss as the kResidual selector compares it.
   template <int N>
-  double ResidualLoss(const Rls<N>& rls) const;
+  double ResidualLoss(const RlsBank<N>& bank, int candidate) const;
   /// theta with p21 >= 0 (wave_front_non_negative): theta itself, or the estimate constrained
   /// to p21 = 0 through the gain g (P or the IV gain).
   template <int N>
@@ -249,8 +251,11 @@ class OnlineIntegratorDelayBank final {
   }
 
   OnlineIntegratorDelayOptions options_;
-  std::vector<Rls<3>> estimators_;            // without the wave-front term
-  std::vector<Rls<4>> wave_estimators_;       // with it
+  // The least-squares candidates, side by side (RlsBank: one update for all).
+  std::optional<RlsBank<3>> estimators_;       // without the wave-front term
+  std::optional<RlsBank<4>> wave_estimators_;  // with it
+  std::vector<double> constrained_error_;      // kPredictionError with p21 >= 0: per candidate
+  std::vector<char> constrained_;
   std::vector<IvRls<3>> iv_estimators_;       // closed loop, without the wave-front term
   std::vector<IvRls<4>> iv_wave_estimators_;  // closed loop, with it
   std::vector<OnlineThreeStep> three_step_;   // closed loop, three-step method

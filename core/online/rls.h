@@ -115,6 +115,9 @@ class Rls final {
   void BoundCovariance();
   void Project();
 
+  template <int M>
+  friend class RlsBank;  // copies a lane's state in and out (RlsBank::Lane, Transform)
+
   RlsOptions options_;
   int n_;
   Vector theta_;
@@ -369,7 +372,10 @@ typename Rls<N>::Result Rls<N>::Update(const Eigen::MatrixBase<Derived>& phi, do
     }
     norm2 += v * v;
   }
-  const double e = y - phi.dot(theta_);
+  // In index order (not Eigen's packet order), so that RlsBank's lanes compute the same sums.
+  double prediction = 0.0;
+  for (int i = 0; i < n_; ++i) prediction += phi(i) * theta_(i);
+  const double e = y - prediction;
   double r = Excitation(phi);
   if (!std::isfinite(e) || !std::isfinite(r) || r < 0.0) {
     ++health_.rejected_invalid;

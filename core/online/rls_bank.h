@@ -1,0 +1,435 @@
+#pragma once
+#include <Eigen/Core>
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/online/rls.h"
+
+namespace canalid::core {
+
+/// `lanes` estimators Rls<N> with the same options, updated together: one output y per sample
+/// and one regressor per lane (a delay bank's candidates).  Each lane is bit for bit the Rls<N>
+/// it replaces: the same operations in the same order on the same numbers.
+///
+/// With a UD method (kUdDirectional, the default, or kUdExponential) and no innovation guard
+/// (reject, huber, dead_zone, cusum_threshold), the lanes are stored as structure of arrays in
+/// blocks of kBlock: every lane's U, D, theta, noise sums and counts side by side, one update
+/// for all, the per-lane branches of Rls::Update (invalid samples, freeze, directional
+/// forgetting's r > 1 - lambda) taken as masks; the box and the trace bounds, off by default,
+/// go lane by lane after it.  Otherwise each lane is an Rls<N> of its own (the same results,
+/// no speed-up).  An update keeps Rls's nine divisions per lane (n = 4), which bound its speed:
+/// two lanes per SSE2 division (docs/performance.md).
+/// Allocates only in the constructor; Update and the accessors never allocate.
+/// Deterministic.  Not thread-safe (Lane() uses a scratch estimator).
+template <int N>
+class RlsBank final {
+  static_assert(N != Eigen::Dynamic, "RlsBank needs a fixed parameter count");
+
+ public:
+  static constexpr int kBlock = 2;
+  using Matrix = Eigen::Matrix<double, N, N>;
+  /// The regressors of one sample, phi_i of lane l at (i, l); lanes() columns and padding.
+  using Regressors = Eigen::Matrix<double, N, Eigen::Dynamic, Eigen::RowMajor>;
+  using Result = typename Rls<N>::Result;
+
+  /// @throws std::invalid_argument on a bad option (RlsOptions::Validate) or lanes < 1.
+  RlsBank(const RlsOptions& options, int lanes);
+
+  int lanes() const { return lanes_; }
+  /// Whether the lanes run as structure of arrays (a UD method without innovation guards).
+  bool structure_of_arrays() const { return soa_; }
+  /// Fill column l with lane l's regressor before Update.
+  Regressors& regressors() { return phi_; }
+  /// One sample on every lane: as Rls<N>::Update(regressors().col(l), y) for each lane l.
+  void Update(double y);
+  /// What Update did on lane l.
+  Result result(int lane) const;
+
+  double theta(int lane, int i) const;
+  double residual_sum_of_squares(int lane) const;
+  /// P_ii of lane l (relative to sigma2), as Rls::CovarianceDiagonal.
+  double CovarianceDiagonal(int lane, int i) const;
+  /// Lane l as an Rls<N>: a copy of its state in a scratch estimator, valid until the next call
+  /// of Lane() or any non-const member.
+  const Rls<N>& Lane(int lane) const;
+  /// Rls::Transform on lane l.
+  void Transform(int lane, const Matrix& t);
+
+ private:
+  // kBlock lanes of doubles as one value (GCC's and Clang's vector extension): +, -, *, / act
+  // lane by lane with IEEE rounding, as on doubles (no FMA at the baseline ISA, so no
+  // contraction either); a comparison gives a mask of -1 / 0 per lane.  Two lanes: one SSE2
+  // register, the baseline x86-64 ISA's.
+  using Lanes = double __attribute__((vector_size(kBlock * sizeof(double))));
+  using Mask = std::int64_t __attribute__((vector_size(kBlock * sizeof(std::int64_t))));
+  static constexpr std::size_t kN = N;  // array extents are unsigned
+  struct Block {
+    Lanes u[kN][kN];  // unit upper triangular U (the diagonal stays 1)
+    Lanes d[kN];
+    Lanes theta[kN];
+    Lanes ssr;
+    Lanes weight;
+    // Rls's bookkeeping, kept here so that the update writes it lane-wise (counts as doubles:
+    // exact to 2^53).
+    Lanes accepted;
+    Lanes updates;
+    Lanes frozen_count;
+    Lanes rejected_invalid;
+    Lanes last_error;    // of the last valid sample
+    Lanes excitation;    // r of the last valid sample
+    Lanes norm2;         // ||phi||^2 of the last valid sample
+    Lanes frozen;        // 1: the last valid sample froze the lane
+    Lanes outcome;       // the last Update's RlsOutcome
+    Lanes result_error;  // and its prediction error (NaN when rejected)
+  };
+  // The rest of a lane's Rls state (only the box and the trace bounds change it).
+  struct LaneState {
+    bool bounded = false;
+    std::int64_t projections = 0;
+    std::int64_t trace_bounded = 0;
+  };
+
+  static std::size_t Index(int lane) { return static_cast<std::size_t>(lane); }
+  // mask ? a : b lane by lane, in bit operations (the vector extension's own ?: compares the
+  // mask with 0 in 64-bit integers, which SSE2 does not have: GCC then goes lane by lane).
+  static Lanes Select(Mask mask, Lanes a, Lanes b) {
+    return std::bit_cast<Lanes>((std::bit_cast<Mask>(a) & mask) | (std::bit_cast<Mask>(b) & ~mask));
+  }
+  /// A comparison's result as plain bits: combined with another mask as it is, GCC 12 reads
+  /// `mask & (a <= b)` as a select on 64-bit integers and goes lane by lane.
+  static Mask Bits(Mask comparison) {
+    return std::bit_cast<Mask>(std::bit_cast<Lanes>(comparison));
+  }
+  /// a where the mask is set, else 0.
+  static Lanes Keep(Mask mask, Lanes a) {
+    return std::bit_cast<Lanes>(std::bit_cast<Mask>(a) & mask);
+  }
+  void UpdateBlock(Block& s, int first_lane, double y);
+  void Load(int lane, Rls<N>& into) const;
+  void Store(int lane, const Rls<N>& from);
+
+  RlsOptions options_;
+  int lanes_;
+  bool soa_ = false;
+  double lambda_ = 1.0;
+  double noise_forgetting_ = 1.0;
+  bool has_box_ = false;
+  bool trace_bounds_ = false;
+  Eigen::Matrix<double, N, 1> lower_;
+  Eigen::Matrix<double, N, 1> upper_;
+  Regressors phi_;
+  std::vector<Block> blocks_;
+  std::vector<LaneState> state_;
+  std::vector<Result> results_;  // !soa_
+  std::vector<Rls<N>> scalar_;   // !soa_: the lanes themselves
+  mutable Rls<N> scratch_;       // Lane()'s copy
+};
+
+// ---------------------------------------------------------------------------------------------
+// Implementation (a template on N, so it lives in the header).
+
+template <int N>
+RlsBank<N>::RlsBank(const RlsOptions& options, int lanes)
+    : options_(options), lanes_(lanes), scratch_(options) {
+  if (lanes < 1) {
+    throw std::invalid_argument("RlsBank: " + std::to_string(lanes) + " lanes; at least 1");
+  }
+  // Rls's own members, copied from the scratch estimator built from the same options (so that
+  // the rules deciding them stay Rls's).
+  const bool ud =
+      options.method == RlsMethod::kUdDirectional || options.method == RlsMethod::kUdExponential;
+  soa_ = ud && !scratch_.guards_;
+  lambda_ = scratch_.GainForgetting();
+  noise_forgetting_ = scratch_.noise_forgetting_;
+  has_box_ = scratch_.has_box_;
+  lower_ = scratch_.lower_;
+  upper_ = scratch_.upper_;
+  trace_bounds_ = std::isfinite(options.trace_max) || options.trace_min > 0.0;
+  const int padded = (lanes + kBlock - 1) / kBlock * kBlock;
+  phi_.setZero(N, padded);
+  if (!soa_) {
+    results_.assign(Index(lanes),
+                    Result{std::numeric_limits<double>::quiet_NaN(), RlsOutcome::kRejectedInvalid});
+    scalar_.assign(Index(lanes), scratch_);
+    return;
+  }
+  blocks_.resize(static_cast<std::size_t>(padded / kBlock));
+  state_.assign(Index(lanes), LaneState{});
+  for (int l = 0; l < padded; ++l) Store(l, scratch_);  // padding lanes too: defined numbers
+}
+
+template <int N>
+void RlsBank<N>::Store(int lane, const Rls<N>& from) {
+  Block& s = blocks_[Index(lane / kBlock)];
+  const auto l = static_cast<std::size_t>(lane % kBlock);
+  for (std::size_t i = 0; i < kN; ++i) {
+    const auto ii = static_cast<Eigen::Index>(i);
+    for (std::size_t j = 0; j < kN; ++j) s.u[i][j][l] = from.u_(ii, static_cast<Eigen::Index>(j));
+    s.d[i][l] = from.d_(ii);
+    s.theta[i][l] = from.theta_(ii);
+  }
+  s.ssr[l] = from.ssr_;
+  s.weight[l] = from.weight_;
+  const RlsHealth& h = from.health_;
+  s.accepted[l] = static_cast<double>(from.accepted_);
+  s.updates[l] = static_cast<double>(h.updates);
+  s.frozen_count[l] = static_cast<double>(h.frozen_count);
+  s.rejected_invalid[l] = static_cast<double>(h.rejected_invalid);
+  s.last_error[l] = from.last_error_;
+  s.excitation[l] = h.excitation;
+  s.norm2[l] = h.regressor_norm2;
+  s.frozen[l] = h.frozen ? 1.0 : 0.0;
+  s.outcome[l] = static_cast<double>(RlsOutcome::kRejectedInvalid);
+  s.result_error[l] = std::numeric_limits<double>::quiet_NaN();
+  if (lane >= lanes_) return;  // padding: no lane state
+  LaneState& st = state_[Index(lane)];
+  st.bounded = from.bounded_;
+  st.projections = h.projections;
+  st.trace_bounded = h.trace_bounded;
+}
+
+template <int N>
+void RlsBank<N>::Load(int lane, Rls<N>& into) const {
+  const Block& s = blocks_[Index(lane / kBlock)];
+  const auto l = static_cast<std::size_t>(lane % kBlock);
+  for (std::size_t i = 0; i < kN; ++i) {
+    const auto ii = static_cast<Eigen::Index>(i);
+    for (std::size_t j = 0; j < kN; ++j) into.u_(ii, static_cast<Eigen::Index>(j)) = s.u[i][j][l];
+    into.d_(ii) = s.d[i][l];
+    into.theta_(ii) = s.theta[i][l];
+  }
+  into.ssr_ = s.ssr[l];
+  into.weight_ = s.weight[l];
+  into.accepted_ = static_cast<long long>(s.accepted[l]);
+  into.last_error_ = s.last_error[l];
+  const LaneState& st = state_[Index(lane)];
+  into.bounded_ = st.bounded;
+  RlsHealth h;  // no innovation guard: their counts stay 0
+  h.excitation = s.excitation[l];
+  h.regressor_norm2 = s.norm2[l];
+  // Rls sets it with each noise update, from the same sums.
+  h.innovation_variance = s.ssr[l] / std::max(s.weight[l] - N, 1.0);
+  h.frozen = s.frozen[l] != 0.0;
+  h.updates = static_cast<std::int64_t>(s.updates[l]);
+  h.rejected_invalid = static_cast<std::int64_t>(s.rejected_invalid[l]);
+  h.frozen_count = static_cast<std::int64_t>(s.frozen_count[l]);
+  h.projections = st.projections;
+  h.trace_bounded = st.trace_bounded;
+  into.health_ = h;
+}
+
+template <int N>
+typename RlsBank<N>::Result RlsBank<N>::result(int lane) const {
+  if (!soa_) return results_[Index(lane)];
+  const Block& s = blocks_[Index(lane / kBlock)];
+  const auto l = static_cast<std::size_t>(lane % kBlock);
+  return {s.result_error[l], static_cast<RlsOutcome>(static_cast<int>(s.outcome[l]))};
+}
+
+template <int N>
+const Rls<N>& RlsBank<N>::Lane(int lane) const {
+  if (!soa_) return scalar_[Index(lane)];
+  Load(lane, scratch_);
+  return scratch_;
+}
+
+template <int N>
+void RlsBank<N>::Transform(int lane, const Matrix& t) {
+  if (!soa_) {
+    scalar_[Index(lane)].Transform(t);
+    return;
+  }
+  Load(lane, scratch_);
+  scratch_.Transform(t);
+  Store(lane, scratch_);
+}
+
+template <int N>
+double RlsBank<N>::theta(int lane, int i) const {
+  if (!soa_) return scalar_[Index(lane)].theta()(i);
+  return blocks_[Index(lane / kBlock)].theta[Index(i)][Index(lane % kBlock)];
+}
+
+template <int N>
+double RlsBank<N>::residual_sum_of_squares(int lane) const {
+  if (!soa_) return scalar_[Index(lane)].residual_sum_of_squares();
+  return blocks_[Index(lane / kBlock)].ssr[Index(lane % kBlock)];
+}
+
+template <int N>
+double RlsBank<N>::CovarianceDiagonal(int lane, int i) const {
+  if (!soa_) return scalar_[Index(lane)].CovarianceDiagonal(i);
+  const Block& s = blocks_[Index(lane / kBlock)];
+  const std::size_t l = Index(lane % kBlock), ii = Index(i);
+  double pii = 0.0;  // Rls::CovarianceDiagonal's sum, in its order
+  for (std::size_t j = ii; j < kN; ++j) pii += s.u[ii][j][l] * s.u[ii][j][l] * s.d[j][l];
+  return pii;
+}
+
+template <int N>
+void RlsBank<N>::Update(double y) {
+  if (!soa_) {
+    for (int l = 0; l < lanes_; ++l) {
+      // A contiguous copy: Eigen's products over a strided column round differently.
+      const Eigen::Matrix<double, N, 1> phi = phi_.col(l);
+      results_[Index(l)] = scalar_[Index(l)].Update(phi, y);
+    }
+    return;
+  }
+  if (!std::isfinite(y) || std::abs(y) > options_.output_abs_max) {
+    const Lanes zero{};
+    for (Block& s : blocks_) {
+      s.rejected_invalid += 1.0;
+      s.outcome = zero + static_cast<double>(RlsOutcome::kRejectedInvalid);
+      s.result_error = zero + std::numeric_limits<double>::quiet_NaN();
+    }
+    return;
+  }
+  for (std::size_t b = 0; b < blocks_.size(); ++b) {
+    UpdateBlock(blocks_[b], static_cast<int>(b) * kBlock, y);
+  }
+}
+
+template <int N>
+void RlsBank<N>::UpdateBlock(Block& s, int first_lane, double y) {
+  // Rls::Update on kBlock lanes at once, each lane's arithmetic Rls's, operation for operation;
+  // its branches are masks.
+  const double lambda = lambda_;
+  const bool exponential = options_.method == RlsMethod::kUdExponential;
+  // (A vector plus a double adds the double to every lane: zero + x is x in every lane.)
+  const Lanes zero{};
+  const Lanes one = zero + 1.0;
+  const Lanes largest = (zero + std::numeric_limits<double>::max());
+  const Lanes regressor_max =
+      (zero + std::min(options_.regressor_abs_max, std::numeric_limits<double>::max()));
+  const Lanes forget = (zero + 1.0 - lambda);
+  Lanes phi[kN];
+  for (std::size_t i = 0; i < kN; ++i) {
+    __builtin_memcpy(&phi[i], phi_.row(static_cast<Eigen::Index>(i)).data() + first_lane,
+                     sizeof(Lanes));
+  }
+  // Validity (NaN compares false), ||phi||^2, the a-priori error, f = U' phi, g = D f, r = f' g.
+  Mask valid = Bits(zero == zero);
+  Lanes norm2 = zero, prediction = zero, r = zero;
+  for (std::size_t i = 0; i < kN; ++i) {
+    valid &= Bits(phi[i] <= regressor_max) & Bits(phi[i] >= -regressor_max);
+    norm2 += phi[i] * phi[i];
+  }
+  for (std::size_t i = 0; i < kN; ++i) prediction += phi[i] * s.theta[i];
+  const Lanes e = (zero + y) - prediction;
+  Lanes f[kN], g[kN];
+  for (std::size_t j = 0; j < kN; ++j) {
+    Lanes fj = phi[j];
+    for (std::size_t i = 0; i < j; ++i) fj += s.u[i][j] * phi[i];
+    f[j] = fj;
+    g[j] = s.d[j] * fj;
+    r += fj * g[j];
+  }
+  valid &= Bits(e <= largest) & Bits(e >= -largest) & Bits(r >= zero) & Bits(r <= largest);
+  const Mask frozen = valid & (Bits(norm2 <= (zero + options_.regressor_norm_min)) |
+                               Bits(r <= (zero + options_.excitation_min)));
+  const Mask apply = valid & ~frozen;
+  // Directional forgetting: Bierman's update when r > 1 - lambda, else the gain alone (lanes
+  // that do not take the factors compute them with a variance of 1, then drop them).
+  const Mask bierman = exponential ? valid | ~valid : Bits(r > forget);
+  const Mask factors = apply & bierman;
+  const Lanes measurement = exponential ? (zero + lambda) : Select(bierman, r / (r - forget), one);
+  const Lanes scale = one + r / (zero + lambda);
+  const Lanes step = e / ((zero + lambda) + r);
+  // Bierman's measurement update (Rls::UpdateUdFactors) into new U, D and the gain numerator
+  // k = P phi.  For directional forgetting's gain-only lanes Rls sums U g as
+  // 0 + 1 g_i + sum_{j > i} u_ij g_j: the accumulator k holds the same sums in the same order.
+  Lanes alpha[kN], inv_alpha[kN];
+  Lanes running = measurement;
+  for (std::size_t j = 0; j < kN; ++j) {
+    running += f[j] * g[j];
+    alpha[j] = running;
+    inv_alpha[j] = one / running;
+  }
+  Lanes alpha_prev = measurement, inv_prev = one / measurement;
+  Lanes k[kN], nu[kN][kN], nd[kN];
+  for (std::size_t j = 0; j < kN; ++j) {
+    nd[j] = s.d[j] * (alpha_prev * inv_alpha[j]);
+    const Lanes pj = -f[j] * inv_prev;
+    for (std::size_t i = 0; i < j; ++i) {
+      const Lanes uij = s.u[i][j];
+      nu[i][j] = uij + k[i] * pj;
+      k[i] += uij * g[j];
+    }
+    k[j] = g[j];
+    alpha_prev = alpha[j];
+    inv_prev = inv_alpha[j];
+  }
+  // theta, U and D of the lanes that update; the noise sums and bookkeeping of the valid ones.
+  for (std::size_t i = 0; i < kN; ++i)
+    s.theta[i] = Select(apply, s.theta[i] + k[i] * step, s.theta[i]);
+  const bool divide = exponential && lambda != 1.0;
+  for (std::size_t j = 0; j < kN; ++j) {
+    const Lanes dj = divide ? nd[j] / (zero + lambda) : nd[j];
+    s.d[j] = Select(factors, dj, s.d[j]);
+    for (std::size_t i = 0; i < j; ++i) s.u[i][j] = Select(factors, nu[i][j], s.u[i][j]);
+  }
+  const Lanes nf = (zero + noise_forgetting_);
+  s.ssr = Select(valid, nf * s.ssr + e * e / scale, s.ssr);
+  s.weight = Select(valid, nf * s.weight + one, s.weight);
+  s.accepted += Keep(valid, one);
+  s.rejected_invalid += Keep(~valid, one);
+  s.updates += Keep(apply, one);
+  s.frozen_count += Keep(frozen, one);
+  s.last_error = Select(valid, e, s.last_error);
+  s.excitation = Select(valid, r, s.excitation);
+  s.norm2 = Select(valid, norm2, s.norm2);
+  s.frozen = Select(valid, Keep(frozen, one), s.frozen);
+  s.outcome = Select(apply, zero + static_cast<double>(RlsOutcome::kUpdated),
+                     Select(frozen, zero + static_cast<double>(RlsOutcome::kFrozen),
+                            zero + static_cast<double>(RlsOutcome::kRejectedInvalid)));
+  s.result_error = Select(valid, e, zero + std::numeric_limits<double>::quiet_NaN());
+  if (!has_box_ && !trace_bounds_) return;
+  // The box and the trace bounds, lane by lane (not configured by default).
+  for (int l = 0; l < kBlock; ++l) {
+    const int lane = first_lane + l;
+    if (lane >= lanes_ || apply[l] == 0) continue;
+    LaneState& st = state_[Index(lane)];
+    if (has_box_) {
+      bool moved = false;
+      for (std::size_t i = 0; i < kN; ++i) {
+        const auto ii = static_cast<Eigen::Index>(i);
+        const double v = std::clamp(s.theta[i][l], lower_(ii), upper_(ii));
+        if (v != s.theta[i][l]) {
+          s.theta[i][l] = v;
+          moved = true;
+        }
+      }
+      if (moved) ++st.projections;
+    }
+    st.bounded = false;
+    if (!trace_bounds_) continue;
+    double t = 0.0;  // Rls::Trace's sum, in its order
+    for (std::size_t j = 0; j < kN; ++j) {
+      double col = 1.0;
+      for (std::size_t i = 0; i < j; ++i) col += s.u[i][j][l] * s.u[i][j][l];
+      t += s.d[j][l] * col;
+    }
+    double factor = 1.0;
+    if (t > options_.trace_max) {
+      factor = options_.trace_max / t;
+      st.bounded = true;
+    } else if (t < options_.trace_min) {
+      factor = options_.trace_min / t;
+      st.bounded = true;
+    }
+    if (st.bounded) {
+      for (std::size_t j = 0; j < kN; ++j) s.d[j][l] *= factor;
+      ++st.trace_bounded;
+    }
+  }
+}
+
+}  // namespace canalid::core

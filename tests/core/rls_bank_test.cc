@@ -1,0 +1,180 @@
+// RlsBank against separate Rls<N> estimators fed the same samples: every lane bit for bit.
+#include "core/online/rls_bank.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "core/online/rls.h"
+
+namespace canalid::core {
+namespace {
+
+struct Variant {
+  std::string name;
+  RlsOptions options;
+  bool structure_of_arrays;
+};
+
+std::vector<Variant> Variants(int n) {
+  std::vector<Variant> v;
+  RlsOptions o;
+  o.initial_covariance = 1e6;
+  v.push_back({"ud directional, lambda 1", o, true});
+  o.forgetting = 0.7;  // r <= 1 - lambda often: directional forgetting's gain-only branch
+  v.push_back({"ud directional, lambda 0.7", o, true});
+  o.forgetting = 0.98;
+  v.push_back({"ud directional, lambda 0.98", o, true});
+  o.method = RlsMethod::kUdExponential;
+  v.push_back({"ud exponential, lambda 0.98", o, true});
+  o.method = RlsMethod::kUdDirectional;
+  o.trace_max = 50.0;
+  o.trace_min = 1e-3;
+  v.push_back({"trace bounds", o, true});
+  o.trace_max = std::numeric_limits<double>::infinity();
+  o.trace_min = 0.0;
+  o.lower = Eigen::VectorXd::Constant(n, -0.5);
+  o.upper = Eigen::VectorXd::Constant(n, 2.0);
+  v.push_back({"box", o, true});
+  o.lower.resize(0);
+  o.upper.resize(0);
+  o.regressor_norm_min = 0.5;
+  o.excitation_min = 1e-4;
+  v.push_back({"freeze thresholds", o, true});
+  o.regressor_norm_min = 0.0;
+  o.excitation_min = 0.0;
+  o.huber = 2.0;
+  o.dead_zone = 0.05;
+  v.push_back({"innovation guards (one Rls per lane)", o, false});
+  o.huber = std::numeric_limits<double>::infinity();
+  o.dead_zone = 0.0;
+  o.method = RlsMethod::kDirectional;
+  v.push_back({"covariance form (one Rls per lane)", o, false});
+  return v;
+}
+
+// Every lane's state against its own Rls: equal doubles, equal counters.
+template <int N>
+void ExpectLanesEqual(const RlsBank<N>& bank, const std::vector<Rls<N>>& reference,
+                      const std::string& where) {
+  for (int l = 0; l < bank.lanes(); ++l) {
+    const Rls<N>& ref = reference[static_cast<std::size_t>(l)];
+    const Rls<N>& lane = bank.Lane(l);
+    for (int i = 0; i < N; ++i) {
+      ASSERT_EQ(bank.theta(l, i), ref.theta()(i)) << where << " lane " << l << " theta " << i;
+      ASSERT_EQ(lane.theta()(i), ref.theta()(i)) << where << " lane " << l;
+      ASSERT_EQ(bank.CovarianceDiagonal(l, i), ref.CovarianceDiagonal(i)) << where << " lane " << l;
+    }
+    typename Rls<N>::Matrix p, q;
+    lane.Covariance(p);
+    ref.Covariance(q);
+    ASSERT_EQ(p, q) << where << " lane " << l;
+    ASSERT_EQ(bank.residual_sum_of_squares(l), ref.residual_sum_of_squares()) << where;
+    ASSERT_EQ(lane.innovation_variance(), ref.innovation_variance()) << where;
+    const RlsHealth a = lane.health(), b = ref.health();
+    ASSERT_EQ(a.updates, b.updates) << where << " lane " << l;
+    ASSERT_EQ(a.frozen_count, b.frozen_count) << where << " lane " << l;
+    ASSERT_EQ(a.rejected_invalid, b.rejected_invalid) << where << " lane " << l;
+    ASSERT_EQ(a.projections, b.projections) << where << " lane " << l;
+    ASSERT_EQ(a.trace_bounded, b.trace_bounded) << where << " lane " << l;
+    ASSERT_EQ(a.clipped, b.clipped) << where << " lane " << l;
+    ASSERT_EQ(a.dead_zone, b.dead_zone) << where << " lane " << l;
+    ASSERT_EQ(a.frozen, b.frozen) << where << " lane " << l;
+    ASSERT_EQ(a.wound_up, b.wound_up) << where << " lane " << l;
+    ASSERT_EQ(a.trace_p, b.trace_p) << where << " lane " << l;
+    ASSERT_EQ(a.excitation, b.excitation) << where << " lane " << l;
+  }
+}
+
+// A delay bank's data: each lane sees the same input at another delay, with drifting offsets,
+// a dropped-out input now and then (NaN or absurd), a regressor that stops moving for a while
+// (freeze, directional forgetting's r <= 1 - lambda) and an absurd output.
+template <int N>
+void RunAgainstSeparateEstimators(int lanes) {
+  for (const Variant& variant : Variants(N)) {
+    RlsBank<N> bank(variant.options, lanes);
+    EXPECT_EQ(bank.structure_of_arrays(), variant.structure_of_arrays) << variant.name;
+    std::vector<Rls<N>> reference(static_cast<std::size_t>(lanes), Rls<N>(variant.options));
+    std::mt19937_64 rng(7);
+    std::normal_distribution<double> noise(0.0, 0.05);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    std::vector<double> input(2000);
+    for (std::size_t k = 0; k < input.size(); ++k) {
+      input[k] = (k / 7) % 2 == 0 ? 1.0 : -1.0;
+      if (k > 900 && k < 1100) input[k] = 0.3;  // no excitation
+    }
+    for (int k = 40; k < 1500; ++k) {
+      const double y = 0.8 * input[static_cast<std::size_t>(k - 5)] + 0.1 + noise(rng);
+      const bool absurd_output = k == 300;
+      std::vector<typename Rls<N>::Result> expected;
+      for (int l = 0; l < lanes; ++l) {
+        Eigen::Matrix<double, N, 1> phi;
+        for (int i = 0; i < N; ++i) {
+          const int lag = l + i;
+          phi(i) = i == N - 1 ? 1.0 : input[static_cast<std::size_t>(k - lag % 30)];
+        }
+        if (unit(rng) < 0.01) phi(0) = std::numeric_limits<double>::quiet_NaN();
+        if (unit(rng) < 0.005) phi(0) = 1e13;
+        bank.regressors().col(l) = phi;
+        expected.push_back(
+            reference[static_cast<std::size_t>(l)].Update(phi, absurd_output ? 1e13 : y));
+      }
+      bank.Update(absurd_output ? 1e13 : y);
+      for (int l = 0; l < lanes; ++l) {
+        // The same outcome and a-priori error on every sample.
+        const auto& want = expected[static_cast<std::size_t>(l)];
+        ASSERT_EQ(bank.result(l).outcome, want.outcome) << variant.name << " k " << k << " " << l;
+        if (std::isnan(want.prediction_error)) {
+          ASSERT_TRUE(std::isnan(bank.result(l).prediction_error));
+        } else {
+          ASSERT_EQ(bank.result(l).prediction_error, want.prediction_error) << variant.name;
+        }
+      }
+      if (k % 97 == 0 || k == 1499) {
+        ExpectLanesEqual<N>(bank, reference, variant.name + " at k = " + std::to_string(k));
+      }
+    }
+  }
+}
+
+TEST(RlsBank, ThreeParametersEqualSeparateEstimatorsBitForBit) {
+  RunAgainstSeparateEstimators<3>(5);
+}
+
+TEST(RlsBank, FourParametersEqualSeparateEstimatorsBitForBit) {
+  RunAgainstSeparateEstimators<4>(24);
+  RunAgainstSeparateEstimators<4>(1);
+}
+
+TEST(RlsBank, TransformAndLaneRoundTrip) {
+  RlsOptions o;
+  o.forgetting = 0.99;
+  RlsBank<3> bank(o, 3);
+  std::vector<Rls<3>> reference(3, Rls<3>(o));
+  for (int k = 0; k < 200; ++k) {
+    for (int l = 0; l < 3; ++l) {
+      const Eigen::Vector3d phi(std::sin(0.1 * k + l), 1.0, 0.01 * k);
+      bank.regressors().col(l) = phi;
+      reference[static_cast<std::size_t>(l)].Update(phi, 0.5 * std::sin(0.1 * k) + 0.2);
+    }
+    bank.Update(0.5 * std::sin(0.1 * k) + 0.2);
+    if (k == 100) {
+      Eigen::Matrix3d t = Eigen::Matrix3d::Identity();
+      t(1, 0) = 0.7;
+      t(1, 2) = 3.0;
+      for (int l = 0; l < 3; ++l) {
+        bank.Transform(l, t);
+        reference[static_cast<std::size_t>(l)].Transform(t);
+      }
+    }
+  }
+  ExpectLanesEqual<3>(bank, reference, "after a transform");
+  EXPECT_THROW(RlsBank<3>(o, 0), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace canalid::core
