@@ -40,11 +40,8 @@ void NodeChainMatrix::ThrowOutside(Eigen::Index row, Eigen::Index col) const {
 }
 
 double NodeChainMatrix::Get(Eigen::Index row, Eigen::Index col) const {
-  try {
-    return const_cast<NodeChainMatrix*>(this)->At(row, col);
-  } catch (const std::out_of_range&) {
-    return 0.0;
-  }
+  const double* const place = const_cast<NodeChainMatrix*>(this)->Find(row, col);
+  return place == nullptr ? 0.0 : *place;
 }
 
 bool NodeChainMatrix::SolveInPlace(Eigen::VectorXd& b) {

@@ -39,22 +39,22 @@ class NodeChainMatrix final {
   bool SolveInPlace(Eigen::VectorXd& b);
 
  private:
-  double& At(Eigen::Index row, Eigen::Index col) {
+  /// (row, col)'s coefficient, or null outside the structure.
+  double* Find(Eigen::Index row, Eigen::Index col) {
     const Eigen::Index n = size();
-    if (row < 0 || row >= n || col < 0 || col >= n) ThrowOutside(row, col);
+    if (row < 0 || row >= n || col < 0 || col >= n) return nullptr;
     // Row 0 and the last row first: with one node they are rows 0 and 1 of a 2 x 2.
-    if (row == 0) {
-      if (col > 1) ThrowOutside(row, col);
-      return first_[col];
-    }
-    if (row == n - 1) {
-      if (col < n - 2) ThrowOutside(row, col);
-      return last_[col - (n - 2)];
-    }
+    if (row == 0) return col > 1 ? nullptr : &first_[col];
+    if (row == n - 1) return col < n - 2 ? nullptr : &last_[col - (n - 2)];
     const Eigen::Index link = (row - 1) / 2;
     const Eigen::Index offset = col - 2 * link;
-    if (offset < 0 || offset > 3) ThrowOutside(row, col);
-    return links_(link, 4 * ((row - 1) % 2) + offset);
+    if (offset < 0 || offset > 3) return nullptr;
+    return &links_(link, 4 * ((row - 1) % 2) + offset);
+  }
+  double& At(Eigen::Index row, Eigen::Index col) {
+    double* const place = Find(row, col);
+    if (place == nullptr) ThrowOutside(row, col);
+    return *place;
   }
   [[noreturn]] void ThrowOutside(Eigen::Index row, Eigen::Index col) const;
 

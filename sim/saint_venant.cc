@@ -296,22 +296,9 @@ void SaintVenantCanal::Assemble(const Eigen::VectorXd& old_x, double dt_s) {
   CANALID_DEMAND(row == residual_.size(), "one equation per unknown");
 }
 
-void SaintVenantCanal::Step(double dt_s) {
-  if (!(dt_s > 0.0)) {
-    throw std::invalid_argument("SaintVenantCanal::Step: dt_s " + std::to_string(dt_s) +
-                                " must be > 0");
-  }
-  RunLevelControls();
-  // Newton starts from the state extrapolated along the last step's change (old_x_ still holds
-  // the state before it), closer than the last state by the order of the step: on canal 2 at
-  // dt 10 s, 3.0 iterations a step become 2.5.  The converged state is the same to the Newton
-  // tolerance.
-  const double ratio = last_dt_s_ > 0.0 ? dt_s / last_dt_s_ : 0.0;
-  guess_ = x_ + ratio * (x_ - old_x_);
-  old_x_ = x_;
-  x_ = guess_;
+bool SaintVenantCanal::Newton(const Eigen::VectorXd& start, double dt_s, int* iterations) {
+  x_ = start;
   for (Eigen::Index k = 0; k < x_.size(); k += 2) x_[k] = std::max(x_[k], 1e-4);
-  NodeFriction(old_x_, nullptr, &old_friction_);
   bool converged = false;
   int it = 0;
   for (; it < kMaxIterations && !converged; ++it) {
@@ -327,8 +314,37 @@ void SaintVenantCanal::Step(double dt_s) {
     x_ += delta_;
     for (Eigen::Index k = 0; k < x_.size(); k += 2) x_[k] = std::max(x_[k], 1e-4);
   }
-  last_iterations_ = it;
-  if (!converged || !x_.allFinite()) {
+  *iterations = it;
+  return converged && x_.allFinite();
+}
+
+void SaintVenantCanal::Step(double dt_s) {
+  if (!(dt_s > 0.0)) {
+    throw std::invalid_argument("SaintVenantCanal::Step: dt_s " + std::to_string(dt_s) +
+                                " must be > 0");
+  }
+  RunLevelControls();
+  // Newton starts from the state extrapolated along the last step's change (old_x_ still holds
+  // the state before it), closer than the last state by the order of the step: on canal 2 at
+  // dt 10 s, 3.0 iterations a step become 2.5.  The converged state is the same to the Newton
+  // tolerance.  A longer step than the last extrapolates no further than one step's change;
+  // where the extrapolation overshoots (a sudden change of an input), Newton starts again from
+  // the last state.
+  const double ratio = last_dt_s_ > 0.0 ? std::min(dt_s / last_dt_s_, 1.0) : 0.0;
+  guess_ = x_ + ratio * (x_ - old_x_);
+  old_x_ = x_;
+  NodeFriction(old_x_, nullptr, &old_friction_);
+  int iterations = 0;
+  bool converged = Newton(guess_, dt_s, &iterations);
+  if (!converged && ratio > 0.0) {
+    int again = 0;
+    converged = Newton(old_x_, dt_s, &again);
+    iterations += again;
+  }
+  last_iterations_ = iterations;
+  if (!converged) {
+    x_ = old_x_;  // the state before the step (the level controls have sampled)
+    last_dt_s_ = 0.0;
     std::ostringstream os;
     os << "SaintVenantCanal: Newton did not converge in " << kMaxIterations
        << " iterations at t = " << time_s_ + dt_s << " s (dt " << dt_s << " s)";

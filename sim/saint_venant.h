@@ -49,7 +49,9 @@ class SaintVenantCanal final {
   explicit SaintVenantCanal(const Canal& canal);
 
   /// Advances by dt_s with the inputs set now taken as the values at the end of the step.
-  /// @throws std::runtime_error if Newton does not converge (the message gives the time).
+  /// @throws std::runtime_error if Newton does not converge (the message gives the time); the
+  /// depths and flows are then those before the step (the level controls have taken their
+  /// sample).
   void Step(double dt_s);
 
   /// Inflow (m^3/s) or reservoir depth (m), according to canal().upstream.type.
@@ -109,6 +111,9 @@ class SaintVenantCanal final {
   BoundaryFlows CurrentBoundaryFlows() const;
   void BuildSteadyState();
   void Assemble(const Eigen::VectorXd& old_x, double dt_s);
+  /// Newton's iterations from `start` for the step to old_x_ + dt_s, in x_; whether they
+  /// converged to finite values.
+  bool Newton(const Eigen::VectorXd& start, double dt_s, int* iterations);
   /// Manning friction G = g A Sf of every node at the depths and flows `x`: G, dG/dh and dG/dQ
   /// into the rows of `all`, or G alone into `g_only` (either may be null).  Once per node, where
   /// the segments computed it twice per node and the old level's again at every iteration.

@@ -207,6 +207,8 @@ struct IntegratorDelayBankHealth {
 /// sample.  The selector (BankSelector) picks nk by each candidate's least-squares loss (or, by
 /// option, the weighted a-priori error with hysteresis).
 /// Allocates only in the constructor; Update and the snapshots never allocate.  Deterministic.
+/// Not thread-safe, its const members included (a snapshot copies a candidate into the
+/// RlsBank's scratch estimator).
 class OnlineIntegratorDelayBank final {
  public:
   /// @throws std::invalid_argument on a bad option.

@@ -246,9 +246,13 @@ void RlsBank<N>::Transform(int lane, const Matrix& t) {
     scalar_[Index(lane)].Transform(t);
     return;
   }
+  const Result last = result(lane);  // Store() does not know it
   Load(lane, scratch_);
   scratch_.Transform(t);
   Store(lane, scratch_);
+  Block& s = blocks_[Index(lane / kBlock)];
+  s.outcome[lane % kBlock] = static_cast<double>(last.outcome);
+  s.result_error[lane % kBlock] = last.prediction_error;
 }
 
 template <int N>

@@ -75,6 +75,8 @@ void ExpectLanesEqual(const RlsBank<N>& bank, const std::vector<Rls<N>>& referen
     ASSERT_EQ(p, q) << where << " lane " << l;
     ASSERT_EQ(bank.residual_sum_of_squares(l), ref.residual_sum_of_squares()) << where;
     ASSERT_EQ(lane.innovation_variance(), ref.innovation_variance()) << where;
+    const double e = lane.last_prediction_error(), e_ref = ref.last_prediction_error();
+    ASSERT_TRUE(e == e_ref || (std::isnan(e) && std::isnan(e_ref))) << where << " lane " << l;
     const RlsHealth a = lane.health(), b = ref.health();
     ASSERT_EQ(a.updates, b.updates) << where << " lane " << l;
     ASSERT_EQ(a.frozen_count, b.frozen_count) << where << " lane " << l;
@@ -87,6 +89,8 @@ void ExpectLanesEqual(const RlsBank<N>& bank, const std::vector<Rls<N>>& referen
     ASSERT_EQ(a.wound_up, b.wound_up) << where << " lane " << l;
     ASSERT_EQ(a.trace_p, b.trace_p) << where << " lane " << l;
     ASSERT_EQ(a.excitation, b.excitation) << where << " lane " << l;
+    ASSERT_EQ(a.regressor_norm2, b.regressor_norm2) << where << " lane " << l;
+    ASSERT_EQ(a.condition_estimate, b.condition_estimate) << where << " lane " << l;
   }
 }
 
@@ -167,8 +171,12 @@ TEST(RlsBank, TransformAndLaneRoundTrip) {
       t(1, 0) = 0.7;
       t(1, 2) = 3.0;
       for (int l = 0; l < 3; ++l) {
+        const auto before = bank.result(l);
         bank.Transform(l, t);
         reference[static_cast<std::size_t>(l)].Transform(t);
+        // A transform does not change what the last update did.
+        EXPECT_EQ(bank.result(l).outcome, before.outcome);
+        EXPECT_EQ(bank.result(l).prediction_error, before.prediction_error);
       }
     }
   }

@@ -133,6 +133,34 @@ double TestVolume(const SaintVenantCanal& plant) {
   return v;
 }
 
+// Newton starts from the state extrapolated along the last step: steps that lengthen 600-fold,
+// shorten again, and sudden input changes on a step must still converge (a longer step
+// extrapolates no further than one step's change; an overshoot restarts from the last state).
+TEST(SaintVenantCanal, StepsOfChangingLengthAndSuddenInputsConverge) {
+  SaintVenantCanal plant(LoadCanal(kSource + "/config/sim/asce-canal2.toml"));
+  const double gate = plant.structure_setting(3);
+  struct Leg {
+    double dt_s;
+    int steps;
+    double inflow_m3s;
+    double gate_factor;
+  };
+  for (const Leg& leg : {Leg{1.0, 20, 11.0, 1.0}, Leg{600.0, 6, 5.5, 0.7}, Leg{0.5, 10, 14.0, 1.2},
+                         Leg{120.0, 10, 2.0, 1.0}, Leg{10.0, 30, 11.0, 1.0}}) {
+    plant.SetUpstream(leg.inflow_m3s);
+    plant.SetStructureSetting(3, gate * leg.gate_factor);
+    for (int k = 0; k < leg.steps; ++k) {
+      ASSERT_NO_THROW(plant.Step(leg.dt_s)) << "dt " << leg.dt_s << " step " << k;
+      ASSERT_LE(plant.last_iterations(), 60);
+    }
+    for (int p = 0; p < plant.num_pools(); ++p) {
+      EXPECT_GT(plant.DownstreamDepth(p), 0.1) << "pool " << p + 1 << " after dt " << leg.dt_s;
+      EXPECT_TRUE(std::isfinite(plant.PoolOutflow(p)));
+    }
+  }
+  EXPECT_NEAR(plant.time_s(), 20.0 + 3600.0 + 5.0 + 1200.0 + 300.0, 1e-9);
+}
+
 TEST(SaintVenantCanal, MassBalanceOverOneDayOfCanal2Operations) {
   Canal canal = LoadCanal(kSource + "/config/sim/asce-canal2.toml");
   SaintVenantCanal plant(canal);
