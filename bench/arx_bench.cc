@@ -5,11 +5,15 @@
 // DelayScan/day: one day of 1 s data (86 400 samples), candidates nk = 0..120, na=nb=2, by
 //   ScanArxDelay (fixed regressors factorised once, Frisch-Waugh projection) and, for comparison,
 //   by 121 independent FitArx calls on the same window.
+// ArxOverDelays12k: the daemon's batch arx (FitArxOverDelays), 12 000 samples, delays 1..1200,
+//   against 1200 full FitArx calls.
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <random>
 
 #include "core/linear/arx.h"
+#include "core/linear/arx_delay_scan.h"
 #include "core/linear/delay_estimation.h"
 
 namespace canalid::core {
@@ -71,6 +75,31 @@ void BM_DelayScanDayNaive(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_DelayScanDayNaive)->Unit(benchmark::kMillisecond);
+
+// The daemon's batch arx at the end of a long experiment: 12 000 samples, delays 1..1200,
+// na = nb = 2 (FitArxOverDelays: the scan in blocks, then FitArx at its delay) against fitting
+// every candidate in full (what it did before), range(0) = 1 / 0.
+void BM_ArxOverDelays12k(benchmark::State& state) {
+  const Record r = MakeRecord(12000, 700);
+  const Eigen::VectorXd u = r.u.col(0);
+  const bool scan = state.range(0) != 0;
+  for (auto _ : state) {
+    if (scan) {
+      const ArxModel m = FitArxOverDelays(r.y, u, 2, 2, 1, 1200);
+      if (m.orders.nk[0] != 700) state.SkipWithError("wrong delay");
+      benchmark::DoNotOptimize(m.parameters.data());
+    } else {
+      double best = 1e300;
+      for (int nk = 1; nk <= 1200; ++nk) {
+        const ArxModel m = FitArx(r.y, u, ArxOrders{2, {2}, {nk}}, 2 + 1200 - 1);
+        best = std::min(best, m.loss);
+      }
+      benchmark::DoNotOptimize(best);
+    }
+  }
+  state.SetLabel(scan ? "scan in blocks" : "every candidate in full");
+}
+BENCHMARK(BM_ArxOverDelays12k)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace canalid::core

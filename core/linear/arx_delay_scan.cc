@@ -1,7 +1,5 @@
 #include "core/linear/arx_delay_scan.h"
 
-#include <algorithm>
-#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -20,15 +18,16 @@ ArxModel FitArxOverDelays(const Eigen::Ref<const Eigen::VectorXd>& y,
   widest.nb = {nb};
   widest.nk = {max_nk};
   widest.Validate(1);
-  const Eigen::Index first = widest.min_first_sample();
-  std::optional<ArxModel> best;
-  for (int nk = min_nk; nk <= max_nk; ++nk) {
-    ArxOrders orders = widest;
-    orders.nk = {nk};
-    ArxModel model = FitArx(y, u, orders, first);
-    if (!best || model.loss < best->loss) best = std::move(model);
-  }
-  return *best;
+  // The delay of least loss on the common window by the projected scan (ScanArxDelay: one
+  // factorisation of the output lags for all candidates, memory bounded), then the model at it.
+  ArxDelayScanOptions scan;
+  scan.orders = widest;
+  scan.min_nk = min_nk;
+  scan.max_nk = max_nk;
+  const ArxDelayScan delays = ScanArxDelay(y, u, scan);
+  ArxOrders orders = widest;
+  orders.nk = {delays.best_nk};
+  return FitArx(y, u, orders, widest.min_first_sample());
 }
 
 }  // namespace canalid::core

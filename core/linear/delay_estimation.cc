@@ -1,6 +1,7 @@
 #include "core/linear/delay_estimation.h"
 
 #include <Eigen/QR>
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -60,19 +61,13 @@ ArxDelayScan ScanArxDelay(const Eigen::Ref<const Eigen::VectorXd>& y,
         " parameters at max_nk = " + Str(options.max_nk) + "; need a longer record");
   }
 
-  // Columns: u(t - L) for L = min_nk .. max_nk + nb - 1, then y(t).
-  const int lags = options.max_nk - options.min_nk + nb;
-  Eigen::MatrixXd z(n, lags + 1);
-  for (int l = 0; l < lags; ++l)
-    z.col(l) = u.col(options.input).segment(t0 - options.min_nk - l, n);
-  z.col(lags) = y.segment(t0, n);
-
+  Eigen::HouseholderQR<Eigen::MatrixXd> fixed_qr;
   Eigen::Index rows = n;
   if (f > 0) {
     const Eigen::MatrixXd phi_fixed = ArxRegressors(y, u, fixed, t0);
-    Eigen::HouseholderQR<Eigen::MatrixXd> qr(phi_fixed);
+    fixed_qr.compute(phi_fixed);
     // Rank check on R's diagonal relative to the column norms (no pivoting here, for speed).
-    const Eigen::VectorXd diag = qr.matrixQR().diagonal().cwiseAbs();
+    const Eigen::VectorXd diag = fixed_qr.matrixQR().diagonal().cwiseAbs();
     for (int j = 0; j < f; ++j) {
       if (!(diag(j) > 1e-12 * phi_fixed.col(j).norm())) {
         throw std::invalid_argument(
@@ -80,43 +75,59 @@ ArxDelayScan ScanArxDelay(const Eigen::Ref<const Eigen::VectorXd>& y,
             "): not persistently exciting for these orders");
       }
     }
-    z.applyOnTheLeft(qr.householderQ().adjoint());
     rows = n - f;  // the components orthogonal to the fixed columns
   }
-  const auto projected = z.bottomRows(rows);
 
   ArxDelayScan scan;
   scan.first_sample = t0;
   scan.num_samples = n;
-  scan.loss.resize(options.max_nk - options.min_nk + 1);
-  scan.leading_b_t.resize(scan.loss.size());
+  const int candidates = options.max_nk - options.min_nk + 1;
+  scan.loss.resize(candidates);
+  scan.leading_b_t.resize(candidates);
+  scan.nk.reserve(static_cast<std::size_t>(candidates));
   const double dof = static_cast<double>(n - f - nb);
+  // The candidates in blocks of kScanBlock: per block the columns u(t - L) for its lags L, then
+  // y(t), projected off the fixed columns; the memory is N x (kScanBlock + nb) whatever the
+  // number of candidates (all at once took N x (K + nb): 115 MB for 12 000 samples and 1 200
+  // delays).
+  constexpr int kScanBlock = 64;
+  Eigen::MatrixXd z;
   Eigen::MatrixXd block(rows, nb + 1);
-  for (int nk = options.min_nk; nk <= options.max_nk; ++nk) {
-    const int i = nk - options.min_nk;
-    block.leftCols(nb) = projected.middleCols(i, nb);
-    block.col(nb) = projected.col(lags);
-    const Eigen::VectorXd norms = block.leftCols(nb).colwise().norm().transpose();
-    // QR of [U_block, y]: the last diagonal entry of R is the residual norm (Octave's
-    // "square-root" form), so no solve is needed for the loss.
-    Eigen::HouseholderQR<Eigen::Ref<Eigen::MatrixXd>> qr(block);
-    const double residual = qr.matrixQR()(nb, nb);
-    for (int j = 0; j < nb; ++j) {
-      if (!(std::abs(qr.matrixQR()(j, j)) > 1e-12 * norms(j))) {
-        throw std::invalid_argument("ScanArxDelay: the scanned input is rank deficient at nk = " +
-                                    Str(nk) + " (constant or collinear with the fixed part)");
+  for (int first_nk = options.min_nk; first_nk <= options.max_nk; first_nk += kScanBlock) {
+    const int count = std::min(kScanBlock, options.max_nk - first_nk + 1);
+    const int lags = count + nb - 1;
+    z.resize(n, lags + 1);  // allocates only when the width changes (the last block)
+    for (int l = 0; l < lags; ++l) z.col(l) = u.col(options.input).segment(t0 - first_nk - l, n);
+    z.col(lags) = y.segment(t0, n);
+    if (f > 0) z.applyOnTheLeft(fixed_qr.householderQ().adjoint());
+    const auto projected = z.bottomRows(rows);
+    for (int c = 0; c < count; ++c) {
+      const int nk = first_nk + c;
+      const int i = nk - options.min_nk;
+      block.leftCols(nb) = projected.middleCols(c, nb);
+      block.col(nb) = projected.col(lags);
+      const Eigen::VectorXd norms = block.leftCols(nb).colwise().norm().transpose();
+      // QR of [U_block, y]: the last diagonal entry of R is the residual norm (Octave's
+      // "square-root" form), so no solve is needed for the loss.
+      Eigen::HouseholderQR<Eigen::Ref<Eigen::MatrixXd>> qr(block);
+      const double residual = qr.matrixQR()(nb, nb);
+      for (int j = 0; j < nb; ++j) {
+        if (!(std::abs(qr.matrixQR()(j, j)) > 1e-12 * norms(j))) {
+          throw std::invalid_argument("ScanArxDelay: the scanned input is rank deficient at nk = " +
+                                      Str(nk) + " (constant or collinear with the fixed part)");
+        }
       }
+      scan.nk.push_back(nk);
+      scan.loss(i) = residual * residual / static_cast<double>(n);
+      // [R11 r12; 0 r22]: theta = R11^-1 r12, cov = sigma^2 R11^-1 R11^-T (Frisch-Waugh: the
+      // same as in the full fit).
+      const auto r11 = qr.matrixQR().topLeftCorner(nb, nb).triangularView<Eigen::Upper>();
+      const Eigen::VectorXd theta = r11.solve(qr.matrixQR().col(nb).head(nb));
+      const Eigen::MatrixXd r11_inv = r11.solve(Eigen::MatrixXd::Identity(nb, nb));
+      const double sigma = std::abs(residual) / std::sqrt(dof);
+      const double std0 = sigma * r11_inv.row(0).norm();
+      scan.leading_b_t(i) = std0 > 0.0 ? theta(0) / std0 : 0.0;
     }
-    scan.nk.push_back(nk);
-    scan.loss(i) = residual * residual / static_cast<double>(n);
-    // [R11 r12; 0 r22]: theta = R11^-1 r12, cov = sigma^2 R11^-1 R11^-T (Frisch-Waugh: the same
-    // as in the full fit).
-    const auto r11 = qr.matrixQR().topLeftCorner(nb, nb).triangularView<Eigen::Upper>();
-    const Eigen::VectorXd theta = r11.solve(qr.matrixQR().col(nb).head(nb));
-    const Eigen::MatrixXd r11_inv = r11.solve(Eigen::MatrixXd::Identity(nb, nb));
-    const double sigma = std::abs(residual) / std::sqrt(dof);
-    const double std0 = sigma * r11_inv.row(0).norm();
-    scan.leading_b_t(i) = std0 > 0.0 ? theta(0) / std0 : 0.0;
   }
   Eigen::Index best = 0;
   scan.loss.minCoeff(&best);

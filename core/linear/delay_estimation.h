@@ -45,8 +45,9 @@ struct ArxDelayScan {
 /// inputs) are factorised once, Phi_f = Q_f R_f, and Q_f^T is applied once to y and to every
 /// lagged copy of the scanned input (lags min_nk .. max_nk + nb - 1).  By the Frisch-Waugh-Lovell
 /// theorem each candidate's residual is then the residual of a small least-squares problem in the
-/// nb projected input columns, solved by Householder QR.  Cost: one QR of N x f, one application
-/// of Q_f^T to N x (K + nb), and K QRs of N x nb (K candidates), instead of K QRs of N x (f + nb).
+/// nb projected input columns, solved by Householder QR.  Cost: one QR of N x f, applications
+/// of Q_f^T to N x (K + nb (K / 64 + 1)), and K QRs of N x nb (K candidates), instead of K QRs of
+/// N x (f + nb).  The candidates go in blocks of 64: memory N x (64 + nb + 1) doubles, whatever K.
 /// @throws std::invalid_argument on bad options or data (as FitArx), or a rank-deficient fixed
 ///         part.
 ArxDelayScan ScanArxDelay(const Eigen::Ref<const Eigen::VectorXd>& y,

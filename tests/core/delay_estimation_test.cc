@@ -2,8 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <optional>
 #include <random>
+#include <stdexcept>
 
+#include "core/linear/arx_delay_scan.h"
 #include "core/signal/prbs.h"
 
 namespace canalid::core {
@@ -66,6 +70,53 @@ TEST(DelayEstimation, ScanFindsTheTrueDelayAndTheLossIsMinimalThere) {
   // Common window: max(na, nb + max_nk - 1, nb2 + nk2 - 1) = 41.
   EXPECT_EQ(scan.first_sample, 41);
   EXPECT_EQ(scan.num_samples, 4000 - 41);
+}
+
+TEST(DelayEstimation, ScanInBlocksEqualsFullFitsAcrossBlockEdges) {
+  // 150 candidates go in blocks of 64: 3..66, 67..130, 131..152 (the last one partial).  Every
+  // loss, and the leading coefficient's t value, still equal the full fit's at that delay.
+  const Record r = MakeRecord(2500, 100, 0.05, 5);
+  const ArxDelayScanOptions options = TwoInputScan(3, 152);
+  const ArxDelayScan scan = ScanArxDelay(r.y, r.u, options);
+  ASSERT_EQ(scan.nk.size(), 150U);
+  EXPECT_EQ(scan.best_nk, 100);
+  for (std::size_t i = 0; i < scan.nk.size(); ++i) {
+    ASSERT_EQ(scan.nk[i], static_cast<int>(i) + 3);
+    ArxOrders orders = options.orders;
+    orders.nk[0] = scan.nk[i];
+    const ArxModel m = FitArx(r.y, r.u, orders, scan.first_sample);
+    EXPECT_NEAR(scan.loss(static_cast<Eigen::Index>(i)), m.loss, 1e-10 * m.loss)
+        << "nk " << scan.nk[i];
+    const double t = m.b[0](0) / std::sqrt(m.covariance(2, 2));
+    EXPECT_NEAR(scan.leading_b_t(static_cast<Eigen::Index>(i)), t, 1e-8 * std::abs(t) + 1e-10)
+        << "nk " << scan.nk[i];
+  }
+}
+
+TEST(DelayEstimation, ArxOverDelaysIsTheFullFitOfLeastLoss) {
+  // The daemon's batch arx: the delay from the scan, the model from FitArx at it; the same as
+  // fitting every candidate in full and keeping the least loss (what it did before the scan).
+  const Record r = MakeRecord(3000, 70, 0.02, 6);
+  const Eigen::VectorXd u = r.u.col(0);
+  const ArxModel fit = FitArxOverDelays(r.y, u, 2, 2, 1, 130);
+  ArxOrders widest;
+  widest.na = 2;
+  widest.nb = {2};
+  widest.nk = {130};
+  std::optional<ArxModel> best;
+  for (int nk = 1; nk <= 130; ++nk) {
+    ArxOrders orders = widest;
+    orders.nk = {nk};
+    ArxModel m = FitArx(r.y, u, orders, widest.min_first_sample());
+    if (!best || m.loss < best->loss) best = std::move(m);
+  }
+  EXPECT_EQ(fit.orders.nk[0], best->orders.nk[0]);
+  EXPECT_EQ(fit.orders.nk[0], 70);
+  EXPECT_EQ(fit.parameters, best->parameters);
+  EXPECT_EQ(fit.loss, best->loss);
+  // A constant input has no delay to find: refused with the scan's reason.
+  EXPECT_THROW(FitArxOverDelays(r.y, Eigen::VectorXd::Ones(3000), 2, 2, 1, 130),
+               std::invalid_argument);
 }
 
 TEST(DelayEstimation, EveryScanLossEqualsAFullArxFitOnTheSameWindow) {
