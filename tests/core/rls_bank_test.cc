@@ -7,6 +7,7 @@
 #include <limits>
 #include <random>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "core/online/rls.h"
@@ -78,19 +79,15 @@ void ExpectLanesEqual(const RlsBank<N>& bank, const std::vector<Rls<N>>& referen
     const double e = lane.last_prediction_error(), e_ref = ref.last_prediction_error();
     ASSERT_TRUE(e == e_ref || (std::isnan(e) && std::isnan(e_ref))) << where << " lane " << l;
     const RlsHealth a = lane.health(), b = ref.health();
-    ASSERT_EQ(a.updates, b.updates) << where << " lane " << l;
-    ASSERT_EQ(a.frozen_count, b.frozen_count) << where << " lane " << l;
-    ASSERT_EQ(a.rejected_invalid, b.rejected_invalid) << where << " lane " << l;
-    ASSERT_EQ(a.projections, b.projections) << where << " lane " << l;
-    ASSERT_EQ(a.trace_bounded, b.trace_bounded) << where << " lane " << l;
-    ASSERT_EQ(a.clipped, b.clipped) << where << " lane " << l;
-    ASSERT_EQ(a.dead_zone, b.dead_zone) << where << " lane " << l;
-    ASSERT_EQ(a.frozen, b.frozen) << where << " lane " << l;
-    ASSERT_EQ(a.wound_up, b.wound_up) << where << " lane " << l;
-    ASSERT_EQ(a.trace_p, b.trace_p) << where << " lane " << l;
-    ASSERT_EQ(a.excitation, b.excitation) << where << " lane " << l;
-    ASSERT_EQ(a.regressor_norm2, b.regressor_norm2) << where << " lane " << l;
-    ASSERT_EQ(a.condition_estimate, b.condition_estimate) << where << " lane " << l;
+    // Counts, flags and doubles, each equal (std::tie compares them all and prints both sides).
+    ASSERT_EQ(std::tie(a.updates, a.frozen_count, a.rejected_invalid, a.projections,
+                       a.trace_bounded, a.clipped, a.dead_zone, a.frozen, a.wound_up),
+              std::tie(b.updates, b.frozen_count, b.rejected_invalid, b.projections,
+                       b.trace_bounded, b.clipped, b.dead_zone, b.frozen, b.wound_up))
+        << where << " lane " << l;
+    ASSERT_EQ(std::tie(a.trace_p, a.excitation, a.regressor_norm2, a.condition_estimate),
+              std::tie(b.trace_p, b.excitation, b.regressor_norm2, b.condition_estimate))
+        << where << " lane " << l;
   }
 }
 
