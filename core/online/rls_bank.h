@@ -24,8 +24,9 @@ namespace canalid::core {
 /// for all, the per-lane branches of Rls::Update (invalid samples, freeze, directional
 /// forgetting's r > 1 - lambda) taken as masks; the box and the trace bounds, off by default,
 /// go lane by lane after it.  Otherwise each lane is an Rls<N> of its own (the same results,
-/// no speed-up).  An update keeps Rls's nine divisions per lane (n = 4), which bound its speed:
-/// two lanes per SSE2 division (docs/performance.md).
+/// no speed-up).  What an update costs is its operation count, each operation serving the two
+/// lanes of an SSE2 register: keeping Rls's results bit for bit keeps its bookkeeping (counts,
+/// last error, outcome) per lane, and every branch becomes a select (docs/performance.md).
 /// Allocates only in the constructor; Update and the accessors never allocate.
 /// Deterministic.  Not thread-safe (Lane() uses a scratch estimator).
 template <int N>
