@@ -103,11 +103,6 @@ class RlsBank final {
   static Lanes Select(Mask mask, Lanes a, Lanes b) {
     return std::bit_cast<Lanes>((std::bit_cast<Mask>(a) & mask) | (std::bit_cast<Mask>(b) & ~mask));
   }
-  /// A comparison's result as plain bits: combined with another mask as it is, GCC 12 reads
-  /// `mask & (a <= b)` as a select on 64-bit integers and goes lane by lane.
-  static Mask Bits(Mask comparison) {
-    return std::bit_cast<Mask>(std::bit_cast<Lanes>(comparison));
-  }
   /// a where the mask is set, else 0.
   static Lanes Keep(Mask mask, Lanes a) {
     return std::bit_cast<Lanes>(std::bit_cast<Mask>(a) & mask);
@@ -321,10 +316,10 @@ void RlsBank<N>::UpdateBlock(Block& s, int first_lane, double y) {
                      sizeof(Lanes));
   }
   // Validity (NaN compares false), ||phi||^2, the a-priori error, f = U' phi, g = D f, r = f' g.
-  Mask valid = Bits(zero == zero);
+  Mask valid = (zero == zero);
   Lanes norm2 = zero, prediction = zero, r = zero;
   for (std::size_t i = 0; i < kN; ++i) {
-    valid &= Bits(phi[i] <= regressor_max) & Bits(phi[i] >= -regressor_max);
+    valid &= (phi[i] <= regressor_max) & (phi[i] >= -regressor_max);
     norm2 += phi[i] * phi[i];
   }
   for (std::size_t i = 0; i < kN; ++i) prediction += phi[i] * s.theta[i];
@@ -337,13 +332,13 @@ void RlsBank<N>::UpdateBlock(Block& s, int first_lane, double y) {
     g[j] = s.d[j] * fj;
     r += fj * g[j];
   }
-  valid &= Bits(e <= largest) & Bits(e >= -largest) & Bits(r >= zero) & Bits(r <= largest);
-  const Mask frozen = valid & (Bits(norm2 <= (zero + options_.regressor_norm_min)) |
-                               Bits(r <= (zero + options_.excitation_min)));
+  valid &= (e <= largest) & (e >= -largest) & (r >= zero) & (r <= largest);
+  const Mask frozen = valid & ((norm2 <= (zero + options_.regressor_norm_min)) |
+                               (r <= (zero + options_.excitation_min)));
   const Mask apply = valid & ~frozen;
   // Directional forgetting: Bierman's update when r > 1 - lambda, else the gain alone (lanes
   // that do not take the factors compute them with a variance of 1, then drop them).
-  const Mask bierman = exponential ? valid | ~valid : Bits(r > forget);
+  const Mask bierman = exponential ? valid | ~valid : (r > forget);
   const Mask factors = apply & bierman;
   const Lanes measurement = exponential ? (zero + lambda) : Select(bierman, r / (r - forget), one);
   const Lanes scale = one + r / (zero + lambda);
