@@ -14,6 +14,30 @@
 
 namespace canalid::core {
 
+/// W lanes of doubles as one value (GCC's and Clang's vector extension): +, -, *, / act lane by
+/// lane with IEEE rounding, as on doubles (no FMA in the ISAs RlsBank uses, so no contraction
+/// either); a comparison gives a mask of -1 / 0 per lane.  Spelled out per width: GCC drops a
+/// vector_size whose value depends on a template parameter.
+template <int W>
+struct LaneVectors;
+template <>
+struct LaneVectors<2> {  // one SSE2 register
+  using Lanes = double __attribute__((vector_size(2 * sizeof(double))));
+  using Mask = std::int64_t __attribute__((vector_size(2 * sizeof(std::int64_t))));
+};
+template <>
+struct LaneVectors<4> {  // one AVX2 register
+  using Lanes = double __attribute__((vector_size(4 * sizeof(double))));
+  using Mask = std::int64_t __attribute__((vector_size(4 * sizeof(std::int64_t))));
+};
+
+/// The instruction set of RlsBank's structure-of-arrays update.
+enum class RlsBankIsa {
+  kBest,      ///< AVX2 where the CPU has it, else the baseline
+  kBaseline,  ///< SSE2, the baseline x86-64 ISA (two lanes per operation)
+  kAvx2,      ///< AVX2, four lanes per operation
+};
+
 /// `lanes` estimators Rls<N> with the same options, updated together: one output y per sample
 /// and one regressor per lane (a delay bank's candidates).  Each lane is bit for bit the Rls<N>
 /// it replaces: the same operations in the same order on the same numbers.
@@ -25,8 +49,10 @@ namespace canalid::core {
 /// forgetting's r > 1 - lambda) taken as masks; the box and the trace bounds, off by default,
 /// go lane by lane after it.  Otherwise each lane is an Rls<N> of its own (the same results,
 /// no speed-up).  What an update costs is its operation count, each operation serving the two
-/// lanes of an SSE2 register: keeping Rls's results bit for bit keeps its bookkeeping (counts,
-/// last error, outcome) per lane, and every branch becomes a select (docs/performance.md).
+/// lanes of an SSE2 register (the baseline x86-64 ISA) or, where the CPU has AVX2, the four of
+/// an AVX2 register (chosen at run time; neither contracts to FMA, so both are Rls bit for
+/// bit).  Keeping Rls's results bit for bit keeps its bookkeeping (counts, last error, outcome)
+/// per lane, and every branch becomes a select (docs/performance.md).
 /// Allocates only in the constructor; Update and the accessors never allocate.
 /// Deterministic.  Not thread-safe (Lane() uses a scratch estimator).
 template <int N>
@@ -34,16 +60,20 @@ class RlsBank final {
   static_assert(N != Eigen::Dynamic, "RlsBank needs a fixed parameter count");
 
  public:
-  static constexpr int kBlock = 2;
+  static constexpr int kBlock = 4;  // lanes per block: one AVX2 register, two SSE2 ones
   using Matrix = Eigen::Matrix<double, N, N>;
   /// The regressors of one sample, phi_i of lane l at (i, l); lanes() columns and padding.
   using Regressors = Eigen::Matrix<double, N, Eigen::Dynamic, Eigen::RowMajor>;
   using Result = typename Rls<N>::Result;
 
-  /// @throws std::invalid_argument on a bad option (RlsOptions::Validate) or lanes < 1.
-  RlsBank(const RlsOptions& options, int lanes);
+  /// `isa`: kBest takes AVX2 where the CPU has it; kBaseline keeps to SSE2; kAvx2 insists.
+  /// @throws std::invalid_argument on a bad option (RlsOptions::Validate), lanes < 1, or kAvx2
+  /// on a CPU without AVX2.
+  RlsBank(const RlsOptions& options, int lanes, RlsBankIsa isa = RlsBankIsa::kBest);
 
   int lanes() const { return lanes_; }
+  /// The instruction set the structure-of-arrays update runs on (kBaseline or kAvx2).
+  RlsBankIsa isa() const { return isa_; }
   /// Whether the lanes run as structure of arrays (a UD method without innovation guards).
   bool structure_of_arrays() const { return soa_; }
   /// Fill column l with lane l's regressor before Update.
@@ -64,31 +94,27 @@ class RlsBank final {
   void Transform(int lane, const Matrix& t);
 
  private:
-  // kBlock lanes of doubles as one value (GCC's and Clang's vector extension): +, -, *, / act
-  // lane by lane with IEEE rounding, as on doubles (no FMA at the baseline ISA, so no
-  // contraction either); a comparison gives a mask of -1 / 0 per lane.  Two lanes: one SSE2
-  // register, the baseline x86-64 ISA's.
-  using Lanes = double __attribute__((vector_size(kBlock * sizeof(double))));
-  using Mask = std::int64_t __attribute__((vector_size(kBlock * sizeof(std::int64_t))));
   static constexpr std::size_t kN = N;  // array extents are unsigned
-  struct Block {
-    Lanes u[kN][kN];  // unit upper triangular U (the diagonal stays 1)
-    Lanes d[kN];
-    Lanes theta[kN];
-    Lanes ssr;
-    Lanes weight;
+  static constexpr std::size_t kLanes = kBlock;
+  using Field = double[kLanes];  // one number of each lane of a block
+  struct alignas(kBlock * sizeof(double)) Block {
+    Field u[kN][kN];  // unit upper triangular U (the diagonal stays 1)
+    Field d[kN];
+    Field theta[kN];
+    Field ssr;
+    Field weight;
     // Rls's bookkeeping, kept here so that the update writes it lane-wise (counts as doubles:
     // exact to 2^53).
-    Lanes accepted;
-    Lanes updates;
-    Lanes frozen_count;
-    Lanes rejected_invalid;
-    Lanes last_error;    // of the last valid sample
-    Lanes excitation;    // r of the last valid sample
-    Lanes norm2;         // ||phi||^2 of the last valid sample
-    Lanes frozen;        // 1: the last valid sample froze the lane
-    Lanes outcome;       // the last Update's RlsOutcome
-    Lanes result_error;  // and its prediction error (NaN when rejected)
+    Field accepted;
+    Field updates;
+    Field frozen_count;
+    Field rejected_invalid;
+    Field last_error;    // of the last valid sample
+    Field excitation;    // r of the last valid sample
+    Field norm2;         // ||phi||^2 of the last valid sample
+    Field frozen;        // 1: the last valid sample froze the lane
+    Field outcome;       // the last Update's RlsOutcome
+    Field result_error;  // and its prediction error (NaN when rejected)
   };
   // The rest of a lane's Rls state (only the box and the trace bounds change it).
   struct LaneState {
@@ -98,22 +124,42 @@ class RlsBank final {
   };
 
   static std::size_t Index(int lane) { return static_cast<std::size_t>(lane); }
-  // mask ? a : b lane by lane, in bit operations (the vector extension's own ?: compares the
-  // mask with 0 in 64-bit integers, which SSE2 does not have: GCC then goes lane by lane).
-  static Lanes Select(Mask mask, Lanes a, Lanes b) {
-    return std::bit_cast<Lanes>((std::bit_cast<Mask>(a) & mask) | (std::bit_cast<Mask>(b) & ~mask));
+  // Lanes at..at+W-1 of a field as one W-lane value (GCC gives vector types their element's
+  // alias set; `at` is a multiple of W, so the value is aligned).
+  template <class V>
+  [[gnu::always_inline]] static V& At(Field& field, std::size_t at) {
+    return *reinterpret_cast<V*>(&field[at]);
   }
-  /// a where the mask is set, else 0.
-  static Lanes Keep(Mask mask, Lanes a) {
-    return std::bit_cast<Lanes>(std::bit_cast<Mask>(a) & mask);
+  // The helpers take vectors by reference: a 32-byte vector passed or returned by value makes
+  // GCC warn (-Wpsabi) that the ABI differs where AVX is off, even when always inlined.
+  // GCC folds bit operations on a comparison's mask back into a ?: (and then, for 64-bit masks
+  // on SSE2, goes lane by lane in scalar code): an empty asm hides where the mask comes from.
+  template <class M>
+  [[gnu::always_inline]] static void Hide(M& mask) {
+    __asm__("" : "+x"(mask));
   }
-  void UpdateBlock(Block& s, int first_lane, double y);
+  /// target = a in the lanes where the mask is set, in bit operations (the vector extension's
+  /// own ?: compares the mask with 0 in 64-bit integers, which SSE2 does not have).
+  template <class M, class L>
+  [[gnu::always_inline]] static void Assign(const M& mask, const L& a, L& target) {
+    M m = mask;
+    Hide(m);
+    target = __builtin_bit_cast(
+        L, (__builtin_bit_cast(M, a) & m) | (__builtin_bit_cast(M, target) & ~m));
+  }
+  template <int W>
+  [[gnu::always_inline]] void UpdateLanes(Block& s, std::size_t at, int first_lane, double y);
+  void UpdateBlockBaseline(Block& s, int first_lane, double y);
+  [[gnu::target("avx2")]] void UpdateBlockAvx2(Block& s, int first_lane, double y);
+  // The box and the trace bounds on the block's lanes that updated, lane by lane.
+  void BoundLanes(Block& s, int first_lane);
   void Load(int lane, Rls<N>& into) const;
   void Store(int lane, const Rls<N>& from);
 
   RlsOptions options_;
   int lanes_;
   bool soa_ = false;
+  RlsBankIsa isa_ = RlsBankIsa::kBaseline;
   double lambda_ = 1.0;
   double noise_forgetting_ = 1.0;
   bool has_box_ = false;
@@ -132,7 +178,7 @@ class RlsBank final {
 // Implementation (a template on N, so it lives in the header).
 
 template <int N>
-RlsBank<N>::RlsBank(const RlsOptions& options, int lanes)
+RlsBank<N>::RlsBank(const RlsOptions& options, int lanes, RlsBankIsa isa)
     : options_(options), lanes_(lanes), scratch_(options) {
   if (lanes < 1) {
     throw std::invalid_argument("RlsBank: " + std::to_string(lanes) + " lanes; at least 1");
@@ -142,6 +188,11 @@ RlsBank<N>::RlsBank(const RlsOptions& options, int lanes)
   const bool ud =
       options.method == RlsMethod::kUdDirectional || options.method == RlsMethod::kUdExponential;
   soa_ = ud && !scratch_.guards_;
+  const bool avx2 = __builtin_cpu_supports("avx2") != 0;
+  if (isa == RlsBankIsa::kAvx2 && !avx2) {
+    throw std::invalid_argument("RlsBank: AVX2 asked for; this CPU does not have it");
+  }
+  if (soa_ && isa != RlsBankIsa::kBaseline && avx2) isa_ = RlsBankIsa::kAvx2;
   lambda_ = scratch_.GainForgetting();
   noise_forgetting_ = scratch_.noise_forgetting_;
   has_box_ = scratch_.has_box_;
@@ -284,23 +335,48 @@ void RlsBank<N>::Update(double y) {
     return;
   }
   if (!std::isfinite(y) || std::abs(y) > options_.output_abs_max) {
-    const Lanes zero{};
     for (Block& s : blocks_) {
-      s.rejected_invalid += 1.0;
-      s.outcome = zero + static_cast<double>(RlsOutcome::kRejectedInvalid);
-      s.result_error = zero + std::numeric_limits<double>::quiet_NaN();
+      for (std::size_t l = 0; l < kLanes; ++l) {
+        s.rejected_invalid[l] += 1.0;
+        s.outcome[l] = static_cast<double>(RlsOutcome::kRejectedInvalid);
+        s.result_error[l] = std::numeric_limits<double>::quiet_NaN();
+      }
     }
     return;
   }
   for (std::size_t b = 0; b < blocks_.size(); ++b) {
-    UpdateBlock(blocks_[b], static_cast<int>(b) * kBlock, y);
+    Block& s = blocks_[b];
+    const int first_lane = static_cast<int>(b) * kBlock;
+    if (isa_ == RlsBankIsa::kAvx2) {
+      UpdateBlockAvx2(s, first_lane, y);
+    } else {
+      UpdateBlockBaseline(s, first_lane, y);
+    }
+    if (has_box_ || trace_bounds_) BoundLanes(s, first_lane);
   }
 }
 
 template <int N>
-void RlsBank<N>::UpdateBlock(Block& s, int first_lane, double y) {
-  // Rls::Update on kBlock lanes at once, each lane's arithmetic Rls's, operation for operation;
-  // its branches are masks.
+void RlsBank<N>::UpdateBlockBaseline(Block& s, int first_lane, double y) {
+  UpdateLanes<2>(s, 0, first_lane, y);
+  UpdateLanes<2>(s, 2, first_lane + 2, y);
+}
+
+// AVX2 code in a header: this function alone is compiled for AVX2 (UpdateLanes is inlined into
+// it) and runs only where __builtin_cpu_supports("avx2") said yes; it calls nothing else.
+template <int N>
+void RlsBank<N>::UpdateBlockAvx2(Block& s, int first_lane, double y) {
+  UpdateLanes<4>(s, 0, first_lane, y);
+}
+
+template <int N>
+template <int W>
+inline void RlsBank<N>::UpdateLanes(Block& s, std::size_t at, int first_lane, double y) {
+  // Rls::Update on lanes at..at+W-1 of the block at once, each lane's arithmetic Rls's,
+  // operation for operation; its branches are masks.
+  using Lanes = typename LaneVectors<W>::Lanes;
+  using Mask = typename LaneVectors<W>::Mask;
+  const auto v = [at](Field& field) -> Lanes& { return At<Lanes>(field, at); };
   const double lambda = lambda_;
   const bool exponential = options_.method == RlsMethod::kUdExponential;
   // (A vector plus a double adds the double to every lane: zero + x is x in every lane.)
@@ -311,6 +387,7 @@ void RlsBank<N>::UpdateBlock(Block& s, int first_lane, double y) {
       (zero + std::min(options_.regressor_abs_max, std::numeric_limits<double>::max()));
   const Lanes forget = (zero + 1.0 - lambda);
   Lanes phi[kN];
+#pragma GCC unroll 16
   for (std::size_t i = 0; i < kN; ++i) {
     __builtin_memcpy(&phi[i], phi_.row(static_cast<Eigen::Index>(i)).data() + first_lane,
                      sizeof(Lanes));
@@ -318,29 +395,41 @@ void RlsBank<N>::UpdateBlock(Block& s, int first_lane, double y) {
   // Validity (NaN compares false), ||phi||^2, the a-priori error, f = U' phi, g = D f, r = f' g.
   Mask valid = (zero == zero);
   Lanes norm2 = zero, prediction = zero, r = zero;
+#pragma GCC unroll 16
   for (std::size_t i = 0; i < kN; ++i) {
     valid &= (phi[i] <= regressor_max) & (phi[i] >= -regressor_max);
     norm2 += phi[i] * phi[i];
   }
-  for (std::size_t i = 0; i < kN; ++i) prediction += phi[i] * s.theta[i];
+#pragma GCC unroll 16
+  for (std::size_t i = 0; i < kN; ++i) prediction += phi[i] * v(s.theta[i]);
   const Lanes e = (zero + y) - prediction;
   Lanes f[kN], g[kN];
+#pragma GCC unroll 16
   for (std::size_t j = 0; j < kN; ++j) {
     Lanes fj = phi[j];
-    for (std::size_t i = 0; i < j; ++i) fj += s.u[i][j] * phi[i];
+#pragma GCC unroll 16
+    for (std::size_t i = 0; i < j; ++i) fj += v(s.u[i][j]) * phi[i];
     f[j] = fj;
-    g[j] = s.d[j] * fj;
+    g[j] = v(s.d[j]) * fj;
     r += fj * g[j];
   }
   valid &= (e <= largest) & (e >= -largest) & (r >= zero) & (r <= largest);
-  const Mask frozen = valid & ((norm2 <= (zero + options_.regressor_norm_min)) |
-                               (r <= (zero + options_.excitation_min)));
-  const Mask apply = valid & ~frozen;
+  Hide(valid);
+  Mask frozen = valid & ((norm2 <= (zero + options_.regressor_norm_min)) |
+                         (r <= (zero + options_.excitation_min)));
+  Hide(frozen);
+  Mask apply = valid & ~frozen;
+  Hide(apply);
   // Directional forgetting: Bierman's update when r > 1 - lambda, else the gain alone (lanes
   // that do not take the factors compute them with a variance of 1, then drop them).
-  const Mask bierman = exponential ? valid | ~valid : (r > forget);
+  Mask bierman = exponential ? valid | ~valid : (r > forget);
+  Hide(bierman);
   const Mask factors = apply & bierman;
-  const Lanes measurement = exponential ? (zero + lambda) : Select(bierman, r / (r - forget), one);
+  Lanes measurement = zero + lambda;
+  if (!exponential) {
+    measurement = one;
+    Assign(bierman, r / (r - forget), measurement);
+  }
   const Lanes scale = one + r / (zero + lambda);
   const Lanes step = e / ((zero + lambda) + r);
   // Bierman's measurement update (Rls::UpdateUdFactors) into new U, D and the gain numerator
@@ -348,6 +437,7 @@ void RlsBank<N>::UpdateBlock(Block& s, int first_lane, double y) {
   // 0 + 1 g_i + sum_{j > i} u_ij g_j: the accumulator k holds the same sums in the same order.
   Lanes alpha[kN], inv_alpha[kN];
   Lanes running = measurement;
+#pragma GCC unroll 16
   for (std::size_t j = 0; j < kN; ++j) {
     running += f[j] * g[j];
     alpha[j] = running;
@@ -355,11 +445,13 @@ void RlsBank<N>::UpdateBlock(Block& s, int first_lane, double y) {
   }
   Lanes alpha_prev = measurement, inv_prev = one / measurement;
   Lanes k[kN], nu[kN][kN], nd[kN];
+#pragma GCC unroll 16
   for (std::size_t j = 0; j < kN; ++j) {
-    nd[j] = s.d[j] * (alpha_prev * inv_alpha[j]);
+    nd[j] = v(s.d[j]) * (alpha_prev * inv_alpha[j]);
     const Lanes pj = -f[j] * inv_prev;
+#pragma GCC unroll 16
     for (std::size_t i = 0; i < j; ++i) {
-      const Lanes uij = s.u[i][j];
+      const Lanes uij = v(s.u[i][j]);
       nu[i][j] = uij + k[i] * pj;
       k[i] += uij * g[j];
     }
@@ -368,34 +460,50 @@ void RlsBank<N>::UpdateBlock(Block& s, int first_lane, double y) {
     inv_prev = inv_alpha[j];
   }
   // theta, U and D of the lanes that update; the noise sums and bookkeeping of the valid ones.
-  for (std::size_t i = 0; i < kN; ++i)
-    s.theta[i] = Select(apply, s.theta[i] + k[i] * step, s.theta[i]);
+#pragma GCC unroll 16
+  for (std::size_t i = 0; i < kN; ++i) Assign(apply, v(s.theta[i]) + k[i] * step, v(s.theta[i]));
   const bool divide = exponential && lambda != 1.0;
+#pragma GCC unroll 16
   for (std::size_t j = 0; j < kN; ++j) {
-    const Lanes dj = divide ? nd[j] / (zero + lambda) : nd[j];
-    s.d[j] = Select(factors, dj, s.d[j]);
-    for (std::size_t i = 0; i < j; ++i) s.u[i][j] = Select(factors, nu[i][j], s.u[i][j]);
+    Assign(factors, divide ? nd[j] / (zero + lambda) : nd[j], v(s.d[j]));
+#pragma GCC unroll 16
+    for (std::size_t i = 0; i < j; ++i) Assign(factors, nu[i][j], v(s.u[i][j]));
   }
   const Lanes nf = (zero + noise_forgetting_);
-  s.ssr = Select(valid, nf * s.ssr + e * e / scale, s.ssr);
-  s.weight = Select(valid, nf * s.weight + one, s.weight);
-  s.accepted += Keep(valid, one);
-  s.rejected_invalid += Keep(~valid, one);
-  s.updates += Keep(apply, one);
-  s.frozen_count += Keep(frozen, one);
-  s.last_error = Select(valid, e, s.last_error);
-  s.excitation = Select(valid, r, s.excitation);
-  s.norm2 = Select(valid, norm2, s.norm2);
-  s.frozen = Select(valid, Keep(frozen, one), s.frozen);
-  s.outcome = Select(apply, zero + static_cast<double>(RlsOutcome::kUpdated),
-                     Select(frozen, zero + static_cast<double>(RlsOutcome::kFrozen),
-                            zero + static_cast<double>(RlsOutcome::kRejectedInvalid)));
-  s.result_error = Select(valid, e, zero + std::numeric_limits<double>::quiet_NaN());
-  if (!has_box_ && !trace_bounds_) return;
+  Assign(valid, nf * v(s.ssr) + e * e / scale, v(s.ssr));
+  Assign(valid, nf * v(s.weight) + one, v(s.weight));
+  // Counts: + 1 where the mask is set.
+  const auto count = [&](const Mask& mask, Lanes& counter) {
+    Lanes add = zero;
+    Assign(mask, one, add);
+    counter += add;
+  };
+  count(valid, v(s.accepted));
+  count(~valid, v(s.rejected_invalid));
+  count(apply, v(s.updates));
+  count(frozen, v(s.frozen_count));
+  Assign(valid, e, v(s.last_error));
+  Assign(valid, r, v(s.excitation));
+  Assign(valid, norm2, v(s.norm2));
+  Lanes froze = zero;
+  Assign(frozen, one, froze);
+  Assign(valid, froze, v(s.frozen));
+  // apply and frozen are disjoint.
+  Lanes outcome = zero + static_cast<double>(RlsOutcome::kRejectedInvalid);
+  Assign(frozen, zero + static_cast<double>(RlsOutcome::kFrozen), outcome);
+  Assign(apply, zero + static_cast<double>(RlsOutcome::kUpdated), outcome);
+  v(s.outcome) = outcome;
+  Lanes result_error = zero + std::numeric_limits<double>::quiet_NaN();
+  Assign(valid, e, result_error);
+  v(s.result_error) = result_error;
+}
+
+template <int N>
+void RlsBank<N>::BoundLanes(Block& s, int first_lane) {
   // The box and the trace bounds, lane by lane (not configured by default).
-  for (int l = 0; l < kBlock; ++l) {
-    const int lane = first_lane + l;
-    if (lane >= lanes_ || apply[l] == 0) continue;
+  for (std::size_t l = 0; l < kLanes; ++l) {
+    const int lane = first_lane + static_cast<int>(l);
+    if (lane >= lanes_ || s.outcome[l] != static_cast<double>(RlsOutcome::kUpdated)) continue;
     LaneState& st = state_[Index(lane)];
     if (has_box_) {
       bool moved = false;
