@@ -62,9 +62,15 @@ void BankSelector::Record(int i, double prediction_error) {
 int BankSelector::Commit() {
   ++samples_;
   if (samples_ <= options_.warmup_samples) return selected_;
+  // The first smallest loss, without a branch per candidate (losses close to each other make
+  // such branches unpredictable: they cost more than the comparisons).
   int best = 0;
+  double best_loss = loss_[0];
   for (int i = 1; i < num_candidates(); ++i) {
-    if (loss(i) < loss(best)) best = i;
+    const double l = loss_[static_cast<std::size_t>(i)];
+    const bool less = l < best_loss;
+    best = less ? i : best;
+    best_loss = less ? l : best_loss;
   }
   if (options_.criterion == BankCriterion::kResidual) {
     if (!std::isfinite(loss(best))) return selected_;  // no candidate has a loss yet
