@@ -1,5 +1,6 @@
 #pragma once
 #include <cassert>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -33,6 +34,23 @@ class RingBuffer final {
     int i = head_ - lag;
     if (i < 0) i += capacity();
     return data_[static_cast<std::size_t>(i)];
+  }
+
+  /// The newest `count` values, oldest first, as at most two runs of storage: `older` then
+  /// `newer` (empty when the values do not wrap).  @pre 0 <= count <= size().
+  struct Runs {
+    std::span<const T> older;
+    std::span<const T> newer;
+  };
+  Runs Chronological(int count) const {
+    assert(count >= 0 && count <= size_);
+    const auto base = data_.data();
+    const int start = head_ - count + 1;
+    if (start >= 0) {
+      return {{}, {base + start, static_cast<std::size_t>(count)}};
+    }
+    return {{base + capacity() + start, static_cast<std::size_t>(-start)},
+            {base, static_cast<std::size_t>(head_ + 1)}};
   }
 
   int size() const { return size_; }

@@ -1,6 +1,9 @@
 #include "core/online/online_gl_regressor.h"
 
+#include <Eigen/Core>
+
 #include <algorithm>
+#include <span>
 #include <sstream>
 #include <stdexcept>
 
@@ -22,13 +25,21 @@ OnlineGlRegressor::OnlineGlRegressor(double alpha, int memory) : alpha_(alpha) {
     const auto uj = static_cast<std::size_t>(j);
     weights_[uj] = weights_[uj - 1] * (1.0 - (alpha + 1.0) / j);
   }
+  reversed_.assign(weights_.rbegin(), weights_.rend() - 1);
 }
 
 double OnlineGlRegressor::Sum(const RingBuffer<double>& history) const {
   const int terms = std::min(memory(), history.size());
-  double s = 0.0;
-  for (int j = 1; j <= terms; ++j) s += weights_[static_cast<std::size_t>(j)] * history[j - 1];
-  return s;
+  // x(k-terms) .. x(k-1) (oldest first) against w_terms .. w_1: the last `terms` reversed weights.
+  const RingBuffer<double>::Runs runs = history.Chronological(terms);
+  const double* w = reversed_.data() + (reversed_.size() - static_cast<std::size_t>(terms));
+  const auto dot = [](const double* a, std::span<const double> x) {
+    if (x.empty()) return 0.0;
+    const auto n = static_cast<Eigen::Index>(x.size());
+    return Eigen::Map<const Eigen::VectorXd>(a, n).dot(
+        Eigen::Map<const Eigen::VectorXd>(x.data(), n));
+  };
+  return dot(w, runs.older) + dot(w + runs.older.size(), runs.newer);
 }
 
 }  // namespace canalid::core

@@ -27,6 +27,9 @@ class OnlineGlRegressor final {
  private:
   double alpha_;
   std::vector<double> weights_;
+  // w_L, ..., w_1: the weights in the order of the history's storage, oldest first (Sum's dot
+  // products run over both in the same direction, so Eigen vectorises them).
+  std::vector<double> reversed_;
 };
 
 }  // namespace canalid::core

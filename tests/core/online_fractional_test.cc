@@ -70,6 +70,25 @@ TEST(OnlineGlRegressor, WeightsAreSignedBinomials) {
   EXPECT_THROW(OnlineGlRegressor(2.5, 10), std::invalid_argument);
 }
 
+// Sum against the sum written out (lag by lag, newest first) while the history fills and wraps:
+// equal to rounding (Sum adds in another order, in vector lanes).
+TEST(OnlineGlRegressor, SumEqualsTheWrittenOutSumAtEveryFillAndWrap) {
+  constexpr int kTerms = 37;
+  const std::vector<double> w = Binomial(0.63, kTerms);
+  OnlineGlRegressor gl(0.63, kTerms);
+  RingBuffer<double> history(kTerms + 5);
+  testdata::TestRandom rnd(5);
+  for (int k = 0; k < 200; ++k) {
+    double want = 0.0, scale = 0.0;
+    for (int j = 1; j <= std::min(kTerms, history.size()); ++j) {
+      want += w[static_cast<std::size_t>(j)] * history[j - 1];
+      scale += std::abs(w[static_cast<std::size_t>(j)] * history[j - 1]);
+    }
+    ASSERT_NEAR(gl.Sum(history), want, 1e-14 * scale + 1e-300) << "k = " << k;
+    history.Push(1.0 + rnd.Normal());
+  }
+}
+
 // With lambda = 1 the candidate at the true alpha equals batch QR on the same GL regressors
 // (1e-6), the bank selects the true alpha 0.7, and K, T come back within 1 % (noise 0.005 on an
 // output of amplitude ~2).
