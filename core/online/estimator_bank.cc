@@ -1,7 +1,6 @@
 #include "core/online/estimator_bank.h"
 
 #include <cmath>
-#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -40,11 +39,6 @@ void BankSelector::Reset() {
   challenger_ = -1;
   challenger_count_ = 0;
   switches_ = 0;
-}
-
-void BankSelector::SetLoss(int i, double loss) {
-  loss_[static_cast<std::size_t>(i)] =
-      std::isfinite(loss) ? loss : std::numeric_limits<double>::infinity();
 }
 
 void BankSelector::Record(int i, double prediction_error) {

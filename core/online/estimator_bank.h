@@ -1,5 +1,7 @@
 #pragma once
+#include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace canalid::core {
@@ -55,7 +57,10 @@ class BankSelector final {
   void Record(int i, double prediction_error);
   /// kResidual: candidate i's loss after the current sample (non-finite: the candidate is not
   /// chosen until its loss is finite again; while no loss is finite the choice stays as it was).
-  void SetLoss(int i, double loss);
+  void SetLoss(int i, double loss) {
+    loss_[static_cast<std::size_t>(i)] =
+        std::isfinite(loss) ? loss : std::numeric_limits<double>::infinity();
+  }
   /// Closes the sample: updates the choice.  Returns the selected index (-1 during the warm-up).
   int Commit();
 
