@@ -2,7 +2,7 @@
 
 #include "core/system/errno_text.h"
 
-#include <array>
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <sstream>
@@ -45,8 +45,8 @@ const char* LogEndName(LogEnd end) {
 LogReader::LogReader(const std::string& path) : path_(path) {
   file_ = std::fopen(path.c_str(), "rb");
   if (file_ == nullptr) throw std::runtime_error(path + ": cannot open: " + core::ErrnoText(errno));
-  // A large stdio buffer: events are small and read in a few fread calls each.
-  std::setvbuf(file_, nullptr, _IOFBF, 1 << 20);
+  // Read in chunks into buffer_: stdio's own buffer would be one more copy.
+  std::setvbuf(file_, nullptr, _IONBF, 0);
   if (std::fseek(file_, 0, SEEK_END) == 0) {
     const long size = std::ftell(file_);
     size_ = size > 0 ? static_cast<std::uint64_t>(size) : 0;
@@ -64,33 +64,51 @@ bool LogReader::Fail(LogEnd end, std::string problem) {
   return false;
 }
 
+std::size_t LogReader::Available(std::size_t count) {
+  if (buffered_ - next_ >= count) return count;
+  // Keep the unread bytes, at the front; room for the event and at least one more chunk.
+  const std::size_t kept = buffered_ - next_;
+  std::memmove(buffer_.data(), buffer_.data() + next_, kept);
+  next_ = 0;
+  buffered_ = kept;
+  const std::size_t room = std::max(count, kChunkBytes);
+  if (buffer_.size() < room) buffer_.resize(room);
+  while (buffered_ < count) {
+    const std::size_t got =
+        std::fread(buffer_.data() + buffered_, 1, buffer_.size() - buffered_, file_);
+    buffered_ += got;
+    if (got == 0) break;  // the end of the file or an error
+  }
+  return std::min(count, buffered_);
+}
+
 bool LogReader::Next(LogEvent* event) {
   if (end_ != LogEnd::kReading) return false;
   const std::uint64_t start = position_;
   // Built only for a message: Next() runs once per event and does not allocate.
   auto at = [start] { return "byte " + std::to_string(start) + ": "; };
-  std::array<std::uint8_t, kHeaderBytes> header{};
-  const std::size_t got = std::fread(header.data(), 1, header.size(), file_);
+  const std::size_t got = Available(kHeaderBytes);
+  const std::uint8_t* header = buffer_.data() + next_;
   if (got == 0 && std::feof(file_)) {
     end_ = LogEnd::kClean;
     return false;
   }
   if (got >= 4) {
-    const auto sync = static_cast<std::uint32_t>(BigEndian(header.data(), 4));
+    const auto sync = static_cast<std::uint32_t>(BigEndian(header, 4));
     if (sync != kSyncWord) {
       return Fail(LogEnd::kCorrupt, at() + "not an LCM event (sync word " + Hex(sync) +
                                         ", expected " + Hex(kSyncWord) + ")");
     }
   }
-  if (got < header.size()) {
+  if (got < kHeaderBytes) {
     return Fail(LogEnd::kTruncated, at() + "the log ends inside an event header (" +
                                         std::to_string(got) + " of " +
-                                        std::to_string(header.size()) + " bytes)");
+                                        std::to_string(kHeaderBytes) + " bytes)");
   }
-  const auto event_number = static_cast<std::int64_t>(BigEndian(header.data() + 4, 8));
-  const auto utime = static_cast<std::int64_t>(BigEndian(header.data() + 12, 8));
-  const auto channel_length = static_cast<std::int32_t>(BigEndian(header.data() + 20, 4));
-  const auto data_length = static_cast<std::int32_t>(BigEndian(header.data() + 24, 4));
+  const auto event_number = static_cast<std::int64_t>(BigEndian(header + 4, 8));
+  const auto utime = static_cast<std::int64_t>(BigEndian(header + 12, 8));
+  const auto channel_length = static_cast<std::int32_t>(BigEndian(header + 20, 4));
+  const auto data_length = static_cast<std::int32_t>(BigEndian(header + 24, 4));
   if (channel_length <= 0 || channel_length > kMaxChannelLength) {
     return Fail(LogEnd::kCorrupt, at() + "event " + std::to_string(event_number) +
                                       ": impossible channel length " +
@@ -103,24 +121,26 @@ bool LogReader::Next(LogEvent* event) {
   }
   const std::uint64_t body =
       static_cast<std::uint64_t>(channel_length) + static_cast<std::uint64_t>(data_length);
-  if (start + header.size() + body > size_) {
+  if (start + kHeaderBytes + body > size_) {
     return Fail(LogEnd::kTruncated, at() + "event " + std::to_string(event_number) + " needs " +
-                                        std::to_string(header.size() + body) +
+                                        std::to_string(kHeaderBytes + body) +
                                         " bytes, the log ends at byte " + std::to_string(size_));
   }
-  channel_.resize(static_cast<std::size_t>(channel_length));
-  data_.resize(static_cast<std::size_t>(data_length));
-  if (std::fread(channel_.data(), 1, channel_.size(), file_) != channel_.size() ||
-      std::fread(data_.data(), 1, data_.size(), file_) != data_.size()) {
+  const std::size_t whole = kHeaderBytes + static_cast<std::size_t>(body);
+  if (Available(whole) < whole) {
     return Fail(LogEnd::kTruncated, at() + "event " + std::to_string(event_number) +
                                         ": read failed: " + core::ErrnoText(errno));
   }
-  position_ = start + header.size() + body;
+  const std::uint8_t* bytes = buffer_.data() + next_ + kHeaderBytes;  // Available may move them
+  next_ += whole;
+  position_ = start + whole;
   event->event_number = event_number;
   event->utime = utime;
   event->offset = start;
-  event->channel = channel_;
-  event->data = std::span<const std::uint8_t>(data_.data(), data_.size());
+  event->channel = std::string_view(reinterpret_cast<const char*>(bytes),
+                                    static_cast<std::size_t>(channel_length));
+  event->data =
+      std::span<const std::uint8_t>(bytes + channel_length, static_cast<std::size_t>(data_length));
   return true;
 }
 

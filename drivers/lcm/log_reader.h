@@ -28,8 +28,9 @@ enum class LogEnd {
 /// Reads an LCM event log (the format lcm-logger and LCM's file:// provider write: per event the
 /// big-endian sync word 0xEDA1DA01, int64 event number, int64 timestamp, int32 channel length,
 /// int32 data length, then the channel and the data) in order, losslessly, with the byte offset
-/// of every event, and stops at the first damage, saying where and what.  Buffers are reused:
-/// reading does not allocate once the largest event has been seen.
+/// of every event, and stops at the first damage, saying where and what.  The file is read in
+/// chunks of kChunkBytes into one buffer and events are returned in place: reading does not
+/// allocate once the largest event has been seen.
 class LogReader final {
  public:
   /// @throws std::runtime_error naming the path when it cannot be opened.
@@ -51,9 +52,13 @@ class LogReader final {
 
   static constexpr std::uint32_t kSyncWord = 0xEDA1DA01U;
   static constexpr std::int32_t kMaxChannelLength = 255;
+  static constexpr std::size_t kChunkBytes = std::size_t{1} << 20;
 
  private:
   bool Fail(LogEnd end, std::string problem);
+  /// Makes `count` bytes from the next unread one available in buffer_ (reading more of the
+  /// file); returns how many are (fewer at the end of the file or on a read error).
+  std::size_t Available(std::size_t count);
 
   std::string path_;
   std::FILE* file_ = nullptr;
@@ -61,8 +66,9 @@ class LogReader final {
   std::uint64_t position_ = 0;
   LogEnd end_ = LogEnd::kReading;
   std::string problem_;
-  std::string channel_;
-  std::vector<std::uint8_t> data_;
+  std::vector<std::uint8_t> buffer_;
+  std::size_t next_ = 0;      // the next unread byte in buffer_
+  std::size_t buffered_ = 0;  // bytes of buffer_ read from the file
 };
 
 const char* LogEndName(LogEnd end);

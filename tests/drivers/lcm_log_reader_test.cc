@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
 
+#include <algorithm>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -109,6 +110,49 @@ TEST(LcmLogReader, ReadsWhatLcmWroteWithOffsets) {
   EXPECT_EQ(reader.end(), LogEnd::kClean);
   EXPECT_EQ(reader.problem(), "");
   EXPECT_EQ(reader.position(), fs::file_size(path));
+}
+
+// The reader takes the file in chunks of kChunkBytes: events that straddle a chunk's end, and
+// one larger than a chunk, come back whole, and then a cut inside the large one is found.
+TEST(LcmLogReader, EventsAcrossChunksAndLargerThanAChunkComeBackWhole) {
+  const fs::path path = TestPath("chunks.lcmlog");
+  std::vector<Written> events;
+  std::uint64_t bytes = 0;
+  for (std::size_t i = 0; bytes < 6 * LogReader::kChunkBytes; ++i) {
+    // Sizes that do not divide the chunk: boundaries fall inside headers, channels and data.
+    std::vector<std::uint8_t> data(static_cast<std::size_t>(997 + 13 * (i % 37)));
+    for (std::size_t j = 0; j < data.size(); ++j) data[j] = static_cast<std::uint8_t>(i + j);
+    if (i == 700) data.assign(LogReader::kChunkBytes * 5 / 2, static_cast<std::uint8_t>(7));
+    events.push_back(
+        {"CHANNEL_" + std::to_string(i % 11), std::move(data), static_cast<std::int64_t>(i)});
+    bytes += 28 + events.back().channel.size() + events.back().data.size();
+  }
+  WriteWithLcm(path, events);
+  {
+    LogReader reader(path.string());
+    LogEvent e;
+    for (std::size_t i = 0; i < events.size(); ++i) {
+      ASSERT_TRUE(reader.Next(&e)) << i << ": " << reader.problem();
+      ASSERT_EQ(e.offset, events[i].offset) << i;
+      ASSERT_EQ(std::string(e.channel), events[i].channel) << i;
+      ASSERT_TRUE(
+          std::equal(e.data.begin(), e.data.end(), events[i].data.begin(), events[i].data.end()))
+          << i;
+    }
+    EXPECT_FALSE(reader.Next(&e));
+    EXPECT_EQ(reader.end(), LogEnd::kClean);
+    EXPECT_EQ(reader.position(), bytes);
+  }
+  // Cut inside the large event's data: the 700 before it, then truncation at its offset.
+  std::vector<std::uint8_t> all = ReadBytes(path);
+  all.resize(static_cast<std::size_t>(events[700].offset) + 28 + 4000);
+  WriteBytes(path, all);
+  LogReader reader(path.string());
+  EXPECT_EQ(ReadAll(reader), 700U);
+  EXPECT_EQ(reader.end(), LogEnd::kTruncated);
+  EXPECT_NE(reader.problem().find("byte " + std::to_string(events[700].offset) + ": event 700"),
+            std::string::npos)
+      << reader.problem();
 }
 
 TEST(LcmLogReader, EmptyFileIsACleanEmptyLog) {
