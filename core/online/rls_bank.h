@@ -97,8 +97,11 @@ class RlsBank final {
   static constexpr std::size_t kN = N;  // array extents are unsigned
   static constexpr std::size_t kLanes = kBlock;
   using Field = double[kLanes];  // one number of each lane of a block
+  static constexpr std::size_t kUpper = kN > 1 ? kN*(kN - 1) / 2 : 1;
+  /// Where u_ij, i < j, is kept: column by column.
+  static constexpr std::size_t Upper(std::size_t i, std::size_t j) { return j * (j - 1) / 2 + i; }
   struct alignas(kBlock * sizeof(double)) Block {
-    Field u[kN][kN];  // unit upper triangular U (the diagonal stays 1)
+    Field u[kUpper];  // U's strictly upper triangle, u_ij at Upper(i, j) (U's diagonal is 1)
     Field d[kN];
     Field theta[kN];
     Field ssr;
@@ -221,7 +224,9 @@ void RlsBank<N>::Store(int lane, const Rls<N>& from) {
   const auto l = static_cast<std::size_t>(lane % kBlock);
   for (std::size_t i = 0; i < kN; ++i) {
     const auto ii = static_cast<Eigen::Index>(i);
-    for (std::size_t j = 0; j < kN; ++j) s.u[i][j][l] = from.u_(ii, static_cast<Eigen::Index>(j));
+    for (std::size_t j = i + 1; j < kN; ++j) {
+      s.u[Upper(i, j)][l] = from.u_(ii, static_cast<Eigen::Index>(j));
+    }
     s.d[i][l] = from.d_(ii);
     s.theta[i][l] = from.theta_(ii);
   }
@@ -251,7 +256,10 @@ void RlsBank<N>::Load(int lane, Rls<N>& into) const {
   const auto l = static_cast<std::size_t>(lane % kBlock);
   for (std::size_t i = 0; i < kN; ++i) {
     const auto ii = static_cast<Eigen::Index>(i);
-    for (std::size_t j = 0; j < kN; ++j) into.u_(ii, static_cast<Eigen::Index>(j)) = s.u[i][j][l];
+    for (std::size_t j = 0; j < kN; ++j) {
+      const auto jj = static_cast<Eigen::Index>(j);
+      into.u_(ii, jj) = j > i ? s.u[Upper(i, j)][l] : j == i ? 1.0 : 0.0;
+    }
     into.d_(ii) = s.d[i][l];
     into.theta_(ii) = s.theta[i][l];
   }
@@ -322,8 +330,11 @@ double RlsBank<N>::CovarianceDiagonal(int lane, int i) const {
   if (!soa_) return scalar_[Index(lane)].CovarianceDiagonal(i);
   const Block& s = blocks_[Index(lane / kBlock)];
   const std::size_t l = Index(lane % kBlock), ii = Index(i);
-  double pii = 0.0;  // Rls::CovarianceDiagonal's sum, in its order
-  for (std::size_t j = ii; j < kN; ++j) pii += s.u[ii][j][l] * s.u[ii][j][l] * s.d[j][l];
+  double pii = 0.0;               // Rls::CovarianceDiagonal's sum, in its order
+  pii += 1.0 * 1.0 * s.d[ii][l];  // u_ii = 1
+  for (std::size_t j = ii + 1; j < kN; ++j) {
+    pii += s.u[Upper(ii, j)][l] * s.u[Upper(ii, j)][l] * s.d[j][l];
+  }
   return pii;
 }
 
@@ -411,7 +422,7 @@ inline void RlsBank<N>::UpdateLanes(Block& s, std::size_t at, int first_lane, do
   for (std::size_t j = 0; j < kN; ++j) {
     Lanes fj = phi[j];
 #pragma GCC unroll 16
-    for (std::size_t i = 0; i < j; ++i) fj += v(s.u[i][j]) * phi[i];
+    for (std::size_t i = 0; i < j; ++i) fj += v(s.u[Upper(i, j)]) * phi[i];
     f[j] = fj;
     g[j] = v(s.d[j]) * fj;
     r += fj * g[j];
@@ -454,7 +465,7 @@ inline void RlsBank<N>::UpdateLanes(Block& s, std::size_t at, int first_lane, do
     const Lanes pj = -f[j] * inv_prev;
 #pragma GCC unroll 16
     for (std::size_t i = 0; i < j; ++i) {
-      const Lanes uij = v(s.u[i][j]);
+      const Lanes uij = v(s.u[Upper(i, j)]);
       nu[i][j] = uij + k[i] * pj;
       k[i] += uij * g[j];
     }
@@ -470,7 +481,7 @@ inline void RlsBank<N>::UpdateLanes(Block& s, std::size_t at, int first_lane, do
   for (std::size_t j = 0; j < kN; ++j) {
     Assign(factors, divide ? nd[j] / (zero + lambda) : nd[j], v(s.d[j]));
 #pragma GCC unroll 16
-    for (std::size_t i = 0; i < j; ++i) Assign(factors, nu[i][j], v(s.u[i][j]));
+    for (std::size_t i = 0; i < j; ++i) Assign(factors, nu[i][j], v(s.u[Upper(i, j)]));
   }
   const Lanes nf = (zero + noise_forgetting_);
   Assign(valid, nf * v(s.ssr) + e * e / scale, v(s.ssr));
@@ -525,7 +536,7 @@ void RlsBank<N>::BoundLanes(Block& s, int first_lane) {
     double t = 0.0;  // Rls::Trace's sum, in its order
     for (std::size_t j = 0; j < kN; ++j) {
       double col = 1.0;
-      for (std::size_t i = 0; i < j; ++i) col += s.u[i][j][l] * s.u[i][j][l];
+      for (std::size_t i = 0; i < j; ++i) col += s.u[Upper(i, j)][l] * s.u[Upper(i, j)][l];
       t += s.d[j][l] * col;
     }
     double factor = 1.0;
