@@ -37,7 +37,7 @@ class RingBuffer final {
   }
 
   /// The newest `count` values, oldest first, as at most two runs of storage: `older` then
-  /// `newer` (empty when the values do not wrap).  @pre 0 <= count <= size().
+  /// `newer` (`older` is empty when the values do not wrap).  @pre 0 <= count <= size().
   struct Runs {
     std::span<const T> older;
     std::span<const T> newer;

@@ -156,6 +156,13 @@ class RlsBank final {
     target = __builtin_bit_cast(
         L, (__builtin_bit_cast(M, a) & m) | (__builtin_bit_cast(M, target) & ~m));
   }
+  /// counter += 1 in the lanes where the mask is set.
+  template <class M, class L>
+  [[gnu::always_inline]] static void CountWhere(const M& mask, L& counter) {
+    L add{};
+    Assign(mask, add + 1.0, add);
+    counter += add;
+  }
   template <int W>
   [[gnu::always_inline]] void UpdateLanes(Block& s, std::size_t at, int first_lane, double y);
   void UpdateBlockBaseline(Block& s, int first_lane, double y);
@@ -382,8 +389,10 @@ void RlsBank<N>::UpdateBlockBaseline(Block& s, int first_lane, double y) {
   UpdateLanes<2>(s, 2, first_lane + 2, y);
 }
 
-// AVX2 code in a header: this function alone is compiled for AVX2 (UpdateLanes is inlined into
-// it) and runs only where __builtin_cpu_supports("avx2") said yes; it calls nothing else.
+// AVX2 code in a header: this function alone is compiled for AVX2 (UpdateLanes and the helpers
+// with vector operands are always inlined into it) and runs only where
+// __builtin_cpu_supports("avx2") said yes.  What it may call out of line (Eigen's accessors) is
+// compiled for the baseline, as everywhere else.
 template <int N>
 void RlsBank<N>::UpdateBlockAvx2(Block& s, int first_lane, double y) {
   UpdateLanes<4>(s, 0, first_lane, y);
@@ -396,7 +405,6 @@ inline void RlsBank<N>::UpdateLanes(Block& s, std::size_t at, int first_lane, do
   // operation for operation; its branches are masks.
   using Lanes = typename LaneVectors<W>::Lanes;
   using Mask = typename LaneVectors<W>::Mask;
-  const auto v = [at](Field& field) -> Lanes& { return At<Lanes>(field, at); };
   const double lambda = lambda_;
   const bool exponential = options_.method == RlsMethod::kUdExponential;
   // (A vector plus a double adds the double to every lane: zero + x is x in every lane.)
@@ -421,16 +429,16 @@ inline void RlsBank<N>::UpdateLanes(Block& s, std::size_t at, int first_lane, do
     norm2 += phi[i] * phi[i];
   }
 #pragma GCC unroll 16
-  for (std::size_t i = 0; i < kN; ++i) prediction += phi[i] * v(s.theta[i]);
+  for (std::size_t i = 0; i < kN; ++i) prediction += phi[i] * At<Lanes>(s.theta[i], at);
   const Lanes e = (zero + y) - prediction;
   Lanes f[kN], g[kN];
 #pragma GCC unroll 16
   for (std::size_t j = 0; j < kN; ++j) {
     Lanes fj = phi[j];
 #pragma GCC unroll 16
-    for (std::size_t i = 0; i < j; ++i) fj += v(s.u[Upper(i, j)]) * phi[i];
+    for (std::size_t i = 0; i < j; ++i) fj += At<Lanes>(s.u[Upper(i, j)], at) * phi[i];
     f[j] = fj;
-    g[j] = v(s.d[j]) * fj;
+    g[j] = At<Lanes>(s.d[j], at) * fj;
     r += fj * g[j];
   }
   valid &= (e <= largest) & (e >= -largest) & (r >= zero) & (r <= largest);
@@ -467,11 +475,11 @@ inline void RlsBank<N>::UpdateLanes(Block& s, std::size_t at, int first_lane, do
   Lanes k[kN], nu[kN][kN], nd[kN];
 #pragma GCC unroll 16
   for (std::size_t j = 0; j < kN; ++j) {
-    nd[j] = v(s.d[j]) * (alpha_prev * inv_alpha[j]);
+    nd[j] = At<Lanes>(s.d[j], at) * (alpha_prev * inv_alpha[j]);
     const Lanes pj = -f[j] * inv_prev;
 #pragma GCC unroll 16
     for (std::size_t i = 0; i < j; ++i) {
-      const Lanes uij = v(s.u[Upper(i, j)]);
+      const Lanes uij = At<Lanes>(s.u[Upper(i, j)], at);
       nu[i][j] = uij + k[i] * pj;
       k[i] += uij * g[j];
     }
@@ -481,41 +489,38 @@ inline void RlsBank<N>::UpdateLanes(Block& s, std::size_t at, int first_lane, do
   }
   // theta, U and D of the lanes that update; the noise sums and bookkeeping of the valid ones.
 #pragma GCC unroll 16
-  for (std::size_t i = 0; i < kN; ++i) Assign(apply, v(s.theta[i]) + k[i] * step, v(s.theta[i]));
+  for (std::size_t i = 0; i < kN; ++i)
+    Assign(apply, At<Lanes>(s.theta[i], at) + k[i] * step, At<Lanes>(s.theta[i], at));
   const bool divide = exponential && lambda != 1.0;
 #pragma GCC unroll 16
   for (std::size_t j = 0; j < kN; ++j) {
-    Assign(factors, divide ? nd[j] / (zero + lambda) : nd[j], v(s.d[j]));
+    Assign(factors, divide ? nd[j] / (zero + lambda) : nd[j], At<Lanes>(s.d[j], at));
 #pragma GCC unroll 16
-    for (std::size_t i = 0; i < j; ++i) Assign(factors, nu[i][j], v(s.u[Upper(i, j)]));
+    for (std::size_t i = 0; i < j; ++i) Assign(factors, nu[i][j], At<Lanes>(s.u[Upper(i, j)], at));
   }
   const Lanes nf = (zero + noise_forgetting_);
-  Assign(valid, nf * v(s.ssr) + e * e / scale, v(s.ssr));
-  Assign(valid, nf * v(s.weight) + one, v(s.weight));
+  Assign(valid, nf * At<Lanes>(s.ssr, at) + e * e / scale, At<Lanes>(s.ssr, at));
+  Assign(valid, nf * At<Lanes>(s.weight, at) + one, At<Lanes>(s.weight, at));
   // Counts: + 1 where the mask is set.
-  const auto count = [&](const Mask& mask, Lanes& counter) {
-    Lanes add = zero;
-    Assign(mask, one, add);
-    counter += add;
-  };
-  count(valid, v(s.accepted));
-  count(~valid, v(s.rejected_invalid));
-  count(apply, v(s.updates));
-  count(frozen, v(s.frozen_count));
-  Assign(valid, e, v(s.last_error));
-  Assign(valid, r, v(s.excitation));
-  Assign(valid, norm2, v(s.norm2));
+  const Mask invalid = ~valid;
+  CountWhere(valid, At<Lanes>(s.accepted, at));
+  CountWhere(invalid, At<Lanes>(s.rejected_invalid, at));
+  CountWhere(apply, At<Lanes>(s.updates, at));
+  CountWhere(frozen, At<Lanes>(s.frozen_count, at));
+  Assign(valid, e, At<Lanes>(s.last_error, at));
+  Assign(valid, r, At<Lanes>(s.excitation, at));
+  Assign(valid, norm2, At<Lanes>(s.norm2, at));
   Lanes froze = zero;
   Assign(frozen, one, froze);
-  Assign(valid, froze, v(s.frozen));
+  Assign(valid, froze, At<Lanes>(s.frozen, at));
   // apply and frozen are disjoint.
   Lanes outcome = zero + static_cast<double>(RlsOutcome::kRejectedInvalid);
   Assign(frozen, zero + static_cast<double>(RlsOutcome::kFrozen), outcome);
   Assign(apply, zero + static_cast<double>(RlsOutcome::kUpdated), outcome);
-  v(s.outcome) = outcome;
+  At<Lanes>(s.outcome, at) = outcome;
   Lanes result_error = zero + std::numeric_limits<double>::quiet_NaN();
   Assign(valid, e, result_error);
-  v(s.result_error) = result_error;
+  At<Lanes>(s.result_error, at) = result_error;
 }
 
 template <int N>

@@ -68,7 +68,7 @@ std::size_t LogReader::Available(std::size_t count) {
   if (buffered_ - next_ >= count) return count;
   // Keep the unread bytes, at the front; room for the event and at least one more chunk.
   const std::size_t kept = buffered_ - next_;
-  std::memmove(buffer_.data(), buffer_.data() + next_, kept);
+  if (kept > 0) std::memmove(buffer_.data(), buffer_.data() + next_, kept);
   next_ = 0;
   buffered_ = kept;
   const std::size_t room = std::max(count, kChunkBytes);
