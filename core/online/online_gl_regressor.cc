@@ -19,13 +19,13 @@ OnlineGlRegressor::OnlineGlRegressor(double alpha, int memory) : alpha_(alpha) {
     throw std::invalid_argument("OnlineGlRegressor: memory = " + std::to_string(memory) +
                                 " is out of range (allowed: >= 1)");
   }
-  weights_.resize(static_cast<std::size_t>(memory) + 1);
-  weights_[0] = 1.0;
+  // w_j = w_{j-1} (1 - (alpha + 1) / j) from w_0 = 1, stored from w_L down to w_1.
+  reversed_.resize(static_cast<std::size_t>(memory));
+  double w = 1.0;
   for (int j = 1; j <= memory; ++j) {
-    const auto uj = static_cast<std::size_t>(j);
-    weights_[uj] = weights_[uj - 1] * (1.0 - (alpha + 1.0) / j);
+    w *= 1.0 - (alpha + 1.0) / j;
+    reversed_[static_cast<std::size_t>(memory - j)] = w;
   }
-  reversed_.assign(weights_.rbegin(), weights_.rend() - 1);
 }
 
 double OnlineGlRegressor::Sum(const RingBuffer<double>& history) const {

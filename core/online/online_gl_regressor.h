@@ -20,15 +20,17 @@ class OnlineGlRegressor final {
   double Sum(const RingBuffer<double>& history) const;
 
   double alpha() const { return alpha_; }
-  int memory() const { return static_cast<int>(weights_.size()) - 1; }
+  int memory() const { return static_cast<int>(reversed_.size()); }
   /// w_j, 0 <= j <= L.
-  double weight(int j) const { return weights_[static_cast<std::size_t>(j)]; }
+  double weight(int j) const {
+    return j == 0 ? 1.0 : reversed_[reversed_.size() - static_cast<std::size_t>(j)];
+  }
 
  private:
   double alpha_;
-  std::vector<double> weights_;
-  // w_L, ..., w_1: the weights in the order of the history's storage, oldest first (Sum's dot
-  // products run over both in the same direction, so Eigen vectorises them).
+  // w_L, ..., w_1 (w_0 = 1 is not kept): the weights in the order of the history's storage,
+  // oldest first (Sum's dot products run over both in the same direction, so Eigen vectorises
+  // them).
   std::vector<double> reversed_;
 };
 
