@@ -195,13 +195,18 @@ void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code)
       "Online estimation (--model id|arx|frac-foptd|lpv|idz|frac-ss --online)");
   online->add_flag("--online", options.online,
                    "Run the recursive estimator sample by sample; print its final snapshot");
-  online->add_option("--forgetting", options.forgetting, "Forgetting factor lambda, 0 < L <= 1")
-      ->capture_default_str();
-  online
-      ->add_option("--method", options.method,
-                   "Update law: ud_directional, ud_exponential, exponential, directional, "
-                   "constant_trace, stabilised, kalman, nlms")
-      ->capture_default_str();
+  auto* forgetting =
+      online->add_option("--forgetting", options.forgetting, "Forgetting factor lambda, 0 < L <= 1")
+          ->capture_default_str();
+  auto* initial_covariance =
+      online->add_option("--initial-covariance", options.initial_covariance,
+                         "P0 = p0 I, 0 < p0 <= 1e20 (default as the daemon's initial_covariance: "
+                         "1e10, frac-foptd 1e6)");
+  auto* method = online
+                     ->add_option("--method", options.method,
+                                  "Update law: ud_directional, ud_exponential, exponential, "
+                                  "directional, constant_trace, stabilised, kalman, nlms")
+                     ->capture_default_str();
   online->add_option("--trace", options.trace,
                      "Write the parameter and health trajectory to this CSV (time_s first)");
   auto* config = online->add_option(
@@ -211,6 +216,8 @@ void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code)
   auto* reach = online->add_option("--reach", options.reach, "--config: the reach");
   config->needs(reach);
   reach->needs(config);
+  // The reach's settings come from the configuration; a flag beside it would do nothing.
+  for (CLI::Option* setting : {forgetting, initial_covariance, method}) config->excludes(setting);
   cmd->add_flag("--json", options.json, "--compare: print JSON (summary and per-file) instead");
   cmd->callback([&options, &exit_code] { exit_code = RunIdentify(options); });
 }

@@ -1,6 +1,7 @@
 #pragma once
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -54,6 +55,7 @@ struct IdentifyOptions {
   // --online
   bool online = false;
   double forgetting = 1.0;
+  std::optional<double> initial_covariance;  ///< P0 = p0 I; none: the kind's default
   std::string method = "ud_directional";
   std::string trace;   ///< --trace OUT.csv
   std::string config;  ///< --config canalidd.toml: the reach's online settings and columns

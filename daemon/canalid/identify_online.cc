@@ -168,7 +168,9 @@ nlohmann::json OnlineArx(const IdentifyOptions& options, const drivers::CsvTable
     throw InputError(table.source() + ": " + std::to_string(n - first) + " equations for " +
                      std::to_string(d) + " ARX parameters");
   }
-  core::Rls<Eigen::Dynamic> rls(core::RlsOptionsFor(OnlineSettingsFromFlags(options, table), d), d);
+  core::Rls<Eigen::Dynamic> rls(
+      core::RlsOptionsFor(OnlineSettingsFromFlags(options, table), core::OnlineModelKind::kArx, d),
+      d);
   std::vector<std::string> names;
   for (int j = 1; j <= orders.na; ++j) names.push_back("a" + std::to_string(j));
   for (std::size_t i = 0; i < inputs.size(); ++i) {

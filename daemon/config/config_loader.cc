@@ -385,6 +385,7 @@ void ReadReach(Reader& r, const toml::table& t, const std::string& at, ReachConf
           "min_delay_s",
           "max_delay_s",
           "forgetting",
+          "initial_covariance",
           "rls_method",
           "closed_loop",
           "id_wave_front",
@@ -420,6 +421,7 @@ void ReadReach(Reader& r, const toml::table& t, const std::string& at, ReachConf
   reach.max_delay_s = 2.0 * reach.expected_delay_s;
   r.Double(t, at, "max_delay_s", reach.max_delay_s);
   r.Double(t, at, "forgetting", reach.forgetting);
+  r.OptionalDouble(t, at, "initial_covariance", reach.initial_covariance);
   r.Enum(t, at, "rls_method", reach.rls_method);
   r.Enum(t, at, "closed_loop", reach.closed_loop);
   r.OptionalBool(t, at, "id_wave_front", reach.id_wave_front);

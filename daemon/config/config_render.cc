@@ -154,6 +154,7 @@ std::string RenderDaemonConfig(const config::DaemonConfig& c) {
     w.Key("min_delay_s", r.min_delay_s);
     w.Key("max_delay_s", r.max_delay_s);
     w.Key("forgetting", r.forgetting);
+    if (r.initial_covariance) w.Key("initial_covariance", *r.initial_covariance);
     w.Key("rls_method", config::EnumName(r.rls_method));
     w.Key("closed_loop", config::EnumName(r.closed_loop));
     if (r.id_wave_front) w.Bool("id_wave_front", *r.id_wave_front);

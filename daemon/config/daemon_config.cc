@@ -439,6 +439,9 @@ void ValidateReaches(const DaemonConfig& c, Collector& out) {
     ValidateReachModels(c, r, level, at, out);
     out.Range(at + "model_publish_period_s", r.model_publish_period_s, 0.0, 1e6);
     out.Range(at + "forgetting", r.forgetting, 0.0, 1.0, true);
+    if (r.initial_covariance) {
+      out.Range(at + "initial_covariance", *r.initial_covariance, 0.0, 1e20, true);
+    }
     out.Range(at + "min_delay_s", r.min_delay_s, 0.0, 1e6);
     if (std::isfinite(r.min_delay_s) && r.min_delay_s >= 0.0) {
       double hi = 1e6;

@@ -93,6 +93,7 @@ core::OnlineModelSettings BuildOnlineModelSettings(const DaemonConfig& config,
   settings.sample_time_s = ReachSampleTimeS(config, reach);
   settings.rls_method = reach.rls_method;
   settings.forgetting = reach.forgetting;
+  settings.initial_covariance = reach.initial_covariance;
   settings.min_delay_s = reach.min_delay_s;
   settings.max_delay_s = reach.max_delay_s;
   settings.arx_na = reach.arx_na;

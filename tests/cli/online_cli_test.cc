@@ -163,6 +163,21 @@ TEST(OnlineCli, ArxWithForgettingOneEqualsBatchArx) {
   EXPECT_EQ(online["equations"], batch["equations"]);
 }
 
+// --initial-covariance is the prior's weight: at 1e-8 (an information of 1e8 against the data's
+// O(1e2..1e5)) the prior theta = 0 outweighs the record and the estimates stay far from the
+// batch fit that the default P0 reproduces (above).
+TEST(OnlineCli, InitialCovarianceSetsThePriorsWeight) {
+  const std::string args = "--model arx --u q_in,q_out --y level --na 2 --nb 2 --nk 11,1 --input " +
+                           Record("asce2-pool2-prbs-fixed-gate");
+  const auto batch = Identify("arx-prior-batch", args);
+  const auto tight = Identify("arx-prior-tight", args + " --online --initial-covariance 1e-8");
+  for (std::size_t j = 0; j < 2; ++j) {
+    EXPECT_GT(Rel(tight["a"][j].get<double>(), batch["a"][j].get<double>()), 0.5) << j;
+    EXPECT_LT(std::abs(tight["a"][j].get<double>()), 0.5 * std::abs(batch["a"][j].get<double>()))
+        << j;
+  }
+}
+
 std::vector<std::string> Split(const std::string& line) {
   std::vector<std::string> parts;
   std::stringstream s(line);
@@ -312,6 +327,19 @@ TEST(OnlineCli, BadOptionsExitTwoWithAClearMessage) {
                  "--forgetting 0: out of range (0 < L <= 1)");
   ExpectBadInput("forgetting-above-one", "--model id --online --forgetting 1.5" + csv,
                  "--forgetting 1.5: out of range (0 < L <= 1)");
+  ExpectBadInput("p0-zero", "--model id --online --initial-covariance 0" + csv,
+                 "--initial-covariance 0: out of range (0 < p0 <= 1e20)");
+  ExpectBadInput("p0-huge", "--model id --online --initial-covariance 1e21" + csv,
+                 "--initial-covariance 1e+21: out of range (0 < p0 <= 1e20)");
+  // With --config the reach's settings are the daemon's; a flag beside them would do nothing.
+  const std::string config =
+      " --config " + std::string(CANALID_SOURCE_DIR) + "/config/canalidd-asce2.toml --reach pool2";
+  ExpectBadInput("config-forgetting", "--model id --online --forgetting 0.99" + config + csv,
+                 "--forgetting excludes --config");
+  ExpectBadInput("config-p0", "--model id --online --initial-covariance 10" + config + csv,
+                 "--initial-covariance excludes --config");
+  ExpectBadInput("config-method", "--model id --online --method kalman" + config + csv,
+                 "--method excludes --config");
   ExpectBadInput("method", "--model arx --u q_in --y level --online --method fast" + csv,
                  "--method fast: unknown (allowed: ud_directional");
   ExpectBadInput("kind", "--model foptd --u q_in --y level --online" + csv,

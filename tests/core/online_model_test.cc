@@ -54,8 +54,10 @@ TEST(OnlineModelOptionsFor, RoundsSecondsToSamplesOnceAndNamesBadSettings) {
 
   // Constant trace needs a finite trace bound: the initial trace n p0.
   s.rls_method = RlsMethod::kConstantTrace;
-  EXPECT_DOUBLE_EQ(OnlineModelOptionsFor(OnlineModelKind::kArx, s).arx.rls.trace_max,
-                   4 * s.initial_covariance);
+  EXPECT_DOUBLE_EQ(OnlineModelOptionsFor(OnlineModelKind::kArx, s).arx.rls.trace_max, 4 * 1e10);
+  s.initial_covariance = 50.0;
+  EXPECT_DOUBLE_EQ(OnlineModelOptionsFor(OnlineModelKind::kArx, s).arx.rls.trace_max, 4 * 50.0);
+  s.initial_covariance.reset();
 
   auto message = [](OnlineModelKind kind, const OnlineModelSettings& bad) -> std::string {
     try {

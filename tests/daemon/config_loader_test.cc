@@ -436,6 +436,7 @@ TEST(ConfigLoaderTest, ExampleAndDocsDocumentEveryKey) {
   c.plcs.push_back(rtu);
   c.reaches[0].nominal_setpoint = 1.0;
   c.reaches[0].actuator_gain_m3s_per_unit = 1.0;
+  c.reaches[0].initial_covariance = 1.0;
   std::set<std::string> keys;
   std::istringstream rendered(RenderDaemonConfig(c));
   for (std::string line; std::getline(rendered, line);) {

@@ -109,10 +109,12 @@ TEST(OnlineModelsConfig, OrdersGridAndDelaysReachTheEstimators) {
   EXPECT_EQ(d[0].arx.na, 2);
   EXPECT_EQ(d[0].arx.nb, 2);
   EXPECT_EQ(d[0].arx.max_delay_samples, 20);  // 1200 s / 60 s
-  // Every kind starts from the RLS default P0 (the daemon's id bank always did).
-  EXPECT_EQ(defaults.pipeline.online_id.rls.initial_covariance,
-            core::RlsOptions{}.initial_covariance);
-  EXPECT_EQ(d[1].fractional.rls.initial_covariance, core::RlsOptions{}.initial_covariance);
+  // Without initial_covariance every kind starts from its own P0, the one `canalid identify
+  // --online` defaults to: the least-squares kinds 1e10, the output-error frac-foptd 1e6.
+  EXPECT_EQ(defaults.pipeline.online_id.rls.initial_covariance, 1e10);
+  EXPECT_EQ(d[0].arx.rls.initial_covariance, 1e10);
+  EXPECT_EQ(d[1].fractional.rls.initial_covariance, 1e6);
+  EXPECT_EQ(d[2].lpv.rls.initial_covariance, 1e10);
   EXPECT_EQ(d[1].fractional.alphas.size(), 8U);
   EXPECT_EQ(d[1].fractional.delay_samples, 10);  // expected_delay_s 600 s
   EXPECT_EQ(d[2].lpv.na, 1);
@@ -131,6 +133,26 @@ TEST(OnlineModelsConfig, OrdersGridAndDelaysReachTheEstimators) {
   EXPECT_EQ(s[2].lpv.na, 2);
   EXPECT_EQ(s[2].lpv.nb, 2);
   EXPECT_EQ(s[2].lpv.delay_samples, 0);
+}
+
+// initial_covariance: P0 of every online kind of the reach, in (0, 1e20].
+TEST(OnlineModelsConfig, InitialCovarianceReachesEveryEstimator) {
+  const core::ReachControllerOptions set = Build(
+      "online_models = [\"id\", \"arx\", \"frac-foptd\", \"lpv\", \"idz\", \"frac-ss\"]\n"
+      "lpv_scheduling = \"level_up\"\ninitial_covariance = 0.25\n");
+  EXPECT_EQ(set.pipeline.online_id.rls.initial_covariance, 0.25);
+  const auto& m = set.pipeline.process_models;
+  ASSERT_EQ(m.size(), 5U);  // every kind but id, which is online_id
+  EXPECT_EQ(m[0].arx.rls.initial_covariance, 0.25);
+  EXPECT_EQ(m[1].fractional.rls.initial_covariance, 0.25);
+  EXPECT_EQ(m[2].lpv.rls.initial_covariance, 0.25);
+  EXPECT_EQ(m[3].id.rls.initial_covariance, 0.25);
+  EXPECT_EQ(m[4].frac_ss.rls.initial_covariance, 0.25);
+  for (const char* bad : {"0.0", "-1.0", "1e21", "nan"}) {
+    EXPECT_THAT(Issues(std::string("initial_covariance = ") + bad + "\n"),
+                ::testing::Contains(HasSubstr("reach[0].initial_covariance")))
+        << bad;
+  }
 }
 
 // frac-ss: frac_ss_q sets the online model's and the batch fit's order, frac_ss_delay_s the
