@@ -77,7 +77,10 @@ std::size_t LogReader::Available(std::size_t count) {
     const std::size_t got =
         std::fread(buffer_.data() + buffered_, 1, buffer_.size() - buffered_, file_);
     buffered_ += got;
-    if (got == 0) break;  // the end of the file or an error
+    if (got == 0) {  // the end of the file or an error
+      if (std::ferror(file_) != 0) read_errno_ = errno != 0 ? errno : EIO;
+      break;
+    }
   }
   return std::min(count, buffered_);
 }
@@ -128,8 +131,13 @@ bool LogReader::Next(LogEvent* event) {
   }
   const std::size_t whole = kHeaderBytes + static_cast<std::size_t>(body);
   if (Available(whole) < whole) {
-    return Fail(LogEnd::kTruncated, at() + "event " + std::to_string(event_number) +
-                                        ": read failed: " + core::ErrnoText(errno));
+    // The file was longer when opened: it shrank since, or the read failed.
+    const std::string why =
+        read_errno_ != 0 ? "read failed: " + core::ErrnoText(read_errno_)
+                         : "no bytes after byte " + std::to_string(position_ + buffered_ - next_) +
+                               ": the file is shorter than when it was opened (" +
+                               std::to_string(size_) + " bytes)";
+    return Fail(LogEnd::kTruncated, at() + "event " + std::to_string(event_number) + ": " + why);
   }
   const std::uint8_t* bytes = buffer_.data() + next_ + kHeaderBytes;  // Available may move them
   next_ += whole;

@@ -69,6 +69,7 @@ class LogReader final {
   std::vector<std::uint8_t> buffer_;
   std::size_t next_ = 0;      // the next unread byte in buffer_
   std::size_t buffered_ = 0;  // bytes of buffer_ read from the file
+  int read_errno_ = 0;        // errno of the read that failed (0: none failed)
 };
 
 const char* LogEndName(LogEnd end);

@@ -2,6 +2,7 @@
 // then cut short or damaged byte by byte: every whole event before the damage is delivered, and
 // the message names the byte offset of the damaged event (computed here from the event sizes).
 #include <gtest/gtest.h>
+#include <cerrno>
 #include <lcm/lcm-cpp.hpp>
 
 #include <algorithm>
@@ -153,6 +154,33 @@ TEST(LcmLogReader, EventsAcrossChunksAndLargerThanAChunkComeBackWhole) {
   EXPECT_NE(reader.problem().find("byte " + std::to_string(events[700].offset) + ": event 700"),
             std::string::npos)
       << reader.problem();
+}
+
+// A log that shrinks while it is read (rotated, or cut by another process): the events read
+// stay, and the problem says the file got shorter, not an errno of an earlier call.
+TEST(LcmLogReader, AFileThatShrinksWhileReadIsNamedAsSuch) {
+  const fs::path path = TestPath("shrinks.lcmlog");
+  std::vector<Written> events;
+  for (std::size_t i = 0; i < 3; ++i) {
+    events.push_back({"CHANNEL", std::vector<std::uint8_t>(LogReader::kChunkBytes * 2 / 3, 1),
+                      static_cast<std::int64_t>(i)});
+  }
+  WriteWithLcm(path, events);
+  LogReader reader(path.string());
+  LogEvent e;
+  ASSERT_TRUE(reader.Next(&e)) << reader.problem();  // the first chunk is read
+  fs::resize_file(path, static_cast<std::uintmax_t>(events[1].offset) + 100);
+  errno = ENOENT;  // a stale errno must not become the reason
+  EXPECT_FALSE(reader.Next(&e));
+  EXPECT_EQ(reader.end(), LogEnd::kTruncated);
+  // The reader had the first chunk; the file gave nothing after it.
+  EXPECT_NE(reader.problem().find("byte " + std::to_string(events[1].offset) +
+                                  ": event 1: no bytes after byte " +
+                                  std::to_string(LogReader::kChunkBytes) +
+                                  ": the file is shorter than when it was opened"),
+            std::string::npos)
+      << reader.problem();
+  EXPECT_EQ(reader.problem().find("No such file"), std::string::npos) << reader.problem();
 }
 
 TEST(LcmLogReader, EmptyFileIsACleanEmptyLog) {
