@@ -107,13 +107,20 @@ void ExpectBatchOfTheFlume(const DaemonExperimentRun& run) {
 TEST(DaemonLabFlume, PrbsIdentifiesTheFlumeAndReplaysIt) {
   const DaemonExperimentRun run = RunFlumeExperiment("pool_prbs");
   ExpectBatchOfTheFlume(run);
-  // Not asserted: the online frac-foptd against the batch one. On an idle machine they agree
-  // (batch K 0.918, T 4.02 s, alpha 0.46; online K 0.895, T 4.00 s, alpha 0.50), but under the
-  // test suite's load the PRBS edges land at other plant times, and the batch fractional fit of
-  // this record moves (one run: alpha 0.38, K 1.09), out of the bounds. Open in #12.
   ASSERT_EQ(run.online.count("frac-foptd"), 1U);
-  EXPECT_TRUE(std::isfinite(run.online.at("frac-foptd").at("alpha")));
-  EXPECT_EQ(run.online.at("frac-foptd").at("delay_s"), 5.1);  // configured: 17 samples of 0.3 s
+  const auto& online = run.online.at("frac-foptd");
+  const nlohmann::json& b = run.batch.at("frac-foptd");
+  const double k = b.at("gain").get<double>();
+  const double t = b.at("time_constant_s").get<double>();
+  // The tolerances.  Measured (2026-11-28, five runs, three of them with the two cores
+  // oversubscribed by busy loops): batch alpha 0.456-0.460, K 0.918-0.931, T 4.02-4.07 s;
+  // online alpha 0.50, K 0.950-0.954, T 4.22-4.24 s.  (An earlier note here saw the batch fit
+  // move to alpha 0.38, K 1.09 once under load, when the daemon's P0 and this test's gap bound
+  // were as now; not seen again.)
+  EXPECT_NEAR(online.at("alpha"), b.at("alpha").get<double>(), 0.08) << b;
+  EXPECT_NEAR(online.at("gain"), k, 0.10 * k) << b;
+  EXPECT_NEAR(online.at("time_constant_s"), t, 0.20 * t) << b;
+  EXPECT_EQ(online.at("delay_s"), 5.1);  // configured: 17 samples of 0.3 s
 }
 
 TEST(DaemonLabFlume, StepOnlineFractionalModelMatchesTheBatchFit) {
