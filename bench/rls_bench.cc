@@ -231,7 +231,7 @@ void BM_FractionalBank8(benchmark::State& state) {
 }
 BENCHMARK(BM_FractionalBank8);
 
-// One sample through an ARX(2, 2) bank over 16 delays (Rls<Dynamic>, n = 4).
+// One sample through an ARX(2, 2) bank over 16 delays (ArxCandidates: RlsBank<4> lanes).
 void BM_ArxBank16(benchmark::State& state) {
   OnlineArxOptions options;
   options.min_delay_samples = 1;

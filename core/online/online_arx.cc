@@ -40,11 +40,9 @@ OnlineArxBank::OnlineArxBank(const OnlineArxOptions& options)
                 SelectorOptionsFor(options.selector, IsLeastSquaresMethod(options.rls.method))),
       u_history_(options.max_delay_samples + options.nb),
       u_bad_history_(options.max_delay_samples + options.nb),
-      y_history_(std::max(options.na, 1)),
-      phi_(Eigen::VectorXd::Zero(options.na + options.nb)) {
-  const int count = options_.max_delay_samples - options_.min_delay_samples + 1;
-  estimators_.reserve(static_cast<std::size_t>(count));
-  for (int i = 0; i < count; ++i) estimators_.emplace_back(options_.rls, n_);
+      y_history_(std::max(options.na, 1)) {
+  candidates_ = ArxCandidates::Make(options_.rls, n_,
+                                    options_.max_delay_samples - options_.min_delay_samples + 1);
   k_start_ = std::max(options_.na, options_.max_delay_samples + options_.nb - 1);
 }
 
@@ -67,24 +65,16 @@ bool OnlineArxBank::Update(double u, double y) {
   // Rows that would contain a bad value: y(k) itself or y(k-na..k-1), u(k-nk-nb+1..k-nk).
   const bool y_window_ok = k_ - last_bad_y_ > options_.na;
   if (k_ >= k_start_ && y_window_ok) {
-    for (int i = 0; i < options_.na; ++i) phi_(i) = -y_history_[i];
-    for (int c = 0; c < static_cast<int>(estimators_.size()); ++c) {
-      const int nk = options_.min_delay_samples + c;
-      // Every input of the row must be good, not only the most recent bad one outside it.
-      bool u_window_ok = true;
-      for (int j = 0; j < options_.nb; ++j) {
-        phi_(options_.na + j) = u_history_[nk + j];
-        u_window_ok = u_window_ok && u_bad_history_[nk + j] == 0;
-      }
-      if (!u_window_ok) continue;
-      Rls<Eigen::Dynamic>& rls = estimators_[static_cast<std::size_t>(c)];
-      const auto result = rls.Update(phi_, y);
-      if (selector_.criterion() == BankCriterion::kResidual) {
-        selector_.SetLoss(c, rls.residual_sum_of_squares());
-      } else {
-        selector_.Record(c, result.prediction_error);
-      }
+    for (int i = 0; i < options_.na; ++i) {
+      minus_y_lags_[static_cast<std::size_t>(i)] = -y_history_[i];
     }
+    const ArxRows rows{.na = options_.na,
+                       .nb = options_.nb,
+                       .min_delay = options_.min_delay_samples,
+                       .minus_y_lags = minus_y_lags_.data(),
+                       .u = &u_history_,
+                       .u_bad = &u_bad_history_};
+    candidates_->Update(rows, y, selector_);
     selector_.Commit();
     updated = true;
   }
@@ -107,24 +97,22 @@ ArxSnapshot OnlineArxBank::Snapshot() const {
 ArxSnapshot OnlineArxBank::CandidateSnapshot(int delay_samples) const {
   ArxSnapshot s;
   const int c = delay_samples - options_.min_delay_samples;
-  if (c < 0 || c >= static_cast<int>(estimators_.size())) return s;
-  const Rls<Eigen::Dynamic>& rls = estimators_[static_cast<std::size_t>(c)];
-  s.valid = rls.health().updates > 0;
+  if (c < 0 || c >= selector_.num_candidates()) return s;
+  ArxCandidateState state;
+  candidates_->State(c, state);
+  s.valid = state.health.updates > 0;
   s.sample = k_;
   s.delay_samples = delay_samples;
   const int na = options_.na;
   const int nb = options_.nb;
-  s.a = rls.theta().head(na);
-  s.b = rls.theta().segment(na, nb);
-  s.a_std.resize(na);
-  s.b_std.resize(nb);
-  const double s2 = rls.innovation_variance();
-  for (int i = 0; i < na; ++i) s.a_std(i) = rls.StandardDeviation(i);
-  for (int j = 0; j < nb; ++j) s.b_std(j) = rls.StandardDeviation(na + j);
-  s.prediction_error = rls.last_prediction_error();
-  s.innovation_std = std::sqrt(s2);
+  s.a = state.theta.head(na);
+  s.b = state.theta.segment(na, nb);
+  s.a_std = state.std_dev.head(na);
+  s.b_std = state.std_dev.segment(na, nb);
+  s.prediction_error = state.last_prediction_error;
+  s.innovation_std = std::sqrt(state.innovation_variance);
   s.loss = selector_.loss(c);
-  s.health = rls.health();
+  s.health = state.health;
   return s;
 }
 

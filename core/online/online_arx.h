@@ -1,18 +1,15 @@
 #pragma once
+#include <array>
 #include <cstdint>
+#include <memory>
 #include <string_view>
-#include <vector>
 
 #include "core/numerics/ring_buffer.h"
+#include "core/online/arx_candidates.h"
 #include "core/online/estimator_bank.h"
 #include "core/online/rls.h"
 
 namespace canalid::core {
-
-/// Largest na + nb of the online ARX estimators (snapshots use fixed-capacity storage).
-inline constexpr int kMaxOnlineArxParams = 16;
-/// A vector of at most kMaxOnlineArxParams values stored inline (no heap).
-using ArxParamVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxOnlineArxParams, 1>;
 
 /// The ARX orders of an online estimator's options: na >= 0, nb >= 1, na + nb <=
 /// kMaxOnlineArxParams.  @throws std::invalid_argument "<owner>.<name> = ..."
@@ -58,12 +55,14 @@ struct ArxBankHealth {
 };
 
 /// Online ARX  y(k) + a1 y(k-1) + ... + a_na y(k-na) = b1 u(k-nk) + ... + b_nb u(k-nk-nb+1) + e(k)
-/// (MATLAB's convention) with one Rls<Dynamic> per candidate nk and a BankSelector choosing nk.
+/// (MATLAB's convention) with one estimator per candidate nk (ArxCandidates: RlsBank lanes up to
+/// n = 8 parameters) and a BankSelector choosing nk.
 /// Regressor phi(k) = [-y(k-1) .. -y(k-na), u(k-nk) .. u(k-nk-nb+1)], used from
 /// k = k_start = max(na, max_delay_samples + nb - 1) on (the same rows for every candidate), so
 /// with lambda = 1 and a large P0 each candidate equals batch least squares on those rows.
 /// A non-finite or absurd u or y is never used: every regression containing it is skipped (the
-/// bad value is kept out of the state, and the estimators see only clean rows).
+/// bad value is kept out of the state: a candidate's estimator rejects a row with a bad input,
+/// counted in its health.rejected_invalid; a bad output skips the sample for all).
 /// Allocates only in the constructor.  Deterministic.
 class OnlineArxBank final {
  public:
@@ -81,12 +80,12 @@ class OnlineArxBank final {
  private:
   OnlineArxOptions options_;
   int n_;
-  std::vector<Rls<Eigen::Dynamic>> estimators_;
+  std::unique_ptr<ArxCandidates> candidates_;
   BankSelector selector_;
   RingBuffer<double> u_history_;
   RingBuffer<std::uint8_t> u_bad_history_;  // 1 where u_history_ holds a bad input's placeholder
   RingBuffer<double> y_history_;
-  Eigen::VectorXd phi_;
+  std::array<double, kMaxOnlineArxParams> minus_y_lags_{};
   std::int64_t k_ = -1;
   std::int64_t k_start_ = 0;
   std::int64_t last_bad_y_ = -1000000000;
