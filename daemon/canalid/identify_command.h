@@ -110,6 +110,9 @@ nlohmann::json IdentifyLpv(const IdentifyOptions& options, const drivers::CsvTab
 /// `--online` with --model id or arx: the recursive estimator run sample by sample over the table,
 /// its final snapshot in the batch keys plus `estimator` and `health`; --trace writes every step.
 nlohmann::json IdentifyOnline(const IdentifyOptions& options, const drivers::CsvTable& table);
+/// `--online` with --model arx and the flags: one RLS estimator (fixed-size up to 8 parameters)
+/// over the ARX rows of the table, its final estimate in the batch arx keys.
+nlohmann::json IdentifyOnlineArx(const IdentifyOptions& options, const drivers::CsvTable& table);
 /// `--online` through the online model registry (the daemon's estimators): --model frac-foptd or
 /// lpv with the flags (--u, --y, --nk as the known delay, --alpha, --schedule, --na, --nb), or
 /// any registry kind with --config and --reach (the reach's settings, its channel names as

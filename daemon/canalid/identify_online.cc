@@ -1,6 +1,7 @@
-// `canalid identify --model id|arx --online`: the recursive estimators of core/ run sample by
-// sample over a CSV record, as the daemon runs them, and their final snapshot printed in the batch
-// model's JSON keys (docs/model-json.md) plus `estimator` and `health`.
+// `canalid identify --model id|arx --online` (arx: identify_online_arx.cc): the recursive
+// estimators of core/ run sample by sample over a CSV record, as the daemon runs them, and their
+// final snapshot printed in the batch model's JSON keys (docs/model-json.md) plus `estimator` and
+// `health`.
 #include <algorithm>
 #include <cmath>
 #include <memory>
@@ -9,39 +10,19 @@
 #include <vector>
 
 #include "core/integrator_delay/identify_integrator_delay.h"
-#include "core/linear/arx.h"
-#include "core/numerics/metrics.h"
 #include "core/online/online_integrator_delay.h"
 #include "core/online/online_model.h"
-#include "core/online/rls.h"
 #include "daemon/canalid/closed_loop_option.h"
 #include "daemon/canalid/identify_command.h"
 #include "daemon/canalid/input_error.h"
 #include "daemon/canalid/online_settings_flags.h"
+#include "daemon/canalid/rls_health_json.h"
 #include "daemon/canalid/table_columns.h"
 #include "daemon/canalid/trace_writer.h"
 #include "drivers/json/model_json.h"
 
 namespace canalid::cli {
 namespace {
-
-nlohmann::json HealthJson(const core::RlsHealth& h) {
-  return {{"trace_p", h.trace_p},
-          {"condition", h.condition_estimate},
-          {"excitation", h.excitation},
-          {"innovation_variance", h.innovation_variance},
-          {"frozen", h.frozen},
-          {"wound_up", h.wound_up},
-          {"updates", h.updates},
-          {"rejected_invalid", h.rejected_invalid},
-          {"rejected_outliers", h.rejected_outliers},
-          {"clipped", h.clipped},
-          {"dead_zone", h.dead_zone},
-          {"frozen_count", h.frozen_count},
-          {"projections", h.projections},
-          {"resets", h.resets},
-          {"trace_bounded", h.trace_bounded}};
-}
 
 nlohmann::json OnlineId(const IdentifyOptions& options, const drivers::CsvTable& table) {
   const Eigen::VectorXd q_in = RequireMovingColumn(table, options.qin);
@@ -125,7 +106,7 @@ nlohmann::json OnlineId(const IdentifyOptions& options, const drivers::CsvTable&
   const core::IntegratorDelaySnapshot s = bank->Snapshot();
   if (!s.valid) throw InputError(table.source() + ": the online bank made no estimate");
   const core::IntegratorDelayBankHealth& bank_health = bank->health();
-  nlohmann::json health = HealthJson(s.health);
+  nlohmann::json health = RlsHealthJson(s.health);
   health["samples"] = bank_health.samples;
   health["bad_flow_samples"] = bank_health.bad_flow_samples;
   health["bad_level_samples"] = bank_health.bad_level_samples;
@@ -158,109 +139,12 @@ nlohmann::json OnlineId(const IdentifyOptions& options, const drivers::CsvTable&
   return model;
 }
 
-nlohmann::json OnlineArx(const IdentifyOptions& options, const drivers::CsvTable& table) {
-  const ArxData data = ReadArxData(options, table);
-  const auto& [inputs, orders, y, u, preprocessing] = data;
-  const int d = orders.num_parameters();
-  const Eigen::Index first = orders.min_first_sample();
-  const Eigen::Index n = y.size();
-  if (n - first < d) {
-    throw InputError(table.source() + ": " + std::to_string(n - first) + " equations for " +
-                     std::to_string(d) + " ARX parameters");
-  }
-  core::Rls<Eigen::Dynamic> rls(
-      core::RlsOptionsFor(OnlineSettingsFromFlags(options, table), core::OnlineModelKind::kArx, d),
-      d);
-  std::vector<std::string> names;
-  for (int j = 1; j <= orders.na; ++j) names.push_back("a" + std::to_string(j));
-  for (std::size_t i = 0; i < inputs.size(); ++i) {
-    for (int j = 1; j <= orders.nb[i]; ++j) {
-      names.push_back("b" + std::to_string(i + 1) + "_" + std::to_string(j));
-    }
-  }
-  for (const char* name : {"trace_p", "prediction_error", "condition", "excitation", "frozen",
-                           "wound_up", "updates", "rejected"}) {
-    names.emplace_back(name);
-  }
-  const Eigen::VectorXd time_s = table.time_s();
-  TraceWriter trace(options.trace, names);
-  Eigen::VectorXd phi(d);
-  std::vector<double> row(names.size());
-  // Row t of core::ArxRegressors: [-y(t-1)..-y(t-na), u_i(t-nk_i)..u_i(t-nk_i-nb_i+1)].
-  for (Eigen::Index t = first; t < n; ++t) {
-    Eigen::Index c = 0;
-    for (int j = 1; j <= orders.na; ++j) phi(c++) = -y(t - j);
-    for (std::size_t i = 0; i < inputs.size(); ++i) {
-      const auto col = static_cast<Eigen::Index>(i);
-      for (int j = 0; j < orders.nb[i]; ++j) phi(c++) = u(t - orders.nk[i] - j, col);
-    }
-    rls.Update(phi, y(t));
-    if (!trace.enabled()) continue;
-    const core::RlsHealth& h = rls.health();
-    for (int j = 0; j < d; ++j) row[static_cast<std::size_t>(j)] = rls.theta()(j);
-    const double extra[] = {h.trace_p,
-                            rls.last_prediction_error(),
-                            h.condition_estimate,
-                            h.excitation,
-                            h.frozen ? 1.0 : 0.0,
-                            h.wound_up ? 1.0 : 0.0,
-                            static_cast<double>(h.updates),
-                            static_cast<double>(h.rejected_invalid + h.rejected_outliers)};
-    std::copy(std::begin(extra), std::end(extra), row.begin() + d);
-    trace.Row(time_s(t), row.data(), row.size());
-  }
-  trace.Close();
-
-  // The snapshot in core::ArxModel form, so the JSON has the batch keys.  loss, aic and fpe are
-  // those of the final parameters over the equations used (with forgetting 1: the batch ones).
-  core::ArxModel model;
-  model.orders = orders;
-  model.parameters = rls.theta();
-  model.a = model.parameters.head(orders.na);
-  Eigen::Index c = orders.na;
-  for (std::size_t i = 0; i < inputs.size(); ++i) {
-    model.b.push_back(model.parameters.segment(c, orders.nb[i]));
-    c += orders.nb[i];
-  }
-  model.parameter_std.resize(d);
-  rls.StandardDeviations(model.parameter_std);
-  model.first_sample = first;
-  model.num_samples = n - first;
-  const Eigen::MatrixXd regressors = core::ArxRegressors(y, u, orders, first);
-  const double ssr = (y.tail(n - first) - regressors * model.parameters).squaredNorm();
-  const double equations = static_cast<double>(n - first);
-  const double ratio = d / equations;
-  model.loss = ssr / equations;
-  model.noise_variance = ssr / (equations - d);
-  model.aic = std::log(model.loss) + 2.0 * ratio;
-  model.fpe = model.loss * (1.0 + ratio) / (1.0 - ratio);
-  nlohmann::json json = drivers::ToJson(model);
-  if (!std::isfinite(model.aic)) json["aic"] = nullptr;
-  json["inputs"] = inputs;
-  json["output"] = options.y;
-  json["sample_time_s"] = table.sample_time_s();
-  json["preprocessing"] = preprocessing;
-  json["estimator"] = "online-" + options.method;
-  json["forgetting"] = options.forgetting;
-  json["prediction_error"] = rls.last_prediction_error();
-  json["health"] = HealthJson(rls.health());
-  try {
-    const Eigen::Index warmup = std::max<Eigen::Index>(model.first_sample, 1);
-    const Eigen::VectorXd simulated = core::SimulateArx(model, u, y.head(warmup));
-    json["metrics"] = drivers::ToJson(core::ComputeMetrics(
-        y.tail(n - warmup), simulated.tail(n - warmup), table.sample_time_s()));
-  } catch (const std::invalid_argument& e) {
-    throw InputError(table.source() + ": " + e.what());
-  }
-  return json;
-}
-
 }  // namespace
 
 nlohmann::json IdentifyOnline(const IdentifyOptions& options, const drivers::CsvTable& table) {
   if (!options.config.empty()) return IdentifyOnlineModel(options, table);
   if (options.model == "id") return OnlineId(options, table);
-  if (options.model == "arx") return OnlineArx(options, table);
+  if (options.model == "arx") return IdentifyOnlineArx(options, table);
   return IdentifyOnlineModel(options, table);
 }
 
