@@ -63,7 +63,8 @@ struct ArxBankHealth {
 /// A non-finite or absurd u or y is never used: every regression containing it is skipped (the
 /// bad value is kept out of the state: a candidate's estimator rejects a row with a bad input,
 /// counted in its health.rejected_invalid; a bad output skips the sample for all).
-/// Allocates only in the constructor.  Deterministic.
+/// Allocates only in the constructor.  Deterministic.  Not thread-safe, its const members
+/// included (a snapshot reads a lane through RlsBank's scratch estimator).
 class OnlineArxBank final {
  public:
   /// @throws std::invalid_argument on a bad option.

@@ -57,7 +57,7 @@ struct OnlineModelSettings {
   // Every kind's recursive least squares.
   RlsMethod rls_method = RlsMethod::kUdDirectional;
   double forgetting = 1.0;  ///< (0, 1]
-  /// P0 = p0 I, finite > 0; none: each kind's DefaultInitialCovariance.
+  /// P0 = p0 I, 0 < p0 <= 1e20; none: each kind's DefaultInitialCovariance.
   std::optional<double> initial_covariance;
   // id and arx: the delays of the bank (rounded to whole samples).
   double min_delay_s = 0.0;

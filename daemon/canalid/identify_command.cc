@@ -193,8 +193,9 @@ void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code)
   AddIdentifyModelOptions(*cmd, options);
   auto* online = cmd->add_option_group(
       "Online estimation (--model id|arx|frac-foptd|lpv|idz|frac-ss --online)");
-  online->add_flag("--online", options.online,
-                   "Run the recursive estimator sample by sample; print its final snapshot");
+  auto* online_flag =
+      online->add_flag("--online", options.online,
+                       "Run the recursive estimator sample by sample; print its final snapshot");
   auto* forgetting =
       online->add_option("--forgetting", options.forgetting, "Forgetting factor lambda, 0 < L <= 1")
           ->capture_default_str();
@@ -207,8 +208,9 @@ void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code)
                                   "Update law: ud_directional, ud_exponential, exponential, "
                                   "directional, constant_trace, stabilised, kalman, nlms")
                      ->capture_default_str();
-  online->add_option("--trace", options.trace,
-                     "Write the parameter and health trajectory to this CSV (time_s first)");
+  auto* trace =
+      online->add_option("--trace", options.trace,
+                         "Write the parameter and health trajectory to this CSV (time_s first)");
   auto* config = online->add_option(
       "--config", options.config,
       "--online: a canalidd configuration; the estimator takes the settings of --reach (as the "
@@ -218,6 +220,10 @@ void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code)
   reach->needs(config);
   // The reach's settings come from the configuration; a flag beside it would do nothing.
   for (CLI::Option* setting : {forgetting, initial_covariance, method}) config->excludes(setting);
+  // The estimator's settings mean nothing to a batch fit.
+  for (CLI::Option* setting : {forgetting, initial_covariance, method, trace, config}) {
+    setting->needs(online_flag);
+  }
   cmd->add_flag("--json", options.json, "--compare: print JSON (summary and per-file) instead");
   cmd->callback([&options, &exit_code] { exit_code = RunIdentify(options); });
 }

@@ -41,8 +41,9 @@ ExperimentDesign DesignExperiment(const DaemonConfig& config, const ExperimentCo
 ExperimentPlan BuildExperimentPlan(const DaemonConfig& config, const ExperimentConfig& experiment,
                                    double nominal_setpoint);
 
-/// The reach's online settings (core::OnlineModelSettings): Ts as above, the RLS method and
-/// forgetting, the delay range, the arx, frac-foptd and lpv keys; the rest at their defaults.
+/// The reach's online settings (core::OnlineModelSettings): Ts as above, the RLS method,
+/// forgetting and initial covariance (when given), the delay range, the arx, frac-foptd and lpv
+/// keys; the rest at their defaults.
 /// @throws std::invalid_argument when the reach does not resolve.
 core::OnlineModelSettings BuildOnlineModelSettings(const DaemonConfig& config,
                                                    const ReachConfig& reach);

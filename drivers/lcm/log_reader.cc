@@ -85,6 +85,12 @@ std::size_t LogReader::Available(std::size_t count) {
   return std::min(count, buffered_);
 }
 
+std::string LogReader::ShortReadReason() const {
+  if (read_errno_ != 0) return "read failed: " + core::ErrnoText(read_errno_);
+  return "no bytes after byte " + std::to_string(position_ + (buffered_ - next_)) +
+         ": the file is shorter than when it was opened (" + std::to_string(size_) + " bytes)";
+}
+
 bool LogReader::Next(LogEvent* event) {
   if (end_ != LogEnd::kReading) return false;
   const std::uint64_t start = position_;
@@ -92,7 +98,9 @@ bool LogReader::Next(LogEvent* event) {
   auto at = [start] { return "byte " + std::to_string(start) + ": "; };
   const std::size_t got = Available(kHeaderBytes);
   const std::uint8_t* header = buffer_.data() + next_;
-  if (got == 0 && std::feof(file_)) {
+  // Fewer bytes than the file had when opened: it shrank since, or a read failed.
+  const bool short_read = read_errno_ != 0 || position_ + got < size_;
+  if (got == 0 && !short_read) {
     end_ = LogEnd::kClean;
     return false;
   }
@@ -103,6 +111,7 @@ bool LogReader::Next(LogEvent* event) {
                                         ", expected " + Hex(kSyncWord) + ")");
     }
   }
+  if (got < kHeaderBytes && short_read) return Fail(LogEnd::kTruncated, at() + ShortReadReason());
   if (got < kHeaderBytes) {
     return Fail(LogEnd::kTruncated, at() + "the log ends inside an event header (" +
                                         std::to_string(got) + " of " +
@@ -130,14 +139,9 @@ bool LogReader::Next(LogEvent* event) {
                                         " bytes, the log ends at byte " + std::to_string(size_));
   }
   const std::size_t whole = kHeaderBytes + static_cast<std::size_t>(body);
-  if (Available(whole) < whole) {
-    // The file was longer when opened: it shrank since, or the read failed.
-    const std::string why =
-        read_errno_ != 0 ? "read failed: " + core::ErrnoText(read_errno_)
-                         : "no bytes after byte " + std::to_string(position_ + buffered_ - next_) +
-                               ": the file is shorter than when it was opened (" +
-                               std::to_string(size_) + " bytes)";
-    return Fail(LogEnd::kTruncated, at() + "event " + std::to_string(event_number) + ": " + why);
+  if (Available(whole) < whole) {  // the file was longer when opened
+    return Fail(LogEnd::kTruncated,
+                at() + "event " + std::to_string(event_number) + ": " + ShortReadReason());
   }
   const std::uint8_t* bytes = buffer_.data() + next_ + kHeaderBytes;  // Available may move them
   next_ += whole;

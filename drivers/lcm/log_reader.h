@@ -56,6 +56,9 @@ class LogReader final {
 
  private:
   bool Fail(LogEnd end, std::string problem);
+  /// Why the file gave fewer bytes than it had when opened: the failed read's errno, or that it
+  /// is shorter now.
+  std::string ShortReadReason() const;
   /// Makes `count` bytes from the next unread one available in buffer_ (reading more of the
   /// file); returns how many are (fewer at the end of the file or on a read error).
   std::size_t Available(std::size_t count);

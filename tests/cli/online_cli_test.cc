@@ -340,6 +340,11 @@ TEST(OnlineCli, BadOptionsExitTwoWithAClearMessage) {
                  "--initial-covariance excludes --config");
   ExpectBadInput("config-method", "--model id --online --method kalman" + config + csv,
                  "--method excludes --config");
+  // The estimator's flags without --online (a batch fit) would do nothing.
+  ExpectBadInput("forgetting-batch", "--model id --forgetting 0.99" + csv,
+                 "--forgetting requires --online");
+  ExpectBadInput("p0-batch", "--model id --initial-covariance 10" + csv,
+                 "--initial-covariance requires --online");
   ExpectBadInput("method", "--model arx --u q_in --y level --online --method fast" + csv,
                  "--method fast: unknown (allowed: ud_directional");
   ExpectBadInput("kind", "--model foptd --u q_in --y level --online" + csv,

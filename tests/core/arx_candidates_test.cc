@@ -15,23 +15,28 @@ namespace {
 struct Orders {
   int na;
   int nb;
+  // kUdDirectional runs the lanes as structure of arrays; the covariance forms lane by lane.
+  RlsMethod method = RlsMethod::kUdDirectional;
+  BankCriterion criterion = BankCriterion::kResidual;
 };
 
 class ArxCandidatesAgainstRls : public ::testing::TestWithParam<Orders> {};
 
 TEST_P(ArxCandidatesAgainstRls, EveryCandidateMatchesItsOwnEstimator) {
-  const auto [na, nb] = GetParam();
+  const auto [na, nb, method, criterion] = GetParam();
   const int n = na + nb;
   constexpr int kMinDelay = 2;
   constexpr int kCount = 6;  // delays 2..7: one full block of lanes and a part-filled one
   RlsOptions options;
   options.forgetting = 0.995;
+  options.method = method;
   const auto candidates = ArxCandidates::Make(options, n, kCount);
-  EXPECT_EQ(candidates->lanes(), n <= ArxCandidates::kMaxArxLaneParams);
+  EXPECT_EQ(candidates->lanes(),
+            n <= ArxCandidates::kMaxArxLaneParams && method == RlsMethod::kUdDirectional);
   std::vector<Rls<Eigen::Dynamic>> reference(kCount, Rls<Eigen::Dynamic>(options, n));
-  BankSelectorOptions criterion{.criterion = BankCriterion::kResidual};
-  BankSelector selector(kCount, criterion);
-  BankSelector reference_selector(kCount, criterion);
+  const BankSelectorOptions choice{.criterion = criterion};
+  BankSelector selector(kCount, choice);
+  BankSelector reference_selector(kCount, choice);
 
   RingBuffer<double> u(kMinDelay + kCount + nb);
   RingBuffer<std::uint8_t> u_bad(kMinDelay + kCount + nb);
@@ -68,8 +73,12 @@ TEST_P(ArxCandidatesAgainstRls, EveryCandidateMatchesItsOwnEstimator) {
           continue;  // the estimator before: the row never reached it
         }
         auto& rls = reference[static_cast<std::size_t>(c)];
-        rls.Update(phi, out);
-        reference_selector.SetLoss(c, rls.residual_sum_of_squares());
+        const auto result = rls.Update(phi, out);
+        if (criterion == BankCriterion::kResidual) {
+          reference_selector.SetLoss(c, rls.residual_sum_of_squares());
+        } else {
+          reference_selector.Record(c, result.prediction_error);
+        }
       }
       selector.Commit();
       reference_selector.Commit();
@@ -85,16 +94,19 @@ TEST_P(ArxCandidatesAgainstRls, EveryCandidateMatchesItsOwnEstimator) {
     candidates->State(c, state);
     const auto& rls = reference[static_cast<std::size_t>(c)];
     ASSERT_EQ(state.theta.size(), n);
+    // Rls<n> (the lanes) and Rls<Dynamic> may round differently (Eigen's fixed and dynamic
+    // kernels): equal to the last few bits, not necessarily to the bit.  The covariance forms
+    // carry that rounding in P from sample to sample: with kKalman 7e-11 was measured after 600
+    // samples, so they are held to 1e-9 (the UD forms to 1e-12).
+    const double tolerance = method == RlsMethod::kUdDirectional ? 1e-12 : 1e-9;
     for (int i = 0; i < n; ++i) {
-      // Rls<n> (the lanes) and Rls<Dynamic> may round differently (Eigen's fixed and dynamic
-      // kernels): equal to the last few bits, not necessarily to the bit.
-      EXPECT_NEAR(state.theta(i), rls.theta()(i), 1e-12 * (1.0 + std::abs(rls.theta()(i))))
+      EXPECT_NEAR(state.theta(i), rls.theta()(i), tolerance * (1.0 + std::abs(rls.theta()(i))))
           << c << " " << i;
       EXPECT_NEAR(state.std_dev(i), rls.StandardDeviation(i), 1e-9 * rls.StandardDeviation(i))
           << c << " " << i;
     }
     EXPECT_NEAR(state.innovation_variance, rls.innovation_variance(),
-                1e-12 * rls.innovation_variance());
+                tolerance * rls.innovation_variance());
     EXPECT_EQ(state.health.updates, rls.health().updates) << c;
     rejected += static_cast<int>(state.health.rejected_invalid);
   }
@@ -102,12 +114,15 @@ TEST_P(ArxCandidatesAgainstRls, EveryCandidateMatchesItsOwnEstimator) {
   EXPECT_EQ(rejected, rejected_rows);
 }
 
-INSTANTIATE_TEST_SUITE_P(Orders, ArxCandidatesAgainstRls,
-                         ::testing::Values(Orders{0, 1}, Orders{2, 2}, Orders{4, 4}, Orders{4, 5}),
-                         [](const ::testing::TestParamInfo<Orders>& p) {
-                           return "na" + std::to_string(p.param.na) + "nb" +
-                                  std::to_string(p.param.nb);
-                         });
+INSTANTIATE_TEST_SUITE_P(
+    Orders, ArxCandidatesAgainstRls,
+    ::testing::Values(Orders{0, 1}, Orders{2, 2}, Orders{4, 4}, Orders{4, 5},
+                      Orders{2, 2, RlsMethod::kExponential, BankCriterion::kPredictionError},
+                      Orders{3, 2, RlsMethod::kKalman, BankCriterion::kPredictionError}),
+    [](const ::testing::TestParamInfo<Orders>& p) {
+      return "na" + std::to_string(p.param.na) + "nb" + std::to_string(p.param.nb) + "_" +
+             std::to_string(p.index);
+    });
 
 }  // namespace
 }  // namespace canalid::core

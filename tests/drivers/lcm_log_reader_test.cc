@@ -181,6 +181,23 @@ TEST(LcmLogReader, AFileThatShrinksWhileReadIsNamedAsSuch) {
             std::string::npos)
       << reader.problem();
   EXPECT_EQ(reader.problem().find("No such file"), std::string::npos) << reader.problem();
+
+  // Cut at event 2's start while event 1 is still in the reader's buffer: the two come back,
+  // then the end is a truncation, not a clean end.
+  const fs::path at_boundary = TestPath("shrinks-at-boundary.lcmlog");
+  WriteWithLcm(at_boundary, events);
+  LogReader second(at_boundary.string());
+  ASSERT_TRUE(second.Next(&e)) << second.problem();
+  fs::resize_file(at_boundary, static_cast<std::uintmax_t>(events[2].offset));
+  std::size_t more = 0;
+  while (second.Next(&e)) ++more;
+  EXPECT_EQ(more, 1U);
+  EXPECT_EQ(second.end(), LogEnd::kTruncated) << second.problem();
+  EXPECT_NE(second.problem().find("byte " + std::to_string(events[2].offset) +
+                                  ": no bytes after byte " + std::to_string(events[2].offset) +
+                                  ": the file is shorter than when it was opened"),
+            std::string::npos)
+      << second.problem();
 }
 
 TEST(LcmLogReader, EmptyFileIsACleanEmptyLog) {
