@@ -104,35 +104,34 @@ void ExpectBatchOfTheFlume(const DaemonExperimentRun& run) {
       << run.replay_err;
 }
 
-TEST(DaemonLabFlume, PrbsIdentifiesTheFlumeAndReplaysIt) {
-  const DaemonExperimentRun run = RunFlumeExperiment("pool_prbs");
-  ExpectBatchOfTheFlume(run);
+// The online frac-foptd at the end of the experiment against the batch fit of the same record:
+// alpha within 0.08, K within 10 %, T within t_fraction of the batch's, the configured delay.
+void ExpectOnlineNearTheBatch(const DaemonExperimentRun& run, double t_fraction) {
   ASSERT_EQ(run.online.count("frac-foptd"), 1U);
   const auto& online = run.online.at("frac-foptd");
   const nlohmann::json& b = run.batch.at("frac-foptd");
   const double k = b.at("gain").get<double>();
   const double t = b.at("time_constant_s").get<double>();
+  EXPECT_NEAR(online.at("alpha"), b.at("alpha").get<double>(), 0.08) << b;
+  EXPECT_NEAR(online.at("gain"), k, 0.10 * k) << b;
+  EXPECT_NEAR(online.at("time_constant_s"), t, t_fraction * t) << b;
+  EXPECT_EQ(online.at("delay_s"), 5.1);  // configured: 17 samples of 0.3 s
+}
+
+TEST(DaemonLabFlume, PrbsIdentifiesTheFlumeAndReplaysIt) {
+  const DaemonExperimentRun run = RunFlumeExperiment("pool_prbs");
+  ExpectBatchOfTheFlume(run);
   // The issue's tolerances.  Measured (2026-11-28, five runs, three of them with the two cores
   // oversubscribed by busy loops): batch alpha 0.456-0.460, K 0.918-0.931, T 4.02-4.07 s;
   // online alpha 0.50, K 0.950-0.954, T 4.22-4.24 s.  (An earlier note here saw the batch fit
   // move to alpha 0.38, K 1.09 once under load, when the daemon's P0 and this test's gap bound
   // were as now; not seen again.)
-  EXPECT_NEAR(online.at("alpha"), b.at("alpha").get<double>(), 0.08) << b;
-  EXPECT_NEAR(online.at("gain"), k, 0.10 * k) << b;
-  EXPECT_NEAR(online.at("time_constant_s"), t, 0.20 * t) << b;
-  EXPECT_EQ(online.at("delay_s"), 5.1);  // configured: 17 samples of 0.3 s
+  ExpectOnlineNearTheBatch(run, 0.20);
 }
 
 TEST(DaemonLabFlume, StepOnlineFractionalModelMatchesTheBatchFit) {
   const DaemonExperimentRun run = RunFlumeExperiment("pool_step");
   ExpectBatchOfTheFlume(run);
-  ASSERT_EQ(run.online.count("frac-foptd"), 1U);
-  const auto& online = run.online.at("frac-foptd");
-  const nlohmann::json& b = run.batch.at("frac-foptd");
-  const double k = b.at("gain").get<double>();
-  const double t = b.at("time_constant_s").get<double>();
-  EXPECT_NEAR(online.at("alpha"), b.at("alpha").get<double>(), 0.08) << b;
-  EXPECT_NEAR(online.at("gain"), k, 0.10 * k) << b;
   // Measured: batch K 0.744, T 2.72 s, alpha 0.51, tau 5.1 s; online K 0.747, T 2.07 s, alpha
   // 0.45. The issue asks T within 20 %; T is 24 % off, held at 30 % here and reported as open.
   // Not the alpha grid or its choice: at the same alpha the two differ as much (alpha 0.5, from
@@ -141,8 +140,7 @@ TEST(DaemonLabFlume, StepOnlineFractionalModelMatchesTheBatchFit) {
   // and T moves with it: the online bank given that offset reads 2.88 s, with an offset
   // parameter of its own 1.89 s. The recursive and the batch output-error estimators differ
   // here; alpha and K hold the issue's bounds.
-  EXPECT_NEAR(online.at("time_constant_s"), t, 0.30 * t) << b;
-  EXPECT_EQ(online.at("delay_s"), 5.1);
+  ExpectOnlineNearTheBatch(run, 0.30);
 }
 
 }  // namespace
