@@ -1,5 +1,6 @@
 // The "frac-foptd" kind of the online registry: OnlineFractionalBank (output error) from the
 // actuator to the level, in deviations from the operating point.
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -9,9 +10,10 @@ namespace canalid::core {
 namespace {
 
 constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
-// kFlagLowExcitation below this many times the prior's information 1 / p0, as the id kind's
-// IntegratorDelayHealthOptions::information_min_per_p0.
+// kFlagLowExcitation below this many times the prior's information 1 / p0, and below the floor,
+// as the id kind's IntegratorDelayHealthOptions::information_min_per_p0 and _floor.
 constexpr double kInformationMinPerP0 = 100.0;
+constexpr double kInformationMinFloor = 1e-4;
 
 class OnlineFractionalModel final : public ProcessOnlineModel {
  public:
@@ -36,7 +38,8 @@ class OnlineFractionalModel final : public ProcessOnlineModel {
     w.Put(options_.delay_samples * options_.sample_time_s, kNan);
     PutOperatingPoint(w);
     int flags = 0;
-    if (s.information_min < kInformationMinPerP0 / options_.rls.initial_covariance) {
+    if (s.information_min <
+        std::max(kInformationMinPerP0 / options_.rls.initial_covariance, kInformationMinFloor)) {
       flags |= kFlagLowExcitation;
     }
     // T at the projection's bound 0, or alpha at an edge of a grid of several values.

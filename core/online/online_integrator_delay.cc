@@ -1,6 +1,7 @@
 #include "core/online/online_integrator_delay.h"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -22,6 +23,9 @@ void IntegratorDelayHealthOptions::Validate() const {
   if (!(information_min_per_p0 >= 0.0 && std::isfinite(information_min_per_p0))) {
     Fail("health.information_min_per_p0", information_min_per_p0, "finite, >= 0");
   }
+  if (!(information_min_floor >= 0.0 && std::isfinite(information_min_floor))) {
+    Fail("health.information_min_floor", information_min_floor, "finite, >= 0");
+  }
 }
 
 int IntegratorDelaySnapshotFlags(const IntegratorDelaySnapshot& s,
@@ -34,7 +38,8 @@ int IntegratorDelaySnapshotFlags(const IntegratorDelaySnapshot& s,
   }
   if (s.health.wound_up) flags |= kFlagWindup;
   if (!(s.information_min >=
-        options.health.information_min_per_p0 / options.rls.initial_covariance)) {
+        std::max(options.health.information_min_per_p0 / options.rls.initial_covariance,
+                 options.health.information_min_floor))) {
     flags |= kFlagLowExcitation;
   }
   if (!(s.condition_number <= options.health.condition_max)) flags |= kFlagIllConditioned;

@@ -19,7 +19,7 @@ namespace canalid::core {
 /// (see docs/lcm-channels.md).
 inline constexpr int kFlagNan = 1;             ///< a parameter or P is NaN or infinite
 inline constexpr int kFlagWindup = 2;          ///< RlsHealth::wound_up: trace(P) above n p0
-inline constexpr int kFlagLowExcitation = 4;   ///< information_min < information_min_per_p0 / p0
+inline constexpr int kFlagLowExcitation = 4;   ///< information_min below the health threshold
 inline constexpr int kFlagIllConditioned = 8;  ///< condition_number > condition_max
 inline constexpr int kFlagFrozen = 16;         ///< the last sample carried no information
 inline constexpr int kFlagOutOfBounds = 32;    ///< A <= 0 or not finite, or nk at a bank edge
@@ -28,11 +28,17 @@ inline constexpr int kFlagOutOfBounds = 32;    ///< A <= 0 or not finite, or nk 
 struct IntegratorDelayHealthOptions {
   /// kFlagIllConditioned above it: the 2-norm condition number of the estimator's P.
   double condition_max = 1e12;
-  /// kFlagLowExcitation below information_min_per_p0 / p0: the smallest eigenvalue of P^-1 (the
-  /// information matrix of the data in the estimator's memory, plus the prior's 1 / p0 and what
-  /// forgetting leaves of it).  100: some direction of theta has gained less than ~99 times the
-  /// prior's information, i.e. the data has not identified all parameters.
+  /// kFlagLowExcitation below max(information_min_per_p0 / p0, information_min_floor): the
+  /// smallest eigenvalue of P^-1 (the information matrix of the data in the estimator's memory,
+  /// plus the prior's 1 / p0 and what forgetting leaves of it).  100: some direction of theta has
+  /// gained less than ~99 times the prior's information, i.e. the data has not identified all
+  /// parameters.
   double information_min_per_p0 = 100.0;
+  /// The threshold's floor, in the regressors' units squared: 100 / 1e6, the threshold at the P0
+  /// the daemon used before the least-squares kinds' 1e10.  Without it a P0 of 1e10 lowers the
+  /// threshold to 1e-8, and the first absurd estimates of a bank (area 2.6e6 m2 from 139 samples
+  /// in DaemonSoak) went out unflagged.
+  double information_min_floor = 1e-4;
   /// @throws std::invalid_argument naming the option out of range.
   void Validate() const;
 };
@@ -147,7 +153,8 @@ struct IntegratorDelaySnapshot {
 
 /// The health flags of a snapshot of a bank with these options (kFlag*):
 ///   kFlagNan: b, c, d, A or trace(P) not finite;  kFlagWindup: health.wound_up;
-///   kFlagLowExcitation: information_min < options.health.information_min_per_p0 / p0;
+///   kFlagLowExcitation: information_min < max(health.information_min_per_p0 / p0,
+///     health.information_min_floor);
 ///   kFlagIllConditioned: condition_number > options.health.condition_max (or not finite);
 ///   kFlagFrozen: health.frozen;
 ///   kFlagOutOfBounds: A <= 0 or not finite, or nk = max_delay_samples, or nk = min_delay_samples

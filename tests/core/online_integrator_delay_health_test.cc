@@ -158,12 +158,33 @@ TEST(OnlineIntegratorDelayHealth, BoundsProblemsNameTheValue) {
   EXPECT_NE(IntegratorDelayBoundsProblem(std::nan(""), 7, o), "");
 }
 
+// At the least-squares kinds' P0 of 1e10 the relative threshold (100 / p0 = 1e-8) alone would
+// pass almost anything; the floor keeps the threshold at least 1e-4.
+TEST(OnlineIntegratorDelayHealth, TheLowExcitationFloorHoldsAtALargeP0) {
+  PoolSpec spec;
+  spec.q_in_amplitude_m3s = 0.0;
+  spec.q_out_amplitude_m3s = 0.0;
+  spec.offtake_m3s = 0.0;
+  OnlineIntegratorDelayOptions o = Options();
+  o.rls.initial_covariance = 1e10;
+  o.health.information_min_per_p0 = 0.0;  // the floor alone
+  const IntegratorDelaySnapshot floored = RunBank(o, spec, 7);
+  ASSERT_TRUE(floored.valid);
+  EXPECT_NEAR(floored.information_min, 1e-10, 1e-16);  // the prior's, along b
+  EXPECT_TRUE(floored.flags & kFlagLowExcitation) << floored.flags;
+  o.health.information_min_floor = 0.0;
+  EXPECT_FALSE(RunBank(o, spec, 7).flags & kFlagLowExcitation);
+}
+
 TEST(OnlineIntegratorDelayHealth, BadThresholdsThrow) {
   OnlineIntegratorDelayOptions o = Options();
   o.health.condition_max = 0.5;
   EXPECT_THROW(OnlineIntegratorDelayBank{o}, std::invalid_argument);
   o = Options();
   o.health.information_min_per_p0 = -1.0;
+  EXPECT_THROW(OnlineIntegratorDelayBank{o}, std::invalid_argument);
+  o = Options();
+  o.health.information_min_floor = -1.0;
   EXPECT_THROW(OnlineIntegratorDelayBank{o}, std::invalid_argument);
 }
 
