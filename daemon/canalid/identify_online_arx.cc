@@ -4,6 +4,7 @@
 // n <= 8 (fixed-size Eigen, no allocation per row), else Rls<Dynamic>.
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -34,6 +35,13 @@ void FillRow(const ArxData& data, Eigen::Index t, Phi& phi) {
   }
 }
 
+// The trace's columns after the parameters, in the order Run writes them.
+constexpr const char* kHealthColumns[] = {"trace_p", "prediction_error", "condition", "excitation",
+                                          "frozen",  "wound_up",         "updates",   "rejected"};
+
+// The largest parameter count run with a fixed-size estimator (the sizes instantiated).
+constexpr int kMaxFixedParams = 8;
+
 // What the recursion leaves for the JSON.
 struct ArxRecursion {
   Eigen::VectorXd theta;
@@ -50,21 +58,23 @@ ArxRecursion Run(const core::RlsOptions& options, int d, const ArxData& data, Ei
   core::Rls<N> rls(options, d);
   typename core::Rls<N>::Vector phi(d);
   const Eigen::VectorXd time_s = trace.enabled() ? table.time_s() : Eigen::VectorXd();
-  std::vector<double> row(trace.enabled() ? static_cast<std::size_t>(d) + 8 : 0);
+  std::vector<double> row(trace.enabled() ? static_cast<std::size_t>(d) + std::size(kHealthColumns)
+                                          : 0);
   for (Eigen::Index t = first; t < data.y.size(); ++t) {
     FillRow(data, t, phi);
     rls.Update(phi, data.y(t));
     if (!trace.enabled()) continue;
     const core::RlsHealth& h = rls.health();
     for (int j = 0; j < d; ++j) row[static_cast<std::size_t>(j)] = rls.theta()(j);
-    const double extra[] = {h.trace_p,
-                            rls.last_prediction_error(),
-                            h.condition_estimate,
-                            h.excitation,
-                            h.frozen ? 1.0 : 0.0,
-                            h.wound_up ? 1.0 : 0.0,
-                            static_cast<double>(h.updates),
-                            static_cast<double>(h.rejected_invalid + h.rejected_outliers)};
+    const double extra[std::size(kHealthColumns)] = {
+        h.trace_p,
+        rls.last_prediction_error(),
+        h.condition_estimate,
+        h.excitation,
+        h.frozen ? 1.0 : 0.0,
+        h.wound_up ? 1.0 : 0.0,
+        static_cast<double>(h.updates),
+        static_cast<double>(h.rejected_invalid + h.rejected_outliers)};
     std::copy(std::begin(extra), std::end(extra), row.begin() + d);
     trace.Row(time_s(t), row.data(), row.size());
   }
@@ -78,11 +88,11 @@ ArxRecursion Run(const core::RlsOptions& options, int d, const ArxData& data, Ei
   return out;
 }
 
-// Run<d> for d = N..8, Run<Dynamic> above.
+// Run<d> for d = N..kMaxFixedParams, Run<Dynamic> above.
 template <int N>
 ArxRecursion RunSized(const core::RlsOptions& options, int d, const ArxData& data,
                       Eigen::Index first, const drivers::CsvTable& table, TraceWriter& trace) {
-  if constexpr (N > 8) {
+  if constexpr (N > kMaxFixedParams) {
     return Run<Eigen::Dynamic>(options, d, data, first, table, trace);
   } else {
     if (d == N) return Run<N>(options, d, data, first, table, trace);
@@ -111,10 +121,7 @@ nlohmann::json IdentifyOnlineArx(const IdentifyOptions& options, const drivers::
       names.push_back("b" + std::to_string(i + 1) + "_" + std::to_string(j));
     }
   }
-  for (const char* name : {"trace_p", "prediction_error", "condition", "excitation", "frozen",
-                           "wound_up", "updates", "rejected"}) {
-    names.emplace_back(name);
-  }
+  names.insert(names.end(), std::begin(kHealthColumns), std::end(kHealthColumns));
   TraceWriter trace(options.trace, names);
   const ArxRecursion recursion = RunSized<1>(rls_options, d, data, first, table, trace);
   trace.Close();
