@@ -1,19 +1,15 @@
 // The "frac-foptd" kind of the online registry: OnlineFractionalBank (output error) from the
 // actuator to the level, in deviations from the operating point.
-#include <algorithm>
 #include <cmath>
 #include <limits>
 
+#include "core/online/online_integrator_delay.h"
 #include "core/online/online_model_kinds.h"
 
 namespace canalid::core {
 namespace {
 
 constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
-// kFlagLowExcitation below this many times the prior's information 1 / p0, and below the floor,
-// as the id kind's IntegratorDelayHealthOptions::information_min_per_p0 and _floor.
-constexpr double kInformationMinPerP0 = 100.0;
-constexpr double kInformationMinFloor = 1e-4;
 
 class OnlineFractionalModel final : public ProcessOnlineModel {
  public:
@@ -38,8 +34,9 @@ class OnlineFractionalModel final : public ProcessOnlineModel {
     w.Put(options_.delay_samples * options_.sample_time_s, kNan);
     PutOperatingPoint(w);
     int flags = 0;
+    // The id kind's default thresholds (IntegratorDelayHealthOptions).
     if (s.information_min <
-        std::max(kInformationMinPerP0 / options_.rls.initial_covariance, kInformationMinFloor)) {
+        IntegratorDelayHealthOptions{}.InformationMin(options_.rls.initial_covariance)) {
       flags |= kFlagLowExcitation;
     }
     // T at the projection's bound 0, or alpha at an edge of a grid of several values.

@@ -37,9 +37,7 @@ int IntegratorDelaySnapshotFlags(const IntegratorDelaySnapshot& s,
     flags |= kFlagNan;
   }
   if (s.health.wound_up) flags |= kFlagWindup;
-  if (!(s.information_min >=
-        std::max(options.health.information_min_per_p0 / options.rls.initial_covariance,
-                 options.health.information_min_floor))) {
+  if (!(s.information_min >= options.health.InformationMin(options.rls.initial_covariance))) {
     flags |= kFlagLowExcitation;
   }
   if (!(s.condition_number <= options.health.condition_max)) flags |= kFlagIllConditioned;

@@ -1,4 +1,5 @@
 #pragma once
+#include <algorithm>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -39,6 +40,10 @@ struct IntegratorDelayHealthOptions {
   /// threshold to 1e-8, and the first absurd estimates of a bank (area 2.6e6 m2 from 139 samples
   /// in DaemonSoak) went out unflagged.
   double information_min_floor = 1e-4;
+  /// The kFlagLowExcitation threshold of an estimator started at P0 = p0 I.
+  double InformationMin(double p0) const {
+    return std::max(information_min_per_p0 / p0, information_min_floor);
+  }
   /// @throws std::invalid_argument naming the option out of range.
   void Validate() const;
 };
