@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -126,6 +127,71 @@ TEST(CsvTable, CellsAreReadInPlaceWithTheirSpaces) {
   EXPECT_EQ(ErrorOf("time_s,a\n0,1\n1,+2\n"), "f.csv:3: column 'a': '+2' is not a number");
   EXPECT_EQ(ErrorOf("time_s,a\n0,1\n1,2,3\n"), "f.csv:3: expected 2 cells, found 3");
   EXPECT_EQ(ErrorOf("time_s,a\n0,1\n,2\n"), "f.csv:3: column 'time_s': '' is not a number");
+}
+
+// A reference reader for the test, one line and one cell at a time (split at commas, spaces
+// trimmed, std::stod), against which the parser's in-place rows are checked.
+std::vector<std::vector<double>> ReferenceRows(const std::string& text) {
+  std::vector<std::vector<double>> rows;
+  std::istringstream in(text);
+  std::string line;
+  bool header = true;
+  while (std::getline(in, line)) {
+    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    if (header) {
+      header = false;
+      continue;
+    }
+    std::vector<double> row;
+    std::istringstream cells(line);
+    std::string cell;
+    while (std::getline(cells, cell, ',')) row.push_back(std::stod(cell));
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+// Rows in the common shape are parsed without looking for the line's end first, and the lines
+// are counted 16 bytes at a time: files long enough to cross the counter's blocks (255 x 16
+// bytes), with and without blank lines (which leave room unused), CRLF, spaces and a last line
+// without its newline, all give what a line-by-line reader gives, and an error after thousands
+// of rows still names its line.
+TEST(CsvTable, LongFilesOfEveryLineShapeMatchALineByLineReader) {
+  for (const char* shape : {"plain", "crlf", "blank lines", "spaces", "no last newline"}) {
+    const std::string kind = shape;
+    std::string text = "time_s,a,b\n";
+    for (int k = 0; k < 5000; ++k) {
+      const std::string t = std::to_string(0.25 * k);
+      const std::string a = std::to_string(std::sin(0.01 * k));
+      const std::string b = std::to_string(k % 7 - 3) + "e-" + std::to_string(k % 5);
+      if (kind == "spaces" && k % 3 == 0) {
+        text += " " + t + " ,\t" + a + ", " + b + " \n";
+      } else {
+        text += t + "," + a + "," + b + (kind == "crlf" ? "\r\n" : "\n");
+      }
+      if (kind == "blank lines" && k % 1000 == 999) text += "\n  \n";
+    }
+    if (kind == "no last newline") text.pop_back();
+    const CsvTable t = CsvTable::Parse(text, "f.csv");
+    const std::vector<std::vector<double>> expected = ReferenceRows(text);
+    ASSERT_EQ(t.rows(), static_cast<Eigen::Index>(expected.size())) << kind;
+    const Eigen::VectorXd a = t.Column("a");
+    const Eigen::VectorXd b = t.Column("b");
+    for (std::size_t r = 0; r < expected.size(); ++r) {
+      const auto i = static_cast<Eigen::Index>(r);
+      ASSERT_EQ(t.time_s()(i), expected[r][0]) << kind << " row " << r;
+      ASSERT_EQ(a(i), expected[r][1]) << kind << " row " << r;
+      ASSERT_EQ(b(i), expected[r][2]) << kind << " row " << r;
+    }
+    EXPECT_DOUBLE_EQ(t.sample_time_s(), 0.25) << kind;
+  }
+  std::string text = "time_s,a\n";
+  for (int k = 0; k < 4000; ++k) text += std::to_string(k) + "," + std::to_string(k) + "\n";
+  EXPECT_EQ(ErrorOf(text + "4000,x\n"), "f.csv:4002: column 'a': 'x' is not a number");
+  EXPECT_EQ(ErrorOf(text + "4001,1\n"),
+            "f.csv:4002: time_s 4001 breaks uniform sampling (expected 4000, sample time 1 s)");
+  EXPECT_EQ(ErrorOf(text + "4000,1,2\n"), "f.csv:4002: expected 2 cells, found 3");
+  EXPECT_EQ(ErrorOf(text + "4000,1\r\r5\n"), "f.csv:4002: column 'a': '1\r\r5' is not a number");
 }
 
 // Read maps a regular file and reads anything else (a pipe, /dev/stdin) as a stream, with the
