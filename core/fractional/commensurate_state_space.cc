@@ -54,29 +54,46 @@ void Validate(const CommensurateModel& model) {
   }
 }
 
-Eigen::VectorXd SimulateCommensurate(const CommensurateModel& model,
-                                     const Eigen::Ref<const Eigen::VectorXd>& input,
-                                     int memory_length) {
-  Validate(model);
-  if (memory_length < 0) {
-    throw std::invalid_argument(
-        "SimulateCommensurate: memory_length = " + std::to_string(memory_length) + " must be >= 0");
-  }
+namespace {
+
+// What one simulation needs besides its result, kept between calls of a delay scan: the GL
+// weights (they depend on alpha and the record's length only) and the states' history.
+struct SimulationBuffers {
+  Eigen::VectorXd weights;
+  RowMajorMatrix history;
+  Eigen::VectorXd x, next;
+};
+
+// The GL weights SimulateInto uses for `steps` samples with memory L (0: full).
+Eigen::Index SimulationMemory(Eigen::Index steps, int memory_length) {
+  return memory_length > 0 ? memory_length : steps + 1;
+}
+void PrepareWeights(double alpha, Eigen::Index steps, int memory_length, SimulationBuffers& b) {
+  const Eigen::Index memory = SimulationMemory(steps, memory_length);
+  b.weights = GrunwaldLetnikovWeights(alpha, static_cast<int>(std::min(memory, steps + 1) + 1));
+}
+
+// SimulateCommensurate's recursion into `output`, with b.weights from PrepareWeights for this
+// model's alpha and the input's length.  Resizes the buffers only when the sizes change.
+void SimulateInto(const CommensurateModel& model, const Eigen::Ref<const Eigen::VectorXd>& input,
+                  int memory_length, SimulationBuffers& b, Eigen::VectorXd& output) {
   const int n = model.order();
   const Eigen::Index steps = input.size();
-  const Eigen::Index memory = memory_length > 0 ? memory_length : steps + 1;
-  const Eigen::VectorXd w =
-      GrunwaldLetnikovWeights(model.alpha(), static_cast<int>(std::min(memory, steps + 1) + 1));
+  const Eigen::Index memory = SimulationMemory(steps, memory_length);
+  const Eigen::VectorXd& w = b.weights;
   // history(i, steps - k) = x_i[k]: time runs backwards along a row so that the GL sum for x[k+1]
-  // is one contiguous dot product per state.
-  RowMajorMatrix history = RowMajorMatrix::Zero(n, steps + 1);
-  Eigen::VectorXd x = Eigen::VectorXd::Zero(n);
-  Eigen::VectorXd next(n);
-  Eigen::VectorXd output(steps);
+  // is one contiguous dot product per state.  Every column read is written first, at an
+  // earlier step of this call, so the history needs no clearing.
+  b.history.resize(n, steps + 1);
+  b.x.setZero(n);
+  b.next.resize(n);
+  output.resize(steps);
+  Eigen::VectorXd& x = b.x;
+  Eigen::VectorXd& next = b.next;
   const double a_n = model.a(n - 1);
   for (Eigen::Index k = 0; k < steps; ++k) {
     output(k) = x(0) + model.c.dot(x.tail(n - 1));
-    history.col(steps - k) = x;
+    b.history.col(steps - k) = x;
     // A x: shift up, last row -sum a_{n-j} x_{j}.
     next.head(n - 1) = x.tail(n - 1);
     next(n - 1) = -model.a.reverse().dot(x);
@@ -85,10 +102,26 @@ Eigen::VectorXd SimulateCommensurate(const CommensurateModel& model,
     // - sum_{j=1..min(k+1, L)} w_j x[k+1-j]; x[k+1-j] sits at column steps - k - 1 + j.
     const Eigen::Index terms = std::min<Eigen::Index>(k + 1, memory);
     for (int i = 0; i < n; ++i) {
-      next(i) -= w.segment(1, terms).dot(history.row(i).segment(steps - k, terms));
+      next(i) -= w.segment(1, terms).dot(b.history.row(i).segment(steps - k, terms));
     }
     x = next;
   }
+}
+
+}  // namespace
+
+Eigen::VectorXd SimulateCommensurate(const CommensurateModel& model,
+                                     const Eigen::Ref<const Eigen::VectorXd>& input,
+                                     int memory_length) {
+  Validate(model);
+  if (memory_length < 0) {
+    throw std::invalid_argument(
+        "SimulateCommensurate: memory_length = " + std::to_string(memory_length) + " must be >= 0");
+  }
+  SimulationBuffers buffers;
+  PrepareWeights(model.alpha(), input.size(), memory_length, buffers);
+  Eigen::VectorXd output;
+  SimulateInto(model, input, memory_length, buffers, output);
   return output;
 }
 
@@ -110,27 +143,74 @@ Differences ComputeDifferences(const Eigen::VectorXd& du, const Eigen::VectorXd&
   return d;
 }
 
-// Equation-error least squares.  Columns: a_1..a_n, g_1..g_{n-1} (g_m = a_n c_m).
-CommensurateModel LeastSquaresModel(const Differences& d, int q, int delay_samples) {
+// The equation-error least squares' buffers, kept between the candidates of a delay scan (the
+// regressor is the record's length times 2n - 1).
+struct LeastSquaresBuffers {
+  Eigen::MatrixXd phi;
+  Eigen::VectorXd target;
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr;
+  Eigen::VectorXd rotated;  // Q' target
+  Eigen::VectorXd theta;
+};
+
+// Equation-error least squares into `model` (q and the delay set, a and c resized only when q
+// changes).  Columns: a_1..a_n, g_1..g_{n-1} (g_m = a_n c_m).  The solve is Eigen's
+// ColPivHouseholderQR::solve step by step, into the buffers instead of fresh vectors.
+void LeastSquaresModel(const Differences& d, int q, int delay_samples, LeastSquaresBuffers& b,
+                       CommensurateModel& model) {
   const int n = 2 * q;
   const Eigen::Index steps = d.du.size();
-  Eigen::MatrixXd phi(steps, 2 * n - 1);
-  Eigen::VectorXd target(steps);
+  b.phi.resize(steps, 2 * n - 1);
+  b.target.resize(steps);
   for (Eigen::Index k = 0; k < steps; ++k) {
-    target(k) = -d.dy_orders[static_cast<size_t>(n)](k);
-    for (int i = 1; i < n; ++i) phi(k, i - 1) = At(d.dy_orders[static_cast<size_t>(n - i)], k - i);
-    phi(k, n - 1) = At(d.dy, k - n) - At(d.du, k - n - delay_samples);
+    b.target(k) = -d.dy_orders[static_cast<size_t>(n)](k);
+    for (int i = 1; i < n; ++i) {
+      b.phi(k, i - 1) = At(d.dy_orders[static_cast<size_t>(n - i)], k - i);
+    }
+    b.phi(k, n - 1) = At(d.dy, k - n) - At(d.du, k - n - delay_samples);
     for (int m = 1; m < n; ++m) {
-      phi(k, n - 1 + m) = -At(d.du_orders[static_cast<size_t>(m)], k - n + m - delay_samples);
+      b.phi(k, n - 1 + m) = -At(d.du_orders[static_cast<size_t>(m)], k - n + m - delay_samples);
     }
   }
-  const Eigen::VectorXd theta = phi.colPivHouseholderQr().solve(target);
-  CommensurateModel model;
+  b.qr.compute(b.phi);
+  const Eigen::Index pivots = b.qr.nonzeroPivots();
+  b.theta.setZero(2 * n - 1);
+  if (pivots > 0) {
+    // Q' target, reflector by reflector as Eigen's HouseholderSequence applies them to one
+    // column (the same operations, so the same bits), without its temporary per reflector.
+    b.rotated = b.target;
+    for (Eigen::Index k = 0; k < pivots; ++k) {
+      const double tau = b.qr.hCoeffs()(k);
+      if (tau == 0.0) continue;
+      const auto essential = b.qr.matrixQR().col(k).tail(steps - k - 1);
+      auto bottom = b.rotated.tail(steps - k - 1);
+      const double w = essential.dot(bottom) + b.rotated(k);
+      b.rotated(k) -= tau * w;
+      for (Eigen::Index i = 0; i < bottom.size(); ++i) bottom(i) -= (tau * essential(i)) * w;
+    }
+    b.qr.matrixQR()
+        .topLeftCorner(pivots, pivots)
+        .triangularView<Eigen::Upper>()
+        .solveInPlace(b.rotated.head(pivots));
+    for (Eigen::Index i = 0; i < pivots; ++i) {
+      b.theta(b.qr.colsPermutation().indices()(i)) = b.rotated(i);
+    }
+  }
   model.q = q;
   model.delay_samples = delay_samples;
-  model.a = theta.head(n);
+  model.a = b.theta.head(n);
   const double a_n = model.a(n - 1);
-  model.c = a_n != 0.0 ? Eigen::VectorXd(theta.tail(n - 1) / a_n) : Eigen::VectorXd::Zero(n - 1);
+  if (a_n != 0.0) {
+    model.c = b.theta.tail(n - 1) / a_n;
+  } else {
+    model.c.setZero(n - 1);
+  }
+}
+
+CommensurateModel LeastSquaresModel(const Differences& d, int q, int delay_samples) {
+  LeastSquaresBuffers buffers;
+  CommensurateModel model;
+  LeastSquaresModel(d, q, delay_samples, buffers, model);
   return model;
 }
 
@@ -226,15 +306,23 @@ CommensurateFitResult FitCommensurateScanDelay(const Eigen::Ref<const Eigen::Vec
   const Eigen::VectorXd du = input.array() - input(0);
   const Eigen::VectorXd dy = output.array() - output(0);
   const Differences d = ComputeDifferences(du, dy, q);
+  // One set of buffers for every candidate: no record-length allocation per delay.
+  LeastSquaresBuffers least_squares;
+  SimulationBuffers simulation;
+  PrepareWeights(1.0 / q, du.size(), options.memory_length, simulation);
+  CommensurateModel candidate;
+  Eigen::VectorXd simulated;
   double best = std::numeric_limits<double>::infinity();
-  CommensurateModel chosen = LeastSquaresModel(d, q, 0);
+  CommensurateModel chosen;
+  LeastSquaresModel(d, q, 0, least_squares, chosen);
   for (int nk = 0; nk <= max_delay_samples; ++nk) {
-    const CommensurateModel m = LeastSquaresModel(d, q, nk);
-    const Eigen::VectorXd s = SimulateCommensurate(m, du, options.memory_length);
-    const double cost = (s - dy).squaredNorm();
+    LeastSquaresModel(d, q, nk, least_squares, candidate);
+    Validate(candidate);
+    SimulateInto(candidate, du, options.memory_length, simulation, simulated);
+    const double cost = (simulated - dy).squaredNorm();
     if (std::isfinite(cost) && cost < best) {
       best = cost;
-      chosen = m;
+      chosen = candidate;
     }
   }
   return Refine(chosen, du, dy, input, output, sample_time_s, options);

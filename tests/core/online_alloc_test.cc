@@ -1,17 +1,21 @@
-// Proves that the online paths never allocate: this executable replaces malloc/calloc/realloc
+// Proves that the online paths never allocate, and that the batch delay scans allocate nothing per
+// candidate delay: this executable replaces malloc/calloc/realloc
 // (which Eigen and operator new use) with counting versions that forward to glibc.
 #include <gtest/gtest.h>
 
 #include <cstddef>
 #include <cstdlib>
 #include <new>
+#include <utility>
 
+#include "core/fractional/commensurate_state_space.h"
 #include "core/online/online_arx.h"
 #include "core/online/online_fractional.h"
 #include "core/online/online_integrator_delay.h"
 #include "core/online/online_model.h"
 #include "core/online/rls.h"
 #include "core/reach/reach_sample_processor.h"
+#include "tests/core/commensurate_test_models.h"
 #include "tests/core/online_test_data.h"
 
 // glibc's own allocator entry points, which the counting versions forward to: their names are
@@ -283,6 +287,30 @@ TEST(OnlineAllocation, AReachRunningEveryKindDoesNotAllocatePerSample) {
   }
   EXPECT_EQ(g_allocations - before, 0);
   EXPECT_EQ(updated, 0x1FU);  // every model moved
+}
+
+// The frac-ss delay scan fits and simulates every candidate delay in one set of buffers: a scan
+// over 26 delays allocates exactly as often as one over a single delay.
+TEST(BatchScanAllocation, CommensurateDelayScanAllocatesNothingPerCandidate) {
+  const CommensurateModel plant = testdata::SeedOneHalf();  // nk = 17
+  Eigen::VectorXd u(600);
+  for (Eigen::Index k = 0; k < u.size(); ++k) u(k) = (k / 40) % 2 == 0 ? 0.0 : 1.0;
+  const Eigen::VectorXd y = SimulateCommensurate(plant, u);
+  CommensurateFitOptions options;
+  options.refine = false;
+  const auto allocations = [&](int max_delay) {
+    const long before = g_allocations;
+    const CommensurateFitResult fit = FitCommensurateScanDelay(u, y, 2, max_delay, 0.5, options);
+    const long count = g_allocations - before;
+    EXPECT_TRUE(fit.model.a.allFinite());
+    return std::pair{count, fit.model.delay_samples};
+  };
+  const auto [one, one_delay] = allocations(0);
+  const auto [many, found_delay] = allocations(25);
+  EXPECT_EQ(one_delay, 0);
+  EXPECT_EQ(found_delay, 17);  // the scan did look at the other candidates
+  EXPECT_GT(one, 0);
+  EXPECT_EQ(many, one);
 }
 
 }  // namespace
