@@ -2,6 +2,7 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <array>
 #include <fstream>
 #include <iostream>
 #include <string>
@@ -154,6 +155,14 @@ void AddIdentifyModelOptions(CLI::App& cmd, IdentifyOptions& options) {
       ->capture_default_str();
 }
 
+// The model's flags and columns: with --config the reach's settings and channel names are used
+// instead, so each of these is refused beside it.
+constexpr std::array kReachSettingFlags = {
+    "--qin",     "--qout",     "--level", "--max-delay-s",   "--closed-loop", "--p22",
+    "--p22-std", "--canal",    "--pool",  "--keep-outliers", "--u",           "--y",
+    "--na",      "--nb",       "--nk",    "--detrend",       "--alpha",       "--q",
+    "--local",   "--schedule", "--bands", "--bands-file",    "--degree",      "--min-band-samples"};
+
 void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code) {
   CLI::App* cmd = app.add_subcommand("identify", "Identify a model from a CSV experiment record");
   cmd->footer(
@@ -214,12 +223,15 @@ void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code)
   auto* config = online->add_option(
       "--config", options.config,
       "--online: a canalidd configuration; the estimator takes the settings of --reach (as the "
-      "daemon runs it) and its channel names as columns");
+      "daemon runs it) and its channel names as columns (the model's flags and columns are "
+      "refused beside it)");
   auto* reach = online->add_option("--reach", options.reach, "--config: the reach");
   config->needs(reach);
   reach->needs(config);
-  // The reach's settings come from the configuration; a flag beside it would do nothing.
+  // The reach's settings and channel names come from the configuration; a flag beside it would
+  // do nothing.
   for (CLI::Option* setting : {forgetting, initial_covariance, method}) config->excludes(setting);
+  for (const char* name : kReachSettingFlags) config->excludes(cmd->get_option(name));
   // The estimator's settings mean nothing to a batch fit.
   for (CLI::Option* setting : {forgetting, initial_covariance, method, trace, config}) {
     setting->needs(online_flag);

@@ -340,6 +340,38 @@ TEST(OnlineCli, BadOptionsExitTwoWithAClearMessage) {
                  "--initial-covariance excludes --config");
   ExpectBadInput("config-method", "--model id --online --method kalman" + config + csv,
                  "--method excludes --config");
+  // So would the model's flags and columns: every one of them is refused beside --config.
+  for (const std::string& flag :
+       std::vector<std::string>{"--qin q_in",
+                                "--qout q_out",
+                                "--level level",
+                                "--max-delay-s 600",
+                                "--closed-loop off",
+                                "--p22 0.01",
+                                "--p22-std 0.001",
+                                "--keep-outliers",
+                                "--u q_in",
+                                "--y level",
+                                "--na 2",
+                                "--nb 2",
+                                "--nk 3",
+                                "--detrend",
+                                "--alpha 0.5",
+                                "--q 2",
+                                "--local arx",
+                                "--schedule level",
+                                "--bands 1,2",
+                                "--bands-file " + Record("asce2-pool2-prbs"),
+                                "--degree 1",
+                                "--min-band-samples 50"}) {
+    const std::string name = flag.substr(0, flag.find(' '));
+    ExpectBadInput("config" + name, "--model id --online " + flag + config + csv,
+                   name + " excludes --config");
+  }
+  ExpectBadInput("config-canal",
+                 "--model id --online --canal " + std::string(CANALID_SOURCE_DIR) +
+                     "/config/sim/asce-canal2.toml --pool 2" + config + csv,
+                 "excludes --config");
   // The estimator's flags without --online (a batch fit) would do nothing.
   ExpectBadInput("forgetting-batch", "--model id --forgetting 0.99" + csv,
                  "--forgetting requires --online");
