@@ -453,12 +453,16 @@ inline void RlsBank<N>::UpdateLanes(Block& s, std::size_t at, int first_lane, do
   Mask bierman = exponential ? valid | ~valid : (r > forget);
   Hide(bierman);
   const Mask factors = apply & bierman;
+  // Without forgetting (lambda = 1, the default) three of the divisions, the update's costliest
+  // operations, have known quotients: r / 1 is r, and r / (r - 0) is 1 in every lane whose
+  // result is kept (r finite and > 0; others are invalid or not Bierman's).  Same bits as Rls.
+  const bool no_forgetting = lambda == 1.0;
   Lanes measurement = zero + lambda;
   if (!exponential) {
     measurement = one;
-    Assign(bierman, r / (r - forget), measurement);
+    if (!no_forgetting) Assign(bierman, r / (r - forget), measurement);
   }
-  const Lanes scale = one + r / (zero + lambda);
+  const Lanes scale = no_forgetting ? one + r : one + r / (zero + lambda);
   const Lanes step = e / ((zero + lambda) + r);
   // Bierman's measurement update (Rls::UpdateUdFactors) into new U, D and the gain numerator
   // k = P phi.  For directional forgetting's gain-only lanes Rls sums U g as
@@ -471,7 +475,7 @@ inline void RlsBank<N>::UpdateLanes(Block& s, std::size_t at, int first_lane, do
     alpha[j] = running;
     inv_alpha[j] = one / running;
   }
-  Lanes alpha_prev = measurement, inv_prev = one / measurement;
+  Lanes alpha_prev = measurement, inv_prev = no_forgetting ? one : one / measurement;
   Lanes k[kN], nu[kN][kN], nd[kN];
 #pragma GCC unroll 16
   for (std::size_t j = 0; j < kN; ++j) {
