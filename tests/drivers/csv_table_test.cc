@@ -165,9 +165,10 @@ TEST(CsvTable, LongFilesOfEveryLineShapeMatchALineByLineReader) {
       const std::string a = std::to_string(std::sin(0.01 * k));
       const std::string b = std::to_string(k % 7 - 3) + "e-" + std::to_string(k % 5);
       if (kind == "spaces" && k % 3 == 0) {
-        text += " " + t + " ,\t" + a + ", " + b + " \n";
+        text.append(" ").append(t).append(" ,\t").append(a).append(", ").append(b).append(" \n");
       } else {
-        text += t + "," + a + "," + b + (kind == "crlf" ? "\r\n" : "\n");
+        text.append(t).append(",").append(a).append(",").append(b);
+        text.append(kind == "crlf" ? "\r\n" : "\n");
       }
       if (kind == "blank lines" && k % 1000 == 999) text += "\n  \n";
     }
