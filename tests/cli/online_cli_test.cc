@@ -365,8 +365,9 @@ TEST(OnlineCli, BadOptionsExitTwoWithAClearMessage) {
                                 "--degree 1",
                                 "--min-band-samples 50"}) {
     const std::string name = flag.substr(0, flag.find(' '));
-    ExpectBadInput("config" + name, "--model id --online " + flag + config + csv,
-                   name + " excludes --config");
+    std::string args = "--model id --online ";
+    args.append(flag).append(config).append(csv);
+    ExpectBadInput("config" + name, args, name + " excludes --config");
   }
   ExpectBadInput("config-canal",
                  "--model id --online --canal " + std::string(CANALID_SOURCE_DIR) +
