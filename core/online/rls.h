@@ -593,4 +593,24 @@ RlsHealth Rls<N>::health() const {
   return h;
 }
 
+// The sizes canalid uses are compiled once, in rls_instances_*.cc (the class and Update on a
+// Vector regressor), instead of in every file that runs one: a size costs 10-20 s of compile time.
+// Other sizes and regressor expressions are compiled where they are used, as before.
+#define CANALID_RLS_SIZE(prefix, N) \
+  prefix template class Rls<N>;     \
+  prefix template Rls<N>::Result Rls<N>::Update(const Eigen::MatrixBase<Rls<N>::Vector>&, double);
+#define CANALID_RLS_SMALL_SIZES(prefix) \
+  CANALID_RLS_SIZE(prefix, 1)           \
+  CANALID_RLS_SIZE(prefix, 2)           \
+  CANALID_RLS_SIZE(prefix, 3)           \
+  CANALID_RLS_SIZE(prefix, 4)
+#define CANALID_RLS_LARGE_SIZES(prefix) \
+  CANALID_RLS_SIZE(prefix, 5)           \
+  CANALID_RLS_SIZE(prefix, 6)           \
+  CANALID_RLS_SIZE(prefix, 7)           \
+  CANALID_RLS_SIZE(prefix, 8)
+CANALID_RLS_SMALL_SIZES(extern)
+CANALID_RLS_LARGE_SIZES(extern)
+CANALID_RLS_SIZE(extern, Eigen::Dynamic)
+
 }  // namespace canalid::core
