@@ -596,6 +596,8 @@ RlsHealth Rls<N>::health() const {
 // The sizes canalid uses are compiled once, in rls_instances_*.cc (the class and Update on a
 // Vector regressor), instead of in every file that runs one: a size costs 10-20 s of compile time.
 // Other sizes and regressor expressions are compiled where they are used, as before.
+// `prefix` is `extern` or nothing, which cannot take the parentheses clang-tidy asks for.
+// NOLINTBEGIN(bugprone-macro-parentheses)
 #define CANALID_RLS_SIZE(prefix, N) \
   prefix template class Rls<N>;     \
   prefix template Rls<N>::Result Rls<N>::Update(const Eigen::MatrixBase<Rls<N>::Vector>&, double);
@@ -609,6 +611,7 @@ RlsHealth Rls<N>::health() const {
   CANALID_RLS_SIZE(prefix, 6)           \
   CANALID_RLS_SIZE(prefix, 7)           \
   CANALID_RLS_SIZE(prefix, 8)
+// NOLINTEND(bugprone-macro-parentheses)
 CANALID_RLS_SMALL_SIZES(extern)
 CANALID_RLS_LARGE_SIZES(extern)
 CANALID_RLS_SIZE(extern, Eigen::Dynamic)

@@ -42,6 +42,7 @@ LAYERS = {
     "daemon/dashboard": 25,  # `canalid dashboard`'s library: above the configuration it reads
     "daemon/canalidd": 30, "daemon/canalid": 30, "sim/canalsim": 30,
     "daemon/command": 31,
+    "tests/support": 39,  # the paths of the checkout and build tree, for every test
     "bench": 40, "tests": 40,
 }
 # Interface targets of the build itself (warning flags, the version header) that anyone may use.

@@ -23,7 +23,7 @@ struct Published {
 
 // (canal, regime, pool) -> the table's row.
 std::map<std::string, Published> PublishedTable() {
-  std::ifstream in(CANALID_REFERENCE_DIR "/asce_idz_litrico_fromion_2004.csv");
+  std::ifstream in(std::string(CANALID_REFERENCE_DIR) + "/asce_idz_litrico_fromion_2004.csv");
   std::map<std::string, Published> table;
   std::string line;
   std::getline(in, line);

@@ -44,7 +44,8 @@ struct OctaveCase {
 
 std::map<int, OctaveCase> ReadExpected() {
   std::map<int, OctaveCase> cases;
-  for (const auto& r : ReadNumericCsv(CANALID_SOURCE_DIR "/tests/data/octave/arx_expected.csv")) {
+  for (const auto& r :
+       ReadNumericCsv(std::string(CANALID_SOURCE_DIR) + "/tests/data/octave/arx_expected.csv")) {
     // case,na,nb1,nb2,nk,first_sample,index,value
     OctaveCase& c = cases[static_cast<int>(r[0])];
     c.orders.na = static_cast<int>(r[1]);
@@ -60,7 +61,8 @@ std::map<int, OctaveCase> ReadExpected() {
 class ArxOctave : public ::testing::Test {
  protected:
   void SetUp() override {
-    const auto rows = ReadNumericCsv(CANALID_SOURCE_DIR "/tests/data/octave/arx_input.csv");
+    const auto rows =
+        ReadNumericCsv(std::string(CANALID_SOURCE_DIR) + "/tests/data/octave/arx_input.csv");
     ASSERT_EQ(rows.size(), 3000U);
     y_.resize(3000);
     u_.resize(3000, 2);

@@ -41,7 +41,7 @@ std::vector<std::vector<std::string>> ReadRows(const std::string& path) {
 // target_depth_m
 std::map<std::pair<int, int>, PoolGeometry> AsceGeometry() {
   std::map<std::pair<int, int>, PoolGeometry> pools;
-  for (const auto& r : ReadRows(CANALID_REFERENCE_DIR "/asce_test_canals.csv")) {
+  for (const auto& r : ReadRows(std::string(CANALID_REFERENCE_DIR) + "/asce_test_canals.csv")) {
     PoolGeometry g;
     g.length_m = std::stod(r.at(2));
     g.bottom_width_m = std::stod(r.at(3));
@@ -60,7 +60,8 @@ TEST(IdzTheory, ReproducesThePublishedTableForAll32Pools) {
   const auto geometry = AsceGeometry();
   ASSERT_EQ(geometry.size(), 16u);
   // canal,regime,pool,flow_m3s,delay_s,backwater_area_m2,p21_s_per_m2,p22_s_per_m2
-  const auto rows = ReadRows(CANALID_REFERENCE_DIR "/asce_idz_litrico_fromion_2004.csv");
+  const auto rows =
+      ReadRows(std::string(CANALID_REFERENCE_DIR) + "/asce_idz_litrico_fromion_2004.csv");
   ASSERT_EQ(rows.size(), 32u);
   double worst[4] = {0, 0, 0, 0};
   for (const auto& r : rows) {
