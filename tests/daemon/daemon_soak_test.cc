@@ -248,8 +248,9 @@ TEST(DaemonSoak, DaysOfPollingAndExperimentsLeaveMemoryDescriptorsAndCountersFla
   EXPECT_LE(rss_max - rss_day_one, 2048) << "resident memory grows after day 1";
   EXPECT_EQ(fds_max, fds_min) << "open descriptors change after day 1";
 
-  // Counters: no reconnect, no failed write, no reply fault but the late replies that timeouts
-  // leave, and timeouts (a 15 ms response timeout on a shared machine) in at most 1 poll in 1000
+  // Counters: no reconnect or failed write but those timeouts explain (below), no reply fault but
+  // the late replies that timeouts leave, and timeouts (a 15 ms response timeout on a shared
+  // machine) in at most 1 poll in 1000
   // (10 in a short run: a few polls of the 2-day run may meet a busy moment of the test command).
   // At most a fifth of the polls may be skipped as overruns of the 20 ms period on a busy machine.
   ASSERT_EQ(bus.health.count("plc.asce2"), 1U) << "no PLC health heard";
@@ -257,13 +258,22 @@ TEST(DaemonSoak, DaysOfPollingAndExperimentsLeaveMemoryDescriptorsAndCountersFla
   const int64_t polls = plc_counters.at("polls");
   EXPECT_GT(polls, static_cast<int64_t>(0.8 * days * kDayWall / kPollPeriod));
   const int64_t timeouts = plc_counters.at("read_errors.timeout");
-  EXPECT_LE(timeouts, std::max<int64_t>(10, polls / 1000));
+  const int64_t timeout_budget = std::max<int64_t>(10, polls / 1000);
+  EXPECT_LE(timeouts, timeout_budget);
+  // What those timeouts cause by design, and nothing more: three in a row drop the link (the
+  // poller's timeouts_before_reconnect), and the heartbeat writes that meet a dropped link or time
+  // out themselves fail, within the same budget. (Zero was asserted here, and a loaded test
+  // machine failed it: 8 timeouts, 2 reconnects, 6 failed heartbeat writes, nothing aborted.)
+  constexpr int64_t kTimeoutsBeforeReconnect = 3;
   for (const auto& [name, value] : plc_counters) {
     if (name == "bad_replies.transaction_id") {
       EXPECT_LE(value, timeouts) << name;
+    } else if (name == "reconnects") {
+      EXPECT_LE(value, timeouts / kTimeoutsBeforeReconnect) << name;
+    } else if (name == "writes_failed") {
+      EXPECT_LE(value, timeout_budget) << name;
     } else if ((name.rfind("read_errors.", 0) == 0 && name != "read_errors.timeout") ||
-               name.rfind("bad_replies.", 0) == 0 || name == "reconnects" ||
-               name == "connect_failures" || name == "writes_failed") {
+               name.rfind("bad_replies.", 0) == 0 || name == "connect_failures") {
       EXPECT_EQ(value, 0) << name;
     }
   }
