@@ -16,6 +16,17 @@ namespace {
   ThrowOptionOutOfRange("OnlineIntegratorDelayOptions", name, value, range);
 }
 
+/// IntegratorDelaySnapshot::flow_level_rms_m from b, P_bb (the covariance's b entry over sigma2)
+/// and the estimator's updates.
+double FlowLevelRms(double b, double p_bb, std::int64_t updates, double forgetting) {
+  if (!(p_bb > 0.0 && std::isfinite(p_bb)) || updates <= 0) {
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+  double memory = static_cast<double>(updates);
+  if (forgetting < 1.0) memory = std::min(memory, 1.0 / (1.0 - forgetting));
+  return std::abs(b) / std::sqrt(p_bb * memory);
+}
+
 }  // namespace
 
 void IntegratorDelayHealthOptions::Validate() const {
@@ -25,6 +36,9 @@ void IntegratorDelayHealthOptions::Validate() const {
   }
   if (!(information_min_floor >= 0.0 && std::isfinite(information_min_floor))) {
     Fail("health.information_min_floor", information_min_floor, "finite, >= 0");
+  }
+  if (!(level_resolution_m >= 0.0 && std::isfinite(level_resolution_m))) {
+    Fail("health.level_resolution_m", level_resolution_m, "finite, >= 0");
   }
 }
 
@@ -37,7 +51,8 @@ int IntegratorDelaySnapshotFlags(const IntegratorDelaySnapshot& s,
     flags |= kFlagNan;
   }
   if (s.health.wound_up) flags |= kFlagWindup;
-  if (!(s.information_min >= options.health.InformationMin(options.rls.initial_covariance))) {
+  if (!(s.information_min >= options.health.InformationMin(options.rls.initial_covariance)) ||
+      s.flow_level_rms_m < options.health.level_resolution_m) {
     flags |= kFlagLowExcitation;
   }
   if (!(s.condition_number <= options.health.condition_max)) flags |= kFlagIllConditioned;
@@ -412,6 +427,10 @@ void OnlineIntegratorDelayBank::FillThreeStepSnapshot(const OnlineThreeStep& t,
   s.prediction_error_m = rls.last_prediction_error();
   s.innovation_std_m = std::sqrt(rls.innovation_variance());
   s.health = rls.health();
+  // Step 3's b is a regression coefficient too; its P_bb is b_std^2 / sigma2.
+  const double s2 = rls.innovation_variance();
+  s.flow_level_rms_m = FlowLevelRms(s.b, s2 > 0.0 ? s.b_std * s.b_std / s2 : 0.0, s.health.updates,
+                                    options_.rls.forgetting);
   Eigen::Matrix<double, OnlineThreeStep::kParams, OnlineThreeStep::kParams> p;
   rls.Covariance(p);
   FillConditioning<OnlineThreeStep::kParams>(p, s);
@@ -474,6 +493,7 @@ void OnlineIntegratorDelayBank::FillSnapshot(const Estimator& rls, std::size_t u
   s.prediction_error_m = rls.last_prediction_error();
   s.innovation_std_m = std::sqrt(s2);
   s.health = rls.health();
+  s.flow_level_rms_m = FlowLevelRms(s.b, p(0, 0), s.health.updates, options_.rls.forgetting);
   FillConditioning<N>(p, s);
 }
 

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include "core/online/online_integrator_delay.h"
 #include "tests/core/online_test_data.h"
@@ -65,7 +66,9 @@ TEST(OnlineIntegratorDelayHealth, LowExcitationWhenTheFlowsNeverMove) {
 // A constant net inflow (0.05 m^3/s) with a PRBS of 0.2 l/s on top: Q_nk is almost k times a
 // constant, collinear with the drift column.  Measured condition number 1e10 against 1.6e7
 // for the healthy pool; the weakest direction still has 4e3 times the prior's information, so
-// this is conditioning, not missing excitation.
+// this is conditioning, not missing information.  (The PRBS swings the level by about 1e-5 m,
+// under the level-resolution rule's 1e-4 m, which would set kFlagLowExcitation: that rule is off
+// here.)
 TEST(OnlineIntegratorDelayHealth, IllConditionedWhenTheRegressorsAreNearlyCollinear) {
   PoolSpec spec;
   spec.q_in_amplitude_m3s = 2e-4;
@@ -73,6 +76,7 @@ TEST(OnlineIntegratorDelayHealth, IllConditionedWhenTheRegressorsAreNearlyCollin
   spec.offtake_m3s = -0.05;
   OnlineIntegratorDelayOptions o = Options();
   o.health.condition_max = 1e9;
+  o.health.level_resolution_m = 0.0;
   const IntegratorDelaySnapshot s = RunBank(o, spec, 7, 500);
   ASSERT_TRUE(s.valid);
   EXPECT_GT(s.condition_number, 1e9);
@@ -173,7 +177,64 @@ TEST(OnlineIntegratorDelayHealth, TheLowExcitationFloorHoldsAtALargeP0) {
   EXPECT_NEAR(floored.information_min, 1e-10, 1e-16);  // the prior's, along b
   EXPECT_TRUE(floored.flags & kFlagLowExcitation) << floored.flags;
   o.health.information_min_floor = 0.0;
+  o.health.level_resolution_m = 0.0;  // no swing at all: that rule would flag it too
   EXPECT_FALSE(RunBank(o, spec, 7).flags & kFlagLowExcitation);
+}
+
+// The default pool's flow term swings the level by centimetres; flows 1e5 times smaller, measured
+// without noise, give the right area from a swing no level sensor resolves (~1e-7 m). The
+// information floors are off here, so only the level-resolution rule can flag it. Between the
+// two, the swing is b rms(Q_nk) computed independently from the data: Q_nk's residual after the
+// offset and drift, times the true b.
+TEST(OnlineIntegratorDelayHealth, LowExcitationWhenTheFlowExplainsASwingBelowTheResolution) {
+  OnlineIntegratorDelayOptions o = Options();
+  o.rls.initial_covariance = 1e10;  // the data, not the prior, decides b
+  o.health.information_min_per_p0 = 0.0;
+  o.health.information_min_floor = 0.0;
+  const IntegratorDelaySnapshot moving = RunBank(o, PoolSpec{}, 7);
+  ASSERT_TRUE(moving.valid);
+  EXPECT_GT(moving.flow_level_rms_m, 1e-3);
+  EXPECT_FALSE(moving.flags & kFlagLowExcitation) << moving.flags;
+
+  PoolSpec still;
+  still.q_in_amplitude_m3s = 2e-6;
+  still.q_out_amplitude_m3s = 1e-6;
+  still.offtake_m3s = 0.0;
+  still.noise_m = 0.0;
+  const IntegratorDelaySnapshot s = RunBank(o, still, 7);
+  ASSERT_TRUE(s.valid);
+  EXPECT_NEAR(s.area_m2, 6000.0, 60.0);  // noise-free: right, but from a swing of ~1e-7 m
+  EXPECT_LT(s.flow_level_rms_m, 1e-5);
+  EXPECT_GT(s.flow_level_rms_m, 1e-9);
+  EXPECT_TRUE(s.flags & kFlagLowExcitation) << s.flags;
+  // The swing against the data: Q_7(k) from the flows, detrended by least squares on [1, k].
+  const testdata::PoolData d = MakePool(still);
+  const int k0 = o.max_delay_samples + 1;
+  std::vector<double> q;
+  double sum = 0.0;
+  for (int k = k0; k < still.samples; ++k) {
+    sum += d.q_in[static_cast<std::size_t>(k - 7)] - d.q_out[static_cast<std::size_t>(k - 1)];
+    q.push_back(sum);
+  }
+  const auto n = static_cast<double>(q.size());
+  double st = 0.0, sq = 0.0, stt = 0.0, stq = 0.0;
+  for (std::size_t i = 0; i < q.size(); ++i) {
+    const auto t = static_cast<double>(i);
+    st += t;
+    sq += q[i];
+    stt += t * t;
+    stq += t * q[i];
+  }
+  const double slope = (n * stq - st * sq) / (n * stt - st * st);
+  const double intercept = (sq - slope * st) / n;
+  double ss = 0.0;
+  for (std::size_t i = 0; i < q.size(); ++i) {
+    const double r = q[i] - intercept - slope * static_cast<double>(i);
+    ss += r * r;
+  }
+  EXPECT_NEAR(s.flow_level_rms_m, still.b * std::sqrt(ss / n), 0.02 * s.flow_level_rms_m);
+  o.health.level_resolution_m = 0.0;
+  EXPECT_FALSE(RunBank(o, still, 7).flags & kFlagLowExcitation);
 }
 
 TEST(OnlineIntegratorDelayHealth, BadThresholdsThrow) {
@@ -185,6 +246,9 @@ TEST(OnlineIntegratorDelayHealth, BadThresholdsThrow) {
   EXPECT_THROW(OnlineIntegratorDelayBank{o}, std::invalid_argument);
   o = Options();
   o.health.information_min_floor = -1.0;
+  EXPECT_THROW(OnlineIntegratorDelayBank{o}, std::invalid_argument);
+  o = Options();
+  o.health.level_resolution_m = std::numeric_limits<double>::infinity();
   EXPECT_THROW(OnlineIntegratorDelayBank{o}, std::invalid_argument);
 }
 
