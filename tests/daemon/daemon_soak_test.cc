@@ -103,6 +103,11 @@ class BusListener {
     for (int i = 0; i < m->num_params; ++i) {
       p[m->param_names[static_cast<std::size_t>(i)]] = m->param_values[static_cast<std::size_t>(i)];
     }
+    std::map<std::string, double> sd;
+    for (int i = 0; i < m->num_params; ++i) {
+      sd[m->param_names[static_cast<std::size_t>(i)]] =
+          m->param_std_devs[static_cast<std::size_t>(i)];
+    }
     const double area = p.count("area_m2") != 0 ? p["area_m2"] : NAN;
     const double delay = p.count("delay_s") != 0 ? p["delay_s"] : NAN;
     const bool absurd =
@@ -115,7 +120,10 @@ class BusListener {
       if (absurd) (m->flags != 0 ? flagged_absurd : unflagged_absurd)++;
       if (absurd && m->flags == 0 && first_unflagged.empty()) {
         first_unflagged = "area " + std::to_string(area) + " m2, delay " + std::to_string(delay) +
-                          " s, samples " + std::to_string(m->samples_used);
+                          " s, samples " + std::to_string(m->samples_used) + ", area sd " +
+                          std::to_string(sd["area_m2"]) + " m2, excitation " +
+                          std::to_string(m->excitation) + ", condition " +
+                          std::to_string(m->condition_number);
       }
     }
   }
@@ -265,9 +273,13 @@ TEST(DaemonSoak, DaysOfPollingAndExperimentsLeaveMemoryDescriptorsAndCountersFla
   // out themselves fail, within the same budget. (Zero was asserted here, and a loaded test
   // machine failed it: 8 timeouts, 2 reconnects, 6 failed heartbeat writes, nothing aborted.)
   constexpr int64_t kTimeoutsBeforeReconnect = 3;
+  // A late reply is skipped by the next exchange and counted as a transaction-id fault; the
+  // request it answered timed out, a read (a read timeout) or a heartbeat write (a failed write).
+  const int64_t writes_failed = plc_counters.at("writes_failed");
   for (const auto& [name, value] : plc_counters) {
     if (name == "bad_replies.transaction_id") {
-      EXPECT_LE(value, timeouts) << name;
+      EXPECT_LE(value, timeouts + writes_failed)
+          << name << ": " << timeouts << " read timeouts, " << writes_failed << " failed writes";
     } else if (name == "reconnects") {
       EXPECT_LE(value, timeouts / kTimeoutsBeforeReconnect) << name;
     } else if (name == "writes_failed") {
@@ -297,9 +309,22 @@ TEST(DaemonSoak, DaysOfPollingAndExperimentsLeaveMemoryDescriptorsAndCountersFla
   ASSERT_NE(read_end, std::string::npos) << log.substr(0, 4000);
   const std::string nominal =
       log.substr(read_at + read_marker.size(), read_end - read_at - read_marker.size());
-  // Each experiment writes it when it starts to settle and again when it ends.
-  EXPECT_EQ(count(read_marker + nominal + " restored"), 2 * started) << log.substr(0, 4000);
-  EXPECT_EQ(count(" restored"), 2 * started) << "a restore to another value";
+  // Each experiment ends with the nominal written back and confirmed by the PLC: after each
+  // "experiment done", before the next start (or the end of the log). The write at the start of
+  // settling is confirmed too unless the first excitation write supersedes it first (settling
+  // lasts 10 polls, 0.2 wall s, and a loaded machine delayed that write's answer past it once),
+  // so it is counted as at most one per experiment. No restore is to another value.
+  const std::string restored = read_marker + nominal + " restored";
+  const std::string done = "reach pool2: experiment done";
+  long ends_restored = 0;
+  for (std::size_t at = log.find(done); at != std::string::npos; at = log.find(done, at + 1)) {
+    const std::size_t next_start = log.find("starting the experiment", at);
+    const std::size_t restore_at = log.find(restored, at);
+    if (restore_at != std::string::npos && restore_at < next_start) ++ends_restored;
+  }
+  EXPECT_EQ(ends_restored, started) << log.substr(0, 4000);
+  EXPECT_LE(count(restored), 2 * started) << log.substr(0, 4000);
+  EXPECT_EQ(count(" restored"), count(restored)) << "a restore to another value";
   EXPECT_EQ(count("experiment aborted"), 0) << log.substr(0, 4000);
   EXPECT_EQ(bus.unflagged_absurd, 0) << "first: " << bus.first_unflagged;
   EXPECT_GT(bus.online_id, 0);
