@@ -297,7 +297,7 @@ void RlsBank<N>::Load(int lane, Rls<N>& into) const {
 }
 
 template <int N>
-typename RlsBank<N>::Result RlsBank<N>::result(int lane) const {
+inline typename RlsBank<N>::Result RlsBank<N>::result(int lane) const {
   if (!soa_) return results_[Index(lane)];
   const Block& s = blocks_[Index(lane / kBlock)];
   const auto l = static_cast<std::size_t>(lane % kBlock);
@@ -327,19 +327,19 @@ void RlsBank<N>::Transform(int lane, const Matrix& t) {
 }
 
 template <int N>
-double RlsBank<N>::theta(int lane, int i) const {
+inline double RlsBank<N>::theta(int lane, int i) const {
   if (!soa_) return scalar_[Index(lane)].theta()(i);
   return blocks_[Index(lane / kBlock)].theta[Index(i)][Index(lane % kBlock)];
 }
 
 template <int N>
-double RlsBank<N>::residual_sum_of_squares(int lane) const {
+inline double RlsBank<N>::residual_sum_of_squares(int lane) const {
   if (!soa_) return scalar_[Index(lane)].residual_sum_of_squares();
   return blocks_[Index(lane / kBlock)].ssr[Index(lane % kBlock)];
 }
 
 template <int N>
-double RlsBank<N>::CovarianceDiagonal(int lane, int i) const {
+inline double RlsBank<N>::CovarianceDiagonal(int lane, int i) const {
   if (!soa_) return scalar_[Index(lane)].CovarianceDiagonal(i);
   const Block& s = blocks_[Index(lane / kBlock)];
   const std::size_t l = Index(lane % kBlock), ii = Index(i);
