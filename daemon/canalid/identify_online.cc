@@ -133,6 +133,7 @@ nlohmann::json OnlineId(const IdentifyOptions& options, const drivers::CsvTable&
                        : bank_health.closed_loop                          ? "online-iv"
                                                  : "online-" + options.method;
   model["forgetting"] = options.forgetting;
+  model["initial_covariance"] = id.rls.initial_covariance;
   model["health"] = health;
   model["preprocessing"] = {{"level_outliers_replaced", outliers.count}};
   model["warnings"] = nlohmann::json::array();

@@ -162,6 +162,7 @@ nlohmann::json IdentifyOnlineArx(const IdentifyOptions& options, const drivers::
   json["preprocessing"] = preprocessing;
   json["estimator"] = "online-" + options.method;
   json["forgetting"] = options.forgetting;
+  json["initial_covariance"] = rls_options.initial_covariance;
   json["prediction_error"] = recursion.last_prediction_error;
   json["health"] = RlsHealthJson(recursion.health);
   try {

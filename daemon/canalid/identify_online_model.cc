@@ -172,6 +172,8 @@ nlohmann::json IdentifyOnlineModel(const IdentifyOptions& options, const drivers
   nlohmann::json json = drivers::OnlineModelJson(snapshot, table.sample_time_s());
   json["method"] = config::EnumName(settings.rls_method);
   json["forgetting"] = settings.forgetting;
+  json["initial_covariance"] =
+      settings.initial_covariance.value_or(core::DefaultInitialCovariance(*kind));
   if (!options.config.empty()) json["reach"] = options.reach;
   return json;
 }

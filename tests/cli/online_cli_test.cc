@@ -66,6 +66,7 @@ TEST(OnlineCli, IdOnFixedGateRecordEqualsTheBatchOpenLoopFit) {
   EXPECT_FALSE(online["closed_loop"].get<bool>());
   EXPECT_LT(Rel(online["b"].get<double>(), batch["b"].get<double>()), 1e-6);
   EXPECT_LT(Rel(online["p21_s_per_m2"].get<double>(), batch["p21_s_per_m2"].get<double>()), 1e-6);
+  EXPECT_EQ(online.value("initial_covariance", 0.0), 1e10);  // the id kind's default P0
   EXPECT_GE(online["delay_s"].get<double>(), 0.5 * kIdzDelay);
   EXPECT_LE(online["delay_s"].get<double>(), 1.2 * kIdzDelay);
 }
@@ -171,6 +172,7 @@ TEST(OnlineCli, InitialCovarianceSetsThePriorsWeight) {
                            Record("asce2-pool2-prbs-fixed-gate");
   const auto batch = Identify("arx-prior-batch", args);
   const auto tight = Identify("arx-prior-tight", args + " --online --initial-covariance 1e-8");
+  EXPECT_EQ(tight.value("initial_covariance", 0.0), 1e-8);  // the JSON says which P0 it used
   for (std::size_t j = 0; j < 2; ++j) {
     EXPECT_GT(Rel(tight["a"][j].get<double>(), batch["a"][j].get<double>()), 0.5) << j;
     EXPECT_LT(std::abs(tight["a"][j].get<double>()), 0.5 * std::abs(batch["a"][j].get<double>()))
