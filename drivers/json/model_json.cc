@@ -244,7 +244,9 @@ nlohmann::json OnlineIntegratorDelayJson(const core::IntegratorDelaySnapshot& s,
           {"b_std", s.b_std},
           {"area_std_m2", s.area_std_m2},
           {"prediction_error_m", s.prediction_error_m},
-          {"innovation_std_m", s.innovation_std_m}};
+          {"innovation_std_m", s.innovation_std_m},
+          {"flow_level_rms_m", s.flow_level_rms_m},
+          {"flags", s.flags}};
 }
 
 nlohmann::json OnlineModelJson(const core::OnlineModelSnapshot& s, double sample_time_s) {

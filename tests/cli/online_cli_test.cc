@@ -48,6 +48,10 @@ TEST(OnlineCli, IdOnCleanAndNoisyRecordsMeetsTheHeldOutTolerances) {
     EXPECT_EQ(model["estimator"], "online-ud_directional");
     EXPECT_GT(model["health"]["updates"].get<int>(), 500);
     EXPECT_FALSE(model["health"]["wound_up"].get<bool>());
+    // A designed experiment swings the level by centimetres through the flow term (measured
+    // 20 mm), far above the 0.1 mm under which the snapshot is flagged: no health flag.
+    EXPECT_GT(model["flow_level_rms_m"].get<double>(), 0.01) << model.dump();
+    EXPECT_EQ(model["flags"], 0) << model.dump();
   }
 }
 
