@@ -101,14 +101,10 @@ class BusListener {
   void OnModel(const lcm::ReceiveBuffer*, const std::string&, const canalid::model_snapshot_t* m) {
     ++models;
     if (m->model_kind != "id") return;
-    std::map<std::string, double> p;
-    for (int i = 0; i < m->num_params; ++i) {
-      p[m->param_names[static_cast<std::size_t>(i)]] = m->param_values[static_cast<std::size_t>(i)];
-    }
-    std::map<std::string, double> sd;
-    for (int i = 0; i < m->num_params; ++i) {
-      sd[m->param_names[static_cast<std::size_t>(i)]] =
-          m->param_std_devs[static_cast<std::size_t>(i)];
+    std::map<std::string, double> p, sd;
+    for (std::size_t i = 0; i < static_cast<std::size_t>(m->num_params); ++i) {
+      p[m->param_names[i]] = m->param_values[i];
+      sd[m->param_names[i]] = m->param_std_devs[i];
     }
     const double area = p.count("area_m2") != 0 ? p["area_m2"] : NAN;
     const double delay = p.count("delay_s") != 0 ? p["delay_s"] : NAN;
