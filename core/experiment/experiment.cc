@@ -130,6 +130,8 @@ const char* AbortReasonName(AbortReason reason) {
       return "experiment guard not persisted";
     case AbortReason::kSampleGap:
       return "sample gap";
+    case AbortReason::kJointStop:
+      return "stopped with its joint experiment";
   }
   return "unknown";
 }
@@ -199,8 +201,11 @@ ExperimentTransition Step(const ExperimentPlan& plan, const ExperimentState& sta
       return t;
     }
     case ExperimentEventKind::kStop:
+    case ExperimentEventKind::kJointStop:
       if (Running(state.phase) || state.phase == ExperimentPhase::kIdentifying) {
-        return Abort(plan, state, AbortReason::kOperatorStop);
+        return Abort(plan, state,
+                     event.kind == ExperimentEventKind::kStop ? AbortReason::kOperatorStop
+                                                              : AbortReason::kJointStop);
       }
       return {state, {}};
     case ExperimentEventKind::kSample:

@@ -32,6 +32,9 @@ enum class AbortReason : std::uint8_t {
   kIdentificationFailed,  ///< the batch identification found no usable model
   kGuardNotPersisted,     ///< the restart guard could not be written before an excitation write
   kSampleGap,  ///< two samples further apart than max_sample_gap_s (stall, overrun, reconnect)
+  /// Another experiment of its joint experiment ended (core/reach/joint_experiments.h): the
+  /// leader's excitation is over, or a member aborted.
+  kJointStop,
 };
 
 const char* ExperimentPhaseName(ExperimentPhase phase);
@@ -67,9 +70,10 @@ struct ExperimentSample {
 };
 
 enum class ExperimentEventKind : std::uint8_t {
-  kStart,   ///< begin (from idle, done or aborted); sample.time_s: the last sample's time (or NaN)
-  kStop,    ///< operator stop: abort with kOperatorStop
-  kSample,  ///< a new sample
+  kStart,  ///< begin (from idle, done or aborted); sample.time_s: the last sample's time (or NaN)
+  kStop,   ///< operator stop: abort with kOperatorStop
+  kJointStop,          ///< its joint experiment ended: abort with kJointStop
+  kSample,             ///< a new sample
   kWriteFailed,        ///< a setpoint write failed
   kGuardNotPersisted,  ///< the restart guard (core/experiment/experiment_guard.h) could not be
                        ///< persisted

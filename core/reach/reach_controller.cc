@@ -166,6 +166,8 @@ ReachActions ReachController::Start(std::string_view name) {
 
 ReachActions ReachController::Stop() { return Track(pipeline_.StopExperiment()); }
 
+ReachActions ReachController::StopJoint() { return Track(pipeline_.StopJointExperiment()); }
+
 ReachActions ReachController::OnLinkLost() { return Track(pipeline_.OnLinkLost()); }
 
 ReachActions ReachController::OnGuardNotPersisted() {

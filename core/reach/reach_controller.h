@@ -145,6 +145,9 @@ class ReachController final {
   ReachActions Start(std::string_view name = {});
   /// An operator's stop, or the daemon's: aborts a running experiment, restoring the nominal.
   ReachActions Stop();
+  /// Its joint experiment ended (JointExperiments): aborts a running experiment (kJointStop),
+  /// restoring the nominal.
+  ReachActions StopJoint();
   /// The link to the PLC is down between polls: aborts a running experiment.
   ReachActions OnLinkLost();
   /// The caller queued the write of the last actions to the actuator, under `id` (ids increase

@@ -101,6 +101,12 @@ ReachActions ReachSampleProcessor::StopExperiment() {
   return Apply(event);
 }
 
+ReachActions ReachSampleProcessor::StopJointExperiment() {
+  ExperimentEvent event;
+  event.kind = ExperimentEventKind::kJointStop;
+  return Apply(event);
+}
+
 ReachActions ReachSampleProcessor::OnLinkLost() {
   ExperimentEvent event;
   event.kind = ExperimentEventKind::kSample;
@@ -198,10 +204,11 @@ std::optional<IntegratorDelayIdentification> ReachSampleProcessor::IdentifyRecor
     process_ok = process_ok || process_results_.back().ok();
   }
   const bool idz_ok = idz_result_.has_value() && idz_problem_.empty();
-  if (!options_.batch_id && !process_ok && !idz_ok) {
-    identification_problem_ = options_.batch_idz         ? "idz: " + idz_problem_
-                              : process_results_.empty() ? "no batch model is configured"
-                                                         : process_results_.front().problem;
+  const bool nothing_to_identify =
+      !options_.batch_id && !options_.batch_idz && options_.batch_process_models.empty();
+  if (!options_.batch_id && !process_ok && !idz_ok && !nothing_to_identify) {
+    identification_problem_ =
+        options_.batch_idz ? "idz: " + idz_problem_ : process_results_.front().problem;
   }
   event.kind = identification_problem_.empty() ? ExperimentEventKind::kIdentificationSucceeded
                                                : ExperimentEventKind::kIdentificationFailed;

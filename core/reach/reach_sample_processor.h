@@ -80,6 +80,9 @@ class ReachSampleProcessor final {
   /// Starts at the time of the last sample: the next one must follow within the plan's gap bound.
   ReachActions StartExperiment();
   ReachActions StopExperiment();
+  /// Its joint experiment ended (core/reach/joint_experiments.h): aborts a running experiment
+  /// with kJointStop, restoring the nominal.
+  ReachActions StopJointExperiment();
   /// The PLC link is down and no samples come (the poller is reconnecting): abort if running.
   /// Nothing else changes (no estimator update, no sample counted).
   ReachActions OnLinkLost();
@@ -102,7 +105,9 @@ class ReachSampleProcessor final {
   /// (kIdentificationFailed): with batch_id by the ID model (inside the bounds of the reach's
   /// delay bank, IntegratorDelayBoundsProblem; the result, if any, is still returned for the
   /// operator to see, and identification_problem() says why it is not the reach's model), else
-  /// done when the IDZ model (within the same bounds) or some process model fitted.
+  /// done when the IDZ model (within the same bounds) or some process model fitted, and done with
+  /// no model when no batch kind is configured (a reach that only moves its actuator in joint
+  /// experiments).
   /// @pre a record is complete.
   std::optional<IntegratorDelayIdentification> IdentifyRecord(ReachActions* actions);
   /// Why the last IdentifyRecord gave no usable model (empty when it did).

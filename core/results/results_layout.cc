@@ -44,7 +44,7 @@ constexpr std::array<ResultsField, 14> kReach{{
     {kReachAbortReason, ResultsType::kU16, "abort_reason",
      "why the last experiment aborted: 0 none, 1 level out of band, 2 level sensor invalid, 3 PLC "
      "link lost, 4 setpoint write failed, 5 stopped by operator, 6 identification failed, 7 "
-     "experiment guard not persisted, 8 sample gap"},
+     "experiment guard not persisted, 8 sample gap, 9 stopped with its joint experiment"},
     {kReachProgress, ResultsType::kF32, "experiment_progress",
      "fraction of the experiment's settle and excitation samples done, 0 to 1"},
     {kReachTimeLeft, ResultsType::kF32, "experiment_time_left_s",

@@ -99,6 +99,7 @@ TEST(Experiment, EveryFaultAbortsAndRestoresNominalInTheSameTransition) {
       {Sample(2.1, true, false), AbortReason::kLinkLost},
       {Event(ExperimentEventKind::kWriteFailed), AbortReason::kWriteFailed},
       {Event(ExperimentEventKind::kStop), AbortReason::kOperatorStop},
+      {Event(ExperimentEventKind::kJointStop), AbortReason::kJointStop},
   };
   for (const Case& c : cases) {
     for (int warmup : {2, 9}) {  // while settling, and while exciting

@@ -187,15 +187,20 @@ TEST(ProcessBatch, MaxDelayZeroKeepsOnlyDelayZero) {
   EXPECT_NEAR(free.foptd->model.delay_s, static_cast<double>(kDelaySamples) * kTs, 0.5 * kTs);
 }
 
-TEST(ProcessBatch, WithoutAnyModelTheExperimentFailsAndSaysWhy) {
+// A reach with no batch kind only moves its actuator (the partner of a joint experiment): its
+// experiment ends done, with no model and no problem to report.
+TEST(ProcessBatch, WithoutAnyModelTheExperimentEndsDoneWithNoModel) {
   ReachSampleProcessorOptions o = FlumeOptions(false);
   o.batch_process_models.clear();
+  ASSERT_FALSE(o.batch_id);
+  ASSERT_FALSE(o.batch_idz.has_value());
   ReachSampleProcessor reach(o);
   RunExperiment(reach);
   ReachActions done;
-  reach.IdentifyRecord(&done);
-  EXPECT_EQ(reach.experiment_state().phase, ExperimentPhase::kAborted);
-  EXPECT_EQ(reach.identification_problem(), "no batch model is configured");
+  EXPECT_FALSE(reach.IdentifyRecord(&done).has_value());
+  EXPECT_EQ(reach.experiment_state().phase, ExperimentPhase::kDone);
+  EXPECT_TRUE(reach.identification_problem().empty()) << reach.identification_problem();
+  EXPECT_TRUE(reach.process_batch_results().empty());
 }
 
 TEST(ProcessBatch, AFitThatCannotRunIsAProblemNotAThrow) {

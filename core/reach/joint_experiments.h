@@ -1,0 +1,75 @@
+#pragma once
+#include <cstddef>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/reach/reach_controller.h"
+
+namespace canalid::core {
+
+/// An experiment of one reach that runs experiments of other reaches with it. The two-structure
+/// experiment of a pool is one: a PRBS on its inflow gate (the leader) and a second, uncorrelated
+/// PRBS on its offtake or downstream structure (a partner), so that its outflow moves on its own
+/// and the IDZ model's p22 comes from the data (docs/closed-loop.md). Each actuator is the
+/// actuator of its own reach, with that reach's limits, rate, level band, guard and restore.
+/// Reaches are indices into the caller's list of controllers.
+struct JointExperiment {
+  struct Member {
+    std::size_t reach = 0;
+    std::string experiment;
+  };
+  Member leader;
+  std::vector<Member> partners;  ///< each on another reach than the leader's
+};
+
+/// What the joint rules did to a reach other than the one whose phase changed: the actions to act
+/// on as on the reach's own (writes, guard, publication; their phase change is passed back to
+/// AfterPhaseChange like any other), and why, for the log.
+struct JointOrder {
+  std::size_t reach = 0;
+  ReachActions actions;
+  std::string why;
+};
+
+/// The rules of joint experiments, shared by the daemon and `canalid replay`, which run them on the
+/// same events:
+/// - the leader's experiment starts only with all its partners: StartRefusal() includes theirs,
+///   and when the leader starts (settling or exciting from another phase) with a partner unable to
+///   start, the leader stops at once (kJointStop) and nothing else moves;
+/// - when the leader starts, each partner's experiment starts with it, at the same poll;
+/// - when the leader leaves settling/exciting (its excitation is over, or it aborted), the partners
+///   still running stop (kJointStop): they move their actuators for the leader's record only;
+/// - when a partner aborts while the leader runs, the leader and the other partners stop.
+/// The rules only add starts and stops: every actuator keeps its own reach's safety rules, and
+/// every stop restores that actuator's nominal through its own ReachController. A partner's
+/// experiment started on its own (an operator's command) is not joint: nothing follows from it.
+/// Deterministic; allocates only when a phase changes (the orders), never per poll.
+class JointExperiments final {
+ public:
+  JointExperiments() = default;
+  explicit JointExperiments(std::vector<JointExperiment> joints);
+
+  /// Why starting experiment `name` (empty: the reach's only one) of `reach` would be refused now:
+  /// its own refusal, else that of a partner (named); empty when all would start. A null entry of
+  /// `reaches` is a reach the caller does not run (a replay of one reach): it refuses nothing.
+  std::string StartRefusal(std::span<ReachController* const> reaches, std::size_t reach,
+                           std::string_view name = {}) const;
+  /// After actions of `reach` that changed its experiment's phase: the starts and stops the joint
+  /// rules ask of other reaches (empty: none).
+  std::vector<JointOrder> AfterPhaseChange(std::span<ReachController* const> reaches,
+                                           std::size_t reach);
+  /// The joint experiments, as built.
+  const std::vector<JointExperiment>& joints() const { return joints_; }
+
+ private:
+  /// Stops every member of joint `j` but `except` that is still running, with `why`.
+  void StopOthers(std::span<ReachController* const> reaches, std::size_t j, std::size_t except,
+                  const std::string& why, std::vector<JointOrder>* orders) const;
+
+  std::vector<JointExperiment> joints_;
+  std::vector<char> active_;  ///< per joint: its leader started it and it has not ended
+};
+
+}  // namespace canalid::core
