@@ -37,6 +37,7 @@ ExperimentPlan BuildExperimentPlan(const DaemonConfig& config, const ExperimentC
   const double ts = ReachSampleTimeS(config, *reach);
 
   ExperimentPlan plan;
+  const bool step_mode = experiment.mode == ExperimentMode::kStep;
   plan.prbs.nominal = nominal_setpoint;
   plan.prbs.seed = static_cast<std::uint32_t>(experiment.seed);
   if (experiment.mode == ExperimentMode::kDesign) {
@@ -59,6 +60,11 @@ ExperimentPlan BuildExperimentPlan(const DaemonConfig& config, const ExperimentC
     plan.excite_samples = static_cast<std::int64_t>(experiment.periods) *
                           ((std::int64_t{1} << experiment.order) - 1) *
                           plan.prbs.clock_period_samples;
+  }
+  // The LFSR's start state is the seed's low `order` bits (the validator checks they are not all
+  // zero): a seed written for a longer register still starts a shorter one.
+  if (!step_mode) {
+    plan.prbs.seed &= static_cast<std::uint32_t>((std::uint64_t{1} << plan.prbs.order) - 1);
   }
   if (!(plan.prbs.amplitude > 0.0)) {
     throw std::invalid_argument(where + "amplitude " + std::to_string(plan.prbs.amplitude) +

@@ -278,6 +278,13 @@ TEST(DaemonPlanTest, ExplicitExperiment) {
   EXPECT_EQ(plan.excite_samples, 2 * 31 * 36);
   EXPECT_EQ(plan.settle_samples, 60);
   EXPECT_DOUBLE_EQ(plan.prbs.amplitude, 0.05);
+  // The seed's low `order` bits start the register (docs/configuration.md): 77 = 0b1001101 starts
+  // an order-5 LFSR at 0b01101 = 13 (the plan used to keep 77, which the LFSR refused).
+  e.seed = 77;
+  EXPECT_THAT(Problems(c), IsEmpty());
+  const ExperimentPlan masked = BuildExperimentPlan(c, e, 0.8);
+  EXPECT_EQ(masked.prbs.seed, 13U);
+  EXPECT_NO_THROW(masked.Validate());
 }
 
 TEST(DaemonPlanTest, StepExperiment) {
