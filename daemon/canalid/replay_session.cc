@@ -4,6 +4,7 @@
 #include <utility>
 
 #include "daemon/canalid/input_error.h"
+#include "daemon/config/plan_from_config.h"
 #include "drivers/json/model_json.h"
 
 namespace canalid::cli {
@@ -78,6 +79,9 @@ void ReplaySession::Restart() {
     r->config = reach;
     reaches_.push_back(std::move(r));
   }
+  std::vector<std::string> names;
+  for (const auto& r : reaches_) names.push_back(r->config.name);
+  joints_ = core::JointExperiments(config::BuildJointExperiments(config, names));
 }
 
 ReplaySession::Plc* ReplaySession::FindPlc(const std::string& name) {
@@ -135,6 +139,10 @@ void ReplaySession::OnSample(const std::string& plc_name, const canalid::sample_
     if (!outcome.plan_error.empty())
       on_warning_("reach " + reach.config.name + ": no experiment: " + outcome.plan_error);
     Step(reach, outcome.actions, t);
+  }
+  // Once every reach has taken the poll, as the daemon does.
+  for (const int index : plc->reaches) {
+    Reach& reach = *reaches_[static_cast<std::size_t>(index)];
     if (const auto start = reach.runner->StartIfDue(status_ok, true)) Step(reach, *start, t);
   }
   if (options_.snapshot_every > 0 && samples_used_ % options_.snapshot_every == 0) {
@@ -144,12 +152,29 @@ void ReplaySession::OnSample(const std::string& plc_name, const canalid::sample_
   }
 }
 
+void ReplaySession::Joint(const Reach& reach, const core::ReachActions& actions) {
+  if (!actions.experiment_phase_changed) return;
+  // The joint experiments' starts and stops, at the same points as the daemon's.
+  std::vector<core::ReachController*> controllers;
+  std::size_t index = 0;
+  for (std::size_t i = 0; i < reaches_.size(); ++i) {
+    controllers.push_back(reaches_[i]->runner ? &*reaches_[i]->runner : nullptr);
+    if (reaches_[i].get() == &reach) index = i;
+  }
+  for (const core::JointOrder& order : joints_.AfterPhaseChange(controllers, index)) {
+    Reach& other = *reaches_[order.reach];
+    Step(other, order.actions, other.last_time_s);
+  }
+}
+
 void ReplaySession::Step(Reach& reach, const core::ReachActions& actions, double log_time_s) {
+  Joint(reach, actions);
   if (!actions.experiment_record_complete) return;
   core::ReachActions after;
   const core::ReachSampleProcessor& pipeline = reach.runner->pipeline();
   const std::optional<core::IntegratorDelayIdentification> result =
       reach.runner->IdentifyRecord(&after);
+  Joint(reach, after);
   // The other batch kinds (idz, the process models), as the daemon publishes them.
   auto other_batch = [&](std::string kind, nlohmann::json json) {
     json["reach"] = reach.config.name;
@@ -215,6 +240,9 @@ void ReplaySession::OnExperiment(const canalid::experiment_state_t& live,
         Step(*reach, runner.OnWriteResult({false, 0.0}).actions, t);
       } else if (live.reason == core::AbortReasonName(core::AbortReason::kGuardNotPersisted)) {
         Step(*reach, runner.OnGuardNotPersisted(), t);
+      } else if (live.reason == core::AbortReasonName(core::AbortReason::kJointStop)) {
+        // Stopped with a joint experiment whose other reach this replay does not run (--reach).
+        Step(*reach, runner.StopJoint(), t);
       } else {
         if (live.reason != core::AbortReasonName(core::AbortReason::kOperatorStop)) {
           on_warning_(At(options_.log_path, event) + ": reach " + live.reach +

@@ -9,6 +9,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/reach/joint_experiments.h"
 #include "core/reach/reach_controller.h"
 #include "daemon/canalid/recorded_config.h"
 #include "drivers/lcm/log_messages.h"
@@ -81,6 +82,8 @@ class ReplaySession final : public drivers::LogMessageVisitor {
   void Restart();
   Plc* FindPlc(const std::string& name);
   void Step(Reach& reach, const core::ReachActions& actions, double log_time_s);
+  /// The joint rules after `actions` of `reach` (core::JointExperiments::AfterPhaseChange).
+  void Joint(const Reach& reach, const core::ReachActions& actions);
   ReplayModel OnlineIdModel(const Reach& reach, double log_time_s) const;
   // Every online model of the reach with a valid snapshot, id first, to `sink`.
   void OnlineModels(const Reach& reach, double log_time_s, bool with_id,
@@ -92,6 +95,7 @@ class ReplaySession final : public drivers::LogMessageVisitor {
   RecordedConfig config_;
   std::vector<std::unique_ptr<Plc>> plcs_;
   std::vector<std::unique_ptr<Reach>> reaches_;
+  core::JointExperiments joints_;  ///< over reaches_, as the daemon's over its reaches
   std::map<std::string, std::map<std::string, canalid::model_snapshot_t>> live_models_;
   std::optional<std::int64_t> first_utime_;
   std::int64_t samples_used_ = 0;

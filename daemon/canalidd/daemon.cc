@@ -64,8 +64,10 @@ Daemon::Daemon(DaemonPlan plan, drivers::Bus& bus, PortFactory make_port, Reload
     if (!reach->runner.initial_plan_error().empty())
       LogError("reach " + reach->name() + ": no experiment: " + reach->runner.initial_plan_error());
     plcs_.at(static_cast<std::size_t>(reach->wiring.plc))->reaches.push_back(static_cast<int>(r));
+    controllers_.push_back(&reach->runner);
     reaches_.push_back(std::move(reach));
   }
+  joints_ = core::JointExperiments(plan_.joints);
 }
 
 Daemon::~Daemon() {
@@ -211,12 +213,16 @@ void Daemon::OnPoll(int index, const drivers::PollSample& s) {
       LogError("reach " + reach.name() + ": no experiment: " + outcome.plan_error);
     Handle(reach, outcome.actions, s.time_s);
     if (outcome.actions.online_updated) PublishOnlineModels(reach, outcome.actions, s.time_s);
+    if (results_) results_->OnReachPoll(r, s, readings);
+  }
+  // Once every reach has taken the poll (a joint experiment's partners know their nominals).
+  for (const int r : plc.reaches) {
+    ReachRuntime& reach = *reaches_[static_cast<std::size_t>(r)];
     if (const auto start = reach.runner.StartIfDue(s.status.ok(), !stopping_)) {
       LogInfo("reach " + reach.name() + ": starting the experiment " +
               reach.runner.experiment_name());
       Handle(reach, *start, s.time_s);
     }
-    if (results_) results_->OnReachPoll(r, s, readings);
   }
 }
 
@@ -295,6 +301,17 @@ void Daemon::Handle(ReachRuntime& reach, const core::ReachActions& actions, doub
       message += " (" + core::AbortReasonText(*plan, state) + ")";
     (state.phase == core::ExperimentPhase::kAborted ? LogWarning(message) : LogInfo(message));
     NotifyStatus(Status());
+  }
+  if (actions.experiment_phase_changed) {
+    for (const core::JointOrder& order :
+         joints_.AfterPhaseChange(controllers_, static_cast<std::size_t>(reach.index))) {
+      ReachRuntime& other = *reaches_[order.reach];
+      const std::string text = "reach " + other.name() + ": joint experiment: " + order.why;
+      const bool stopped =
+          other.pipeline().experiment_state().phase == core::ExperimentPhase::kAborted;
+      (stopped ? LogWarning(text) : LogInfo(text));
+      Handle(other, order.actions, other.last_time_s);
+    }
   }
   if (actions.experiment_record_complete) {
     core::ReachActions after;
@@ -407,7 +424,8 @@ void Daemon::OnCommand(const drivers::AcceptedCommand& command) {
     LogInfo("command from " + command.sender + " for reach " + command.reach);
     switch (command.kind) {
       case drivers::CommandKind::kStartExperiment:
-        if (const std::string refusal = reach->runner.StartRefusal(command.argument);
+        if (const std::string refusal = joints_.StartRefusal(
+                controllers_, static_cast<std::size_t>(reach->index), command.argument);
             !refusal.empty()) {
           LogWarning("reach " + command.reach + ": start refused: " + refusal);
         } else if (!stopping_) {

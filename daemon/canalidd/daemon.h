@@ -117,6 +117,8 @@ class Daemon final {
   CommandDispatch commands_;
   std::vector<std::unique_ptr<PlcRuntime>> plcs_;
   std::vector<std::unique_ptr<ReachRuntime>> reaches_;
+  std::vector<core::ReachController*> controllers_;  ///< each reach's, for joints_
+  core::JointExperiments joints_;
   std::optional<DaemonPlan> reloaded_plan_;
   std::optional<StateStore> store_;
   std::unique_ptr<PersistenceWorker> model_saver_;  ///< with a state directory

@@ -5,6 +5,7 @@
 #include <variant>
 #include <vector>
 
+#include "core/reach/joint_experiments.h"
 #include "core/reach/reach_controller.h"
 #include "drivers/auth/command_auth.h"
 #include "drivers/modbus/modbus_port.h"
@@ -36,6 +37,8 @@ struct DaemonPlan {
   std::string config_text;  ///< effective configuration, published on LCM at start
   std::vector<PlcWiring> plcs;
   std::vector<ReachWiring> reaches;
+  /// Experiments that run others with them (`with`), over indices into `reaches`.
+  std::vector<core::JointExperiment> joints;
   std::string lcm_url;  ///< empty: LCM's default (LCM_DEFAULT_URL)
   std::string channel_prefix = "CANALID_";
   std::string state_directory;  ///< empty: no persistence

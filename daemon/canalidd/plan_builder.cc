@@ -68,6 +68,9 @@ DaemonPlan BuildDaemonPlan(const config::DaemonConfig& config, const std::string
         1, std::llround(reach.model_publish_period_s / config::ReachSampleTimeS(config, reach)));
     plan.reaches.push_back(std::move(wiring));
   }
+  std::vector<std::string> reach_names;
+  for (const config::ReachConfig& reach : config.reaches) reach_names.push_back(reach.name);
+  plan.joints = config::BuildJointExperiments(config, reach_names);
   return plan;
 }
 

@@ -202,6 +202,20 @@ class Reader {
          });
   }
 
+  void StringList(const toml::table& t, const std::string& path, std::string_view key,
+                  std::vector<std::string>& out) {
+    List(t, path, key, "of strings", out,
+         [&](const toml::node& item, const std::string& at, std::string& value) {
+           if (const auto* text = item.as_string()) {
+             value = text->get();
+             return true;
+           }
+           Problem(item.source(), at,
+                   std::string("expected a string, got ") + core::TomlTypeName(item));
+           return false;
+         });
+  }
+
   void DoubleList(const toml::table& t, const std::string& path, std::string_view key,
                   std::vector<double>& out) {
     List(t, path, key, "of numbers", out,
@@ -456,7 +470,7 @@ void ReadExperiment(Reader& r, const toml::table& t, const std::string& at, Expe
     case config::ExperimentMode::kDesign:
       r.Keys(t, at,
              {"name", "reach", "mode", "amplitude_percent", "duration_factor", "seed", "settle_s",
-              "start", "max_invalid_samples", "max_sample_gap_periods"},
+              "start", "max_invalid_samples", "max_sample_gap_periods", "with"},
              {{"amplitude", explicit_only},
               {"clock_period_s", explicit_only},
               {"order", explicit_only},
@@ -468,7 +482,7 @@ void ReadExperiment(Reader& r, const toml::table& t, const std::string& at, Expe
     case config::ExperimentMode::kExplicit:
       r.Keys(t, at,
              {"name", "reach", "mode", "amplitude", "clock_period_s", "order", "periods", "seed",
-              "settle_s", "start", "max_invalid_samples", "max_sample_gap_periods"},
+              "settle_s", "start", "max_invalid_samples", "max_sample_gap_periods", "with"},
              {{"amplitude_percent", design_only},
               {"duration_factor", design_only},
               {"hold_s", step_only}});
@@ -480,7 +494,7 @@ void ReadExperiment(Reader& r, const toml::table& t, const std::string& at, Expe
     case config::ExperimentMode::kStep:
       r.Keys(t, at,
              {"name", "reach", "mode", "amplitude", "hold_s", "settle_s", "start",
-              "max_invalid_samples", "max_sample_gap_periods"},
+              "max_invalid_samples", "max_sample_gap_periods", "with"},
              {{"amplitude_percent", design_only},
               {"duration_factor", design_only},
               {"clock_period_s", explicit_only},
@@ -498,6 +512,7 @@ void ReadExperiment(Reader& r, const toml::table& t, const std::string& at, Expe
   r.Enum(t, at, "start", e.start);
   r.Integer(t, at, "max_invalid_samples", e.max_invalid_samples);
   r.Double(t, at, "max_sample_gap_periods", e.max_sample_gap_periods);
+  r.StringList(t, at, "with", e.with);
 }
 
 void ReadCommands(Reader& r, const toml::table& root, DaemonConfig& c) {

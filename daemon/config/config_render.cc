@@ -55,6 +55,12 @@ class Writer {
     }
     Key(key, text + "]");
   }
+  void Strings(const char* key, const std::vector<std::string>& values) {
+    std::string text = "[";
+    for (std::size_t i = 0; i < values.size(); ++i)
+      text += (i == 0 ? "" : ", ") + String(values[i]);
+    Key(key, text + "]");
+  }
   void Numbers(const char* key, const std::vector<double>& values) {
     std::string text = "[";
     for (std::size_t i = 0; i < values.size(); ++i) text += (i == 0 ? "" : ", ") + Float(values[i]);
@@ -197,6 +203,7 @@ std::string RenderDaemonConfig(const config::DaemonConfig& c) {
     w.Key("start", config::EnumName(e.start));
     w.Int("max_invalid_samples", e.max_invalid_samples);
     w.Key("max_sample_gap_periods", e.max_sample_gap_periods);
+    w.Strings("with", e.with);
   }
   w.Line("");
   w.Line("[commands]");

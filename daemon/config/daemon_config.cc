@@ -383,7 +383,20 @@ void ValidateReachModels(const DaemonConfig& c, const ReachConfig& r, const Chan
   }
 }
 
+// The reaches with an experiment that another experiment runs `with` (partners of joint
+// experiments).
+std::set<std::string> PartnerReaches(const DaemonConfig& c) {
+  std::set<std::string> reaches;
+  for (const ExperimentConfig& e : c.experiments) {
+    for (const std::string& name : e.with) {
+      if (const ExperimentConfig* partner = c.FindExperiment(name)) reaches.insert(partner->reach);
+    }
+  }
+  return reaches;
+}
+
 void ValidateReaches(const DaemonConfig& c, Collector& out) {
+  const std::set<std::string> partners = PartnerReaches(c);
   std::set<std::string> names;
   for (std::size_t i = 0; i < c.reaches.size(); ++i) {
     const ReachConfig& r = c.reaches[i];
@@ -432,9 +445,16 @@ void ValidateReaches(const DaemonConfig& c, Collector& out) {
     }
     NoDuplicates(at + "online_models", r.online_models, out);
     NoDuplicates(at + "batch_models", r.batch_models, out);
-    if (r.batch_models.empty()) {
+    if (r.batch_models.empty() && !r.online_models.empty()) {
       out.Add(at + "batch_models",
               "is empty (allowed: at least one of " + AllowedNames<BatchModel>() + ")");
+    } else if (r.batch_models.empty() && partners.count(r.name) == 0) {
+      // No model at all: the reach only moves its actuator, which it does in joint experiments.
+      out.Add(at + "batch_models",
+              "is empty and so is online_models: the reach does nothing (allowed: at least one "
+              "of " +
+                  AllowedNames<BatchModel>() +
+                  ", or none when an experiment of the reach runs `with` another reach's)");
     }
     ValidateReachModels(c, r, level, at, out);
     out.Range(at + "model_publish_period_s", r.model_publish_period_s, 0.0, 1e6);
@@ -554,6 +574,61 @@ void ValidateExperiments(const DaemonConfig& c, Collector& out) {
   }
 }
 
+// `with`: the experiments of other reaches that run with this one (core/reach/joint_experiments.h).
+void ValidateJointExperiments(const DaemonConfig& c, Collector& out) {
+  for (std::size_t i = 0; i < c.experiments.size(); ++i) {
+    const ExperimentConfig& e = c.experiments[i];
+    const ReachConfig* reach = c.FindReach(e.reach);
+    std::set<std::string> reaches;
+    for (std::size_t k = 0; k < e.with.size(); ++k) {
+      const std::string at = Index("experiment", i) + ".with[" + std::to_string(k) + "]";
+      const std::string& name = e.with[k];
+      const ExperimentConfig* partner = c.FindExperiment(name);
+      if (partner == nullptr) {
+        out.Add(at, "unknown experiment " + Quoted(name) + " (allowed: an [[experiment]] name)");
+        continue;
+      }
+      const std::string what = "experiment " + Quoted(name);
+      if (partner->reach == e.reach) {
+        out.Add(at, what + " is of the same reach " + Quoted(e.reach) +
+                        " (allowed: an experiment of another reach)");
+        continue;
+      }
+      if (!reaches.insert(partner->reach).second) {
+        out.Add(at, what + " is a second one of reach " + Quoted(partner->reach) +
+                        " (allowed: one experiment per reach)");
+      }
+      if (!partner->with.empty()) {
+        out.Add(at, what +
+                        " runs others with it (allowed: one without `with`; joint experiments "
+                        "do not chain)");
+      }
+      if (partner->start == ExperimentStart::kOnStart) {
+        out.Add(at, what + " starts on its own (allowed: start = \"manual\"; it starts with " +
+                        Quoted(e.name) + ")");
+      }
+      if (e.mode != ExperimentMode::kStep && partner->mode != ExperimentMode::kStep &&
+          partner->seed == e.seed) {
+        out.Add(at, what + " has this experiment's seed " + std::to_string(e.seed) +
+                        " (allowed: another seed, so that the two PRBS are uncorrelated)");
+      }
+      const ReachConfig* other = c.FindReach(partner->reach);
+      if (reach == nullptr || other == nullptr) continue;
+      if (other->actuator == reach->actuator) {
+        out.Add(at, what + " moves this experiment's actuator " + Quoted(reach->actuator) +
+                        " (allowed: an experiment of a reach with another actuator)");
+      }
+      const PlcConfig* plc = c.FindReachPlc(*reach);
+      const PlcConfig* other_plc = c.FindReachPlc(*other);
+      if (plc != nullptr && other_plc != nullptr && plc != other_plc) {
+        out.Add(at, what + " is of reach " + Quoted(other->name) + " on plc " +
+                        Quoted(other_plc->name) + " (allowed: a reach on plc " + Quoted(plc->name) +
+                        ", polled with this one)");
+      }
+    }
+  }
+}
+
 void ValidateResults(const DaemonConfig& c, Collector& out) {
   const ResultsSection& r = c.results;
   out.IntRange("results.max_clients", r.max_clients, 1, 512);
@@ -651,6 +726,7 @@ std::vector<ConfigProblem> Validate(const DaemonConfig& config) {
   ValidateChannels(config, out);
   ValidateReaches(config, out);
   ValidateExperiments(config, out);
+  ValidateJointExperiments(config, out);
   ValidateResults(config, out);
   ValidateCommands(config, out);
   return out.Take();

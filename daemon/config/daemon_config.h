@@ -192,6 +192,10 @@ struct ExperimentConfig {
   /// Largest time between two samples of a running experiment, in poll periods of the reach's
   /// PLC, [1.1, 1000]; a longer gap (a stall, an overrun, a reconnect) aborts it.
   double max_sample_gap_periods = 1.5;
+  /// Experiments of other reaches that run with this one, by name (a joint experiment,
+  /// core/reach/joint_experiments.h: they start with it, stop when its excitation ends, and an
+  /// abort of any stops all). A pool's two-structure experiment names its offtake's here.
+  std::vector<std::string> with;
   bool operator==(const ExperimentConfig&) const = default;
 };
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -203,6 +204,30 @@ ReachControllerOptions BuildReachControllerOptions(
     };
   }
   return options;
+}
+
+std::vector<core::JointExperiment> BuildJointExperiments(
+    const DaemonConfig& config, const std::vector<std::string>& reach_names) {
+  auto index = [&](const std::string& reach) -> std::optional<std::size_t> {
+    const auto at = std::find(reach_names.begin(), reach_names.end(), reach);
+    if (at == reach_names.end()) return std::nullopt;
+    return static_cast<std::size_t>(at - reach_names.begin());
+  };
+  std::vector<core::JointExperiment> joints;
+  for (const ExperimentConfig& experiment : config.experiments) {
+    const std::optional<std::size_t> leader = index(experiment.reach);
+    if (experiment.with.empty() || !leader) continue;
+    core::JointExperiment& joint = joints.emplace_back();
+    joint.leader = {*leader, experiment.name};
+    for (const std::string& name : experiment.with) {
+      const ExperimentConfig* partner = config.FindExperiment(name);
+      if (partner == nullptr) continue;
+      if (const std::optional<std::size_t> reach = index(partner->reach)) {
+        joint.partners.push_back({*reach, partner->name});
+      }
+    }
+  }
+  return joints;
 }
 
 }  // namespace canalid::config

@@ -2,11 +2,13 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "core/experiment/experiment.h"
 #include "core/experiment/experiment_design.h"
 #include "core/online/online_integrator_delay.h"
 #include "core/online/online_model.h"
+#include "core/reach/joint_experiments.h"
 #include "core/reach/reach_controller.h"
 #include "daemon/config/daemon_config.h"
 
@@ -66,5 +68,11 @@ OnlineIntegratorDelayOptions BuildOnlineIntegratorDelayOptions(const DaemonConfi
 ReachControllerOptions BuildReachControllerOptions(
     const std::shared_ptr<const DaemonConfig>& config, const ReachConfig& reach,
     const std::function<int(const std::string& channel)>& channel_index);
+
+/// The joint experiments of `config` (its experiments with `with`) over the caller's reaches,
+/// `reach_names` in the caller's order (indices into it): a joint whose leader the caller does
+/// not run is left out, and so is a partner it does not run (`canalid replay --reach`).
+std::vector<core::JointExperiment> BuildJointExperiments(
+    const DaemonConfig& config, const std::vector<std::string>& reach_names);
 
 }  // namespace canalid::config

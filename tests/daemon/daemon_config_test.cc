@@ -198,6 +198,110 @@ TEST(DaemonConfigTest, OneWriterPerRegisterAndOneAutomaticExperimentPerReach) {
   EXPECT_THAT(Problems(c), IsEmpty());
 }
 
+// ValidConfig with the pool's offtake as a reach with no model, and the pool's experiment running
+// the offtake's PRBS with it (a two-structure experiment).
+DaemonConfig TwoStructureConfig() {
+  DaemonConfig c = ValidConfig();
+  const ChannelConfig gate = c.channels[3];  // copied first: emplace_back may move the vector
+  ChannelConfig& offtake = c.channels.emplace_back(gate);
+  offtake.name = "offtake";
+  offtake.role = ChannelRole::kPump;
+  offtake.address = 302;
+  offtake.setpoint_min = 0.0;
+  offtake.setpoint_max = 3.0;
+  offtake.max_rate_per_s = 0.01;
+  const ReachConfig pool = c.reaches[0];
+  ReachConfig& reach = c.reaches.emplace_back(pool);
+  reach.name = "pool2_offtake";
+  reach.actuator = "offtake";
+  reach.online_models.clear();
+  reach.batch_models.clear();
+  ExperimentConfig& prbs = c.experiments.emplace_back();
+  prbs.name = "offtake_prbs";
+  prbs.reach = "pool2_offtake";
+  prbs.mode = ExperimentMode::kExplicit;
+  prbs.amplitude = 0.5;
+  prbs.clock_period_s = 50.0;
+  prbs.seed = 77;
+  c.experiments[0].with = {"offtake_prbs"};
+  return c;
+}
+
+TEST(DaemonConfigTest, AJointExperimentAndAReachWithNoModel) {
+  EXPECT_THAT(Problems(TwoStructureConfig()), IsEmpty());
+  // Without the joint experiment, the reach with no model does nothing.
+  DaemonConfig alone = TwoStructureConfig();
+  alone.experiments[0].with.clear();
+  EXPECT_THAT(
+      Problems(alone),
+      ElementsAre("reach[1].batch_models: is empty and so is online_models: the reach does "
+                  "nothing (allowed: at least one of id, idz, foptd, frac-foptd, soptd, arx, "
+                  "frac-ss, or none when an experiment of the reach runs `with` another "
+                  "reach's)"));
+  // An online model without a batch one is still an error.
+  DaemonConfig online = TwoStructureConfig();
+  online.reaches[1].online_models = {OnlineModel::kIntegratorDelay};
+  EXPECT_THAT(Problems(online), ElementsAre(::testing::StartsWith("reach[1].batch_models: is empty "
+                                                                  "(allowed: at least one of")));
+}
+
+TEST(DaemonConfigTest, JointExperimentsNeedUncorrelatedManualPartnersOfOtherActuators) {
+  DaemonConfig c = TwoStructureConfig();
+  c.experiments[0].with = {"nope", "prbs", "offtake_prbs"};
+  c.experiments[1].seed = 1;
+  c.experiments[1].start = ExperimentStart::kOnStart;
+  EXPECT_THAT(
+      Problems(c),
+      ElementsAre("experiment[0].with[0]: unknown experiment \"nope\" (allowed: an [[experiment]] "
+                  "name)",
+                  "experiment[0].with[1]: experiment \"prbs\" is of the same reach \"pool2\" "
+                  "(allowed: an experiment of another reach)",
+                  "experiment[0].with[2]: experiment \"offtake_prbs\" starts on its own (allowed: "
+                  "start = \"manual\"; it starts with \"prbs\")",
+                  "experiment[0].with[2]: experiment \"offtake_prbs\" has this experiment's seed 1 "
+                  "(allowed: another seed, so that the two PRBS are uncorrelated)"));
+  // No chains, one experiment per partner reach, and never the leader's own actuator.
+  DaemonConfig chain = TwoStructureConfig();
+  chain.experiments[1].with = {"prbs"};
+  chain.reaches[1].actuator = "gate";
+  const ExperimentConfig partner = chain.experiments[1];
+  ExperimentConfig& again = chain.experiments.emplace_back(partner);
+  again.name = "offtake_prbs2";
+  again.with.clear();
+  chain.experiments[0].with = {"offtake_prbs", "offtake_prbs2"};
+  EXPECT_THAT(
+      Problems(chain),
+      ElementsAre("experiment[0].with[0]: experiment \"offtake_prbs\" runs others with it "
+                  "(allowed: one without `with`; joint experiments do not chain)",
+                  "experiment[0].with[0]: experiment \"offtake_prbs\" moves this experiment's "
+                  "actuator \"gate\" (allowed: an experiment of a reach with another actuator)",
+                  "experiment[0].with[1]: experiment \"offtake_prbs2\" is a second one of reach "
+                  "\"pool2_offtake\" (allowed: one experiment per reach)",
+                  "experiment[0].with[1]: experiment \"offtake_prbs2\" moves this experiment's "
+                  "actuator \"gate\" (allowed: an experiment of a reach with another actuator)",
+                  "experiment[1].with[0]: experiment \"prbs\" runs others with it (allowed: one "
+                  "without `with`; joint experiments do not chain)",
+                  "experiment[1].with[0]: experiment \"prbs\" moves this experiment's actuator "
+                  "\"gate\" (allowed: an experiment of a reach with another actuator)"));
+}
+
+TEST(DaemonPlanTest, JointExperimentsOverTheCallersReaches) {
+  const DaemonConfig c = TwoStructureConfig();
+  const std::vector<core::JointExperiment> all =
+      BuildJointExperiments(c, {"pool2", "pool2_offtake"});
+  ASSERT_EQ(all.size(), 1U);
+  EXPECT_EQ(all[0].leader.reach, 0U);
+  EXPECT_EQ(all[0].leader.experiment, "prbs");
+  ASSERT_EQ(all[0].partners.size(), 1U);
+  EXPECT_EQ(all[0].partners[0].reach, 1U);
+  EXPECT_EQ(all[0].partners[0].experiment, "offtake_prbs");
+  // A replay of one reach: the leader alone, or nothing when only the partner is run.
+  const std::vector<core::JointExperiment> leader = BuildJointExperiments(c, {"pool2"});
+  ASSERT_EQ(leader.size(), 1U);
+  EXPECT_TRUE(leader[0].partners.empty());
+  EXPECT_TRUE(BuildJointExperiments(c, {"pool2_offtake"}).empty());
+}
+
 TEST(DaemonConfigTest, NamesEndLcmChannelNames) {
   DaemonConfig c = ValidConfig();
   c.experiments[0].name = "pool2.prbs";
