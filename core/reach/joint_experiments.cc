@@ -20,6 +20,19 @@ ReachController* At(std::span<ReachController* const> reaches, std::size_t index
   return index < reaches.size() ? reaches[index] : nullptr;
 }
 
+// Why a partner's experiment would not start now (empty: it would).
+std::string PartnerRefusal(const JointExperiment::Member& partner, const ReachController& other) {
+  std::string refusal = other.StartRefusal(partner.experiment);
+  if (refusal.empty()) return refusal;
+  std::string why = "experiment '";
+  why += partner.experiment;
+  why += "' on reach ";
+  why += other.name();
+  why += " cannot start: ";
+  why += refusal;
+  return why;
+}
+
 }  // namespace
 
 JointExperiments::JointExperiments(std::vector<JointExperiment> joints)
@@ -36,9 +49,8 @@ std::string JointExperiments::StartRefusal(std::span<ReachController* const> rea
     for (const JointExperiment::Member& partner : joint.partners) {
       const ReachController* other = At(reaches, partner.reach);
       if (other == nullptr) continue;
-      if (std::string refusal = other->StartRefusal(partner.experiment); !refusal.empty()) {
-        return "its joint experiment '" + partner.experiment + "' on reach " + other->name() +
-               " cannot start: " + refusal;
+      if (std::string refusal = PartnerRefusal(partner, *other); !refusal.empty()) {
+        return "its joint " + refusal;
       }
     }
   }
@@ -77,11 +89,7 @@ std::vector<JointOrder> JointExperiments::AfterPhaseChange(
         for (const JointExperiment::Member& partner : joint.partners) {
           const ReachController* other = At(reaches, partner.reach);
           if (other == nullptr || !refusal.empty()) continue;
-          refusal = other->StartRefusal(partner.experiment);
-          if (!refusal.empty()) {
-            refusal = "experiment '" + partner.experiment + "' on reach " + other->name() +
-                      " cannot start: " + refusal;
-          }
+          refusal = PartnerRefusal(partner, *other);
         }
         if (!refusal.empty()) {
           orders.push_back({reach, changed->StopJoint(), refusal});
