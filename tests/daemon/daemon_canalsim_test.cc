@@ -260,28 +260,42 @@ TEST(DaemonCanalsim, DesignedExperimentIdentifiesRestoresReplaysAndResumes) {
 // restore (core/reach/joint_experiments.h). The truths: the published IDZ table for pool 2 at
 // 10 m3/s (34113 m2, 682 s, p22 0.0216 s/m2), the offtake's nominal read from canalsim before the
 // daemon ran, and `canalid replay`'s models from the log.
+constexpr int kOfftakeAddress = 306;  // holding float block, pool record 1, field 1
+
+// The demo's configuration with config/canalidd-asce2-two-structures.toml appended, the
+// two-structure experiment started at once instead of the demo's, and `replace` (whole text,
+// e.g. a key of the offtake's reach) swapped in; returns the file's path.
+std::string WriteTwoStructureConfig(const fs::path& dir, int port,
+                                    const std::pair<std::string, std::string>& replace = {}) {
+  std::string text = ReadText(WriteConfig(dir / "canalidd.toml", BaseKeys(port, dir)));
+  std::string addon = ReadText(SourcePath("config/canalidd-asce2-two-structures.toml"));
+  if (!replace.first.empty()) {
+    const std::size_t at = addon.find(replace.first);
+    EXPECT_NE(at, std::string::npos) << replace.first;
+    if (at != std::string::npos) addon.replace(at, replace.first.size(), replace.second);
+  }
+  text += "\n" + addon;
+  auto swap_start = [&](const std::string& experiment, const std::string& from,
+                        const std::string& to) {
+    const std::size_t at = text.find("name = \"" + experiment + "\"\nreach");
+    EXPECT_NE(at, std::string::npos) << experiment;
+    const std::size_t start = text.find("start = \"" + from + "\"", at);
+    EXPECT_NE(start, std::string::npos) << experiment;
+    if (start != std::string::npos) text.replace(start, from.size() + 10, "start = \"" + to + "\"");
+  };
+  swap_start("pool2_prbs", "on_start", "manual");
+  swap_start("pool2_two_structures", "manual", "on_start");
+  std::ofstream(dir / "canalidd.toml") << text;
+  return (dir / "canalidd.toml").string();
+}
+
 TEST(DaemonCanalsim, TwoStructureExperimentFitsP22FromTheDataAndRestoresBoth) {
-  constexpr int kOfftakeAddress = 306;  // holding float block, pool record 1, field 1
   const fs::path dir = TestDir();
   Canal canal(dir);
   const double gate_nominal = ReadSetpoint(canal.master);
   const double offtake_nominal = canal.master.HoldingFloatAbcd(kOfftakeAddress);
   ASSERT_NEAR(offtake_nominal, 1.0, 1e-6);  // the canal file's offtake of pool 2
-  std::string text =
-      ReadText(WriteConfig(dir / "canalidd.toml", BaseKeys(canal.serve.port(), dir)));
-  text += "\n" + ReadText(SourcePath("config/canalidd-asce2-two-structures.toml"));
-  auto swap_start = [&](const std::string& experiment, const std::string& from,
-                        const std::string& to) {
-    const std::size_t at = text.find("name = \"" + experiment + "\"\nreach");
-    ASSERT_NE(at, std::string::npos) << experiment;
-    const std::size_t start = text.find("start = \"" + from + "\"", at);
-    ASSERT_NE(start, std::string::npos) << experiment;
-    text.replace(start, from.size() + 10, "start = \"" + to + "\"");
-  };
-  swap_start("pool2_prbs", "on_start", "manual");
-  swap_start("pool2_two_structures", "manual", "on_start");
-  std::ofstream(dir / "canalidd.toml") << text;
-  auto daemon = StartDaemon(dir, (dir / "canalidd.toml").string());
+  auto daemon = StartDaemon(dir, WriteTwoStructureConfig(dir, canal.serve.port()));
   const std::string idz_line = daemon->WaitForLine("reach pool2: identified idz ", 120000);
   ASSERT_FALSE(idz_line.empty()) << daemon->output();
   const nlohmann::json idz = JsonAfter(idz_line, "identified idz ");
@@ -363,6 +377,54 @@ TEST(DaemonCanalsim, TwoStructureExperimentFitsP22FromTheDataAndRestoresBoth) {
   }
   ASSERT_TRUE(replayed.has_value()) << replay.out;
   EXPECT_EQ(JsonNumbersDiffer(idz, *replayed, 1e-9), "") << idz_line << "\n" << replayed->dump();
+}
+
+// The same experiment with the offtake's level band narrowed to 5 mm above the pool's level at
+// rest: the offtake's experiment aborts out of its band once the PRBS moves the level, which
+// stops the gate's (its joint experiment) at the same poll; each actuator is back at its nominal,
+// confirmed by the PLC, and no record is identified.
+TEST(DaemonCanalsim, TwoStructureExperimentStopsWholeWhenThePartnerAborts) {
+  const fs::path dir = TestDir();
+  Canal canal(dir);
+  const double gate_nominal = ReadSetpoint(canal.master);
+  const double offtake_nominal = canal.master.HoldingFloatAbcd(kOfftakeAddress);
+  auto daemon =
+      StartDaemon(dir, WriteTwoStructureConfig(dir, canal.serve.port(),
+                                               {"level_max_m = 2.3\nonline_models = []",
+                                                "level_max_m = 2.105\nonline_models = []"}));
+  const std::string aborted =
+      daemon->WaitForLine("reach pool2_offtake: experiment aborted (level out of band)", 60000);
+  ASSERT_FALSE(aborted.empty()) << daemon->output();
+  const std::size_t at = Position(*daemon, aborted);
+  const std::string joint = daemon->WaitForLine(
+      "reach pool2: joint experiment: experiment 'pool2_offtake_prbs' of reach pool2_offtake "
+      "aborted (level out of band)",
+      10000, at);
+  ASSERT_FALSE(joint.empty()) << daemon->output();
+  ASSERT_FALSE(
+      daemon
+          ->WaitForLine("reach pool2: experiment aborted (stopped with its joint experiment)",
+                        10000, at)
+          .empty())
+      << daemon->output();
+  ASSERT_FALSE(daemon->WaitForLine("reach pool2: nominal setpoint", 10000, at).empty())
+      << daemon->output();
+  ASSERT_FALSE(daemon->WaitForLine("reach pool2_offtake: nominal setpoint", 10000, at).empty())
+      << daemon->output();
+  // Restores confirmed by the PLC: what it holds now.
+  EXPECT_NEAR(ReadSetpoint(canal.master), gate_nominal, 1e-4);
+  EXPECT_NEAR(canal.master.HoldingFloatAbcd(kOfftakeAddress), offtake_nominal, 1e-6);
+  EXPECT_EQ(daemon->Stop(SIGTERM), 0) << daemon->output();
+  EXPECT_EQ(daemon->output().find("reach pool2: identified"), std::string::npos)
+      << daemon->output();
+  // Replayed whole, and for the gate's reach alone (its stop then comes from the log's message):
+  // the same aborts, no divergence.
+  for (const std::string reach : {"", " --reach pool2"}) {
+    const ProgramRun replay =
+        RunProgram(CanalidProgram() + " replay " + (dir / "run.lcmlog").string() + reach, dir);
+    EXPECT_EQ(replay.err.find("diverges"), std::string::npos) << reach << "\n" << replay.err;
+    EXPECT_NE(replay.err.find("samples of"), std::string::npos) << replay.err;
+  }
 }
 
 // The demo's designed experiment on pool 2 (closed loop: a fixed gate ends the pool), with the
