@@ -57,6 +57,23 @@ std::string JointExperiments::StartRefusal(std::span<ReachController* const> rea
   return {};
 }
 
+bool JointExperiments::OnStartAllowed(std::span<ReachController* const> reaches,
+                                      std::size_t reach) const {
+  const ReachController* leader = At(reaches, reach);
+  if (leader == nullptr) return true;
+  for (const ReachExperiment& experiment : leader->options().experiments) {
+    if (!experiment.start_on_start) continue;
+    for (const JointExperiment& joint : joints_) {
+      if (joint.leader.reach != reach || joint.leader.experiment != experiment.name) continue;
+      for (const JointExperiment::Member& partner : joint.partners) {
+        const ReachController* other = At(reaches, partner.reach);
+        if (other != nullptr && !other->StartRefusal(partner.experiment).empty()) return false;
+      }
+    }
+  }
+  return true;
+}
+
 void JointExperiments::StopOthers(std::span<ReachController* const> reaches, std::size_t j,
                                   std::size_t except, const std::string& why,
                                   std::vector<JointOrder>* orders) const {

@@ -56,6 +56,12 @@ class JointExperiments final {
   /// `reaches` is a reach the caller does not run (a replay of one reach): it refuses nothing.
   std::string StartRefusal(std::span<ReachController* const> reaches, std::size_t reach,
                            std::string_view name = {}) const;
+  /// Whether the on_start experiment of `reach` may start now as far as its joint experiment goes:
+  /// every partner would start (true when it leads none). The caller passes it to
+  /// ReachController::StartIfDue, so that an on_start experiment waits for a partner that is busy
+  /// or holding a restart's restore instead of being started and stopped at once. A partner that
+  /// can never start (no room around its nominal, logged at start-up) holds it for good.
+  bool OnStartAllowed(std::span<ReachController* const> reaches, std::size_t reach) const;
   /// After actions of `reach` that changed its experiment's phase: the starts and stops the joint
   /// rules ask of other reaches (empty: none).
   std::vector<JointOrder> AfterPhaseChange(std::span<ReachController* const> reaches,

@@ -82,6 +82,7 @@ void ReplaySession::Restart() {
   std::vector<std::string> names;
   for (const auto& r : reaches_) names.push_back(r->config.name);
   joints_ = core::JointExperiments(config::BuildJointExperiments(config, names));
+  controllers_.assign(reaches_.size(), nullptr);  // each set when its runner is built
 }
 
 ReplaySession::Plc* ReplaySession::FindPlc(const std::string& name) {
@@ -117,6 +118,7 @@ void ReplaySession::OnSample(const std::string& plc_name, const canalid::sample_
     if (!reach.runner) {
       reach.runner.emplace(
           config_.RunnerOptions(reach.config, sample, At(options_.log_path, event)));
+      controllers_[static_cast<std::size_t>(index)] = &*reach.runner;
       if (!reach.runner->initial_plan_error().empty()) {
         on_warning_("reach " + reach.config.name +
                     ": no experiment: " + reach.runner->initial_plan_error());
@@ -143,7 +145,8 @@ void ReplaySession::OnSample(const std::string& plc_name, const canalid::sample_
   // Once every reach has taken the poll, as the daemon does.
   for (const int index : plc->reaches) {
     Reach& reach = *reaches_[static_cast<std::size_t>(index)];
-    if (const auto start = reach.runner->StartIfDue(status_ok, true)) Step(reach, *start, t);
+    const bool allowed = joints_.OnStartAllowed(controllers_, static_cast<std::size_t>(index));
+    if (const auto start = reach.runner->StartIfDue(status_ok, allowed)) Step(reach, *start, t);
   }
   if (options_.snapshot_every > 0 && samples_used_ % options_.snapshot_every == 0) {
     for (const auto& reach : reaches_) {
@@ -155,13 +158,11 @@ void ReplaySession::OnSample(const std::string& plc_name, const canalid::sample_
 void ReplaySession::Joint(const Reach& reach, const core::ReachActions& actions) {
   if (!actions.experiment_phase_changed) return;
   // The joint experiments' starts and stops, at the same points as the daemon's.
-  std::vector<core::ReachController*> controllers;
   std::size_t index = 0;
   for (std::size_t i = 0; i < reaches_.size(); ++i) {
-    controllers.push_back(reaches_[i]->runner ? &*reaches_[i]->runner : nullptr);
     if (reaches_[i].get() == &reach) index = i;
   }
-  for (const core::JointOrder& order : joints_.AfterPhaseChange(controllers, index)) {
+  for (const core::JointOrder& order : joints_.AfterPhaseChange(controllers_, index)) {
     Reach& other = *reaches_[order.reach];
     Step(other, order.actions, other.last_time_s);
   }

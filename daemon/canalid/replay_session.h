@@ -96,6 +96,8 @@ class ReplaySession final : public drivers::LogMessageVisitor {
   std::vector<std::unique_ptr<Plc>> plcs_;
   std::vector<std::unique_ptr<Reach>> reaches_;
   core::JointExperiments joints_;  ///< over reaches_, as the daemon's over its reaches
+  /// Each reach's controller (null until its runner is built), the view joints_ takes.
+  std::vector<core::ReachController*> controllers_;
   std::map<std::string, std::map<std::string, canalid::model_snapshot_t>> live_models_;
   std::optional<std::int64_t> first_utime_;
   std::int64_t samples_used_ = 0;

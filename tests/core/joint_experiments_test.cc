@@ -105,7 +105,8 @@ class Rig {
       Act(r, reaches_[r]->OnPoll(readings).actions);
     }
     for (std::size_t r = 0; r < 2; ++r) {
-      if (const auto start = reaches_[r]->StartIfDue(true, true)) Act(r, *start);
+      const bool allowed = joints_.OnStartAllowed(reaches_, r);
+      if (const auto start = reaches_[r]->StartIfDue(true, allowed)) Act(r, *start);
     }
     time_s_ += 1.0;
   }
@@ -254,6 +255,34 @@ TEST(JointExperiments, ALeaderWhosePartnerCannotStartIsRefusedOrStopped) {
   rig.Start(0);
   EXPECT_EQ(rig.Phase(0), ExperimentPhase::kSettling);
   EXPECT_EQ(rig.Phase(1), ExperimentPhase::kSettling);
+}
+
+TEST(JointExperiments, AnOnStartLeaderWaitsForItsPartner) {
+  ReachControllerOptions gate = Gate();
+  gate.experiments.front().start_on_start = true;
+  Rig rig(gate, Offtake());
+  // The partner runs on its own (an operator's start before the first complete poll).
+  rig.Start(1);
+  ASSERT_EQ(rig.Phase(1), ExperimentPhase::kSettling);
+  EXPECT_FALSE(rig.joints().OnStartAllowed(rig.reaches(), 0));
+  rig.Poll();
+  rig.Poll();
+  EXPECT_EQ(rig.Phase(0), ExperimentPhase::kIdle);  // waits: neither started nor stopped
+  // The partner ends (here: out of its band, as it takes the poll); once every reach has taken
+  // that poll, the leader starts, and the partner with it.
+  const std::size_t writes = rig.written.size();
+  rig.Poll(2.7);
+  EXPECT_EQ(rig.Phase(0), ExperimentPhase::kSettling);
+  EXPECT_EQ(rig.Phase(1), ExperimentPhase::kSettling);
+  EXPECT_NE(rig.why.back().find("started with experiment 'gate-prbs'"), std::string::npos);
+  // In order: the partner's abort restores it, then each settles at its nominal.
+  ASSERT_EQ(rig.written.size(), writes + 3);
+  EXPECT_EQ(rig.written[writes].reach, 1U);
+  EXPECT_TRUE(rig.written[writes].restore);
+  EXPECT_EQ(rig.written[writes + 1].reach, 0U);
+  EXPECT_EQ(rig.written[writes + 2].reach, 1U);
+  // A reach that leads nothing is never held.
+  EXPECT_TRUE(rig.joints().OnStartAllowed(rig.reaches(), 1));
 }
 
 TEST(JointExperiments, APartnerStartedOnItsOwnIsNotJoint) {
