@@ -318,16 +318,13 @@ TEST(DaemonCanalsim, TwoStructureExperimentFitsP22FromTheDataAndRestoresBoth) {
   ASSERT_FALSE(daemon->WaitForLine("reach pool2_offtake: nominal setpoint", 10000, stopped).empty())
       << log;
 
-  // p22 from the data, as the issue asks, within its 25 %: measured +4.7 to +4.8 % in three runs.
-  // The area is +11.3 to +11.8 % (the issue's 10 % is for the demo's printed model, which keeps
-  // the prior: -3.3 %, DesignedExperimentIdentifiesRestoresReplaysAndResumes): a single p22
-  // cannot be the low- and the high-frequency gain both, and the area takes up the difference
-  // (docs/closed-loop.md). Bounded at 15 % here, wider than 10 % for that reason, so that a worse
-  // fit still fails.
+  // The issue's tolerances: p22 from the data and within 25 %, p21 within 25 %, the area within
+  // 10 %, the delay within 0.8-1.2 x. Measured (four runs, seeds 77 and 99, offtake clock 300 and
+  // 420 s): p22 -2.8 to +0.2 %, area +0.1 to +2.1 %, p21 -17 to -19 %, delay 660 s.
   EXPECT_EQ(idz.value("p22_source", ""), "data") << idz_line;
-  EXPECT_LT(idz.at("outflow_level_correlation").get<double>(), -0.3) << idz_line;
   EXPECT_NEAR(idz.at("p22_s_per_m2").get<double>(), 0.0216, 0.25 * 0.0216) << idz_line;
-  EXPECT_NEAR(idz.at("area_m2").get<double>(), 34113.0, 0.15 * 34113.0) << idz_line;
+  EXPECT_NEAR(idz.at("p21_s_per_m2").get<double>(), 0.0185, 0.25 * 0.0185) << idz_line;
+  EXPECT_NEAR(idz.at("area_m2").get<double>(), 34113.0, 0.10 * 34113.0) << idz_line;
   EXPECT_GE(idz.at("delay_s").get<double>(), 0.8 * 682.0) << idz_line;
   EXPECT_LE(idz.at("delay_s").get<double>(), 1.2 * 682.0) << idz_line;
 
@@ -335,7 +332,7 @@ TEST(DaemonCanalsim, TwoStructureExperimentFitsP22FromTheDataAndRestoresBoth) {
   EXPECT_NEAR(ReadSetpoint(canal.master), gate_nominal, 1e-4);
   EXPECT_NEAR(canal.master.HoldingFloatAbcd(kOfftakeAddress), offtake_nominal, 1e-6);
 
-  // What the offtake did, from the samples the daemon logged: its PRBS (nominal +- 0.5 m3/s)
+  // What the offtake did, from the samples the daemon logged: its PRBS (nominal +- 0.2 m3/s)
   // while the gate's experiment ran (its return to nominal is the read above: the daemon may stop
   // before it polls again).
   const ProgramRun exported =
@@ -354,9 +351,9 @@ TEST(DaemonCanalsim, TwoStructureExperimentFitsP22FromTheDataAndRestoresBoth) {
     std::string cell;
     for (std::size_t i = 0; i <= column; ++i) std::getline(cells, cell, ',');
     const double value = std::stod(cell);
-    low += std::abs(value - (offtake_nominal - 0.5)) < 1e-4 ? 1 : 0;
-    high += std::abs(value - (offtake_nominal + 0.5)) < 1e-4 ? 1 : 0;
-    other += std::abs(value - offtake_nominal) > 0.5 + 1e-4 ? 1 : 0;
+    low += std::abs(value - (offtake_nominal - 0.2)) < 1e-4 ? 1 : 0;
+    high += std::abs(value - (offtake_nominal + 0.2)) < 1e-4 ? 1 : 0;
+    other += std::abs(value - offtake_nominal) > 0.2 + 1e-4 ? 1 : 0;
   }
   // 378 samples of excitation, about half at each level, none outside them.
   EXPECT_GT(low, 150);
