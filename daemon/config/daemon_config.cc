@@ -491,7 +491,9 @@ void WholeSamples(const std::string& path, double seconds, double ts, Collector&
   }
 }
 
-void ValidateExperiments(const DaemonConfig& c, Collector& out) {
+// Returns each experiment's LFSR order (0: a step, or a design that cannot be made).
+std::vector<int> ValidateExperiments(const DaemonConfig& c, Collector& out) {
+  std::vector<int> orders;
   std::set<std::string> names;
   for (std::size_t i = 0; i < c.experiments.size(); ++i) {
     const ExperimentConfig& e = c.experiments[i];
@@ -571,11 +573,14 @@ void ValidateExperiments(const DaemonConfig& c, Collector& out) {
     out.Range(at + "settle_s", e.settle_s, 0.0, 1e7);
     out.IntRange(at + "max_invalid_samples", e.max_invalid_samples, 0, 1000);
     out.Range(at + "max_sample_gap_periods", e.max_sample_gap_periods, 1.1, 1000.0);
+    orders.push_back(e.mode == ExperimentMode::kStep ? 0 : order);
   }
+  return orders;
 }
 
 // `with`: the experiments of other reaches that run with this one (core/reach/joint_experiments.h).
-void ValidateJointExperiments(const DaemonConfig& c, Collector& out) {
+void ValidateJointExperiments(const DaemonConfig& c, const std::vector<int>& orders,
+                              Collector& out) {
   for (std::size_t i = 0; i < c.experiments.size(); ++i) {
     const ExperimentConfig& e = c.experiments[i];
     const ReachConfig* reach = c.FindReach(e.reach);
@@ -607,10 +612,16 @@ void ValidateJointExperiments(const DaemonConfig& c, Collector& out) {
         out.Add(at, what + " starts on its own (allowed: start = \"manual\"; it starts with " +
                         Quoted(e.name) + ")");
       }
-      if (e.mode != ExperimentMode::kStep && partner->mode != ExperimentMode::kStep &&
-          partner->seed == e.seed) {
-        out.Add(at, what + " has this experiment's seed " + std::to_string(e.seed) +
-                        " (allowed: another seed, so that the two PRBS are uncorrelated)");
+      // Two PRBS of one order whose registers start alike (the seeds' low `order` bits) are one
+      // sequence: only their clocks would differ.
+      const int order = orders[i];
+      const auto partner_index = static_cast<std::size_t>(partner - c.experiments.data());
+      if (order >= kMinLfsrOrder && order <= kMaxLfsrOrder && orders[partner_index] == order &&
+          ((e.seed ^ partner->seed) & ((std::int64_t{1} << order) - 1)) == 0) {
+        out.Add(at, what + " starts its LFSR of order " + std::to_string(order) +
+                        " as this one does (seeds " + std::to_string(partner->seed) + " and " +
+                        std::to_string(e.seed) + ") (allowed: another seed in the low " +
+                        std::to_string(order) + " bits, so that the two PRBS are uncorrelated)");
       }
       const ReachConfig* other = c.FindReach(partner->reach);
       if (reach == nullptr || other == nullptr) continue;
@@ -725,8 +736,8 @@ std::vector<ConfigProblem> Validate(const DaemonConfig& config) {
   ValidatePlcs(config, out);
   ValidateChannels(config, out);
   ValidateReaches(config, out);
-  ValidateExperiments(config, out);
-  ValidateJointExperiments(config, out);
+  const std::vector<int> orders = ValidateExperiments(config, out);
+  ValidateJointExperiments(config, orders, out);
   ValidateResults(config, out);
   ValidateCommands(config, out);
   return out.Take();

@@ -248,7 +248,10 @@ TEST(DaemonConfigTest, AJointExperimentAndAReachWithNoModel) {
 TEST(DaemonConfigTest, JointExperimentsNeedUncorrelatedManualPartnersOfOtherActuators) {
   DaemonConfig c = TwoStructureConfig();
   c.experiments[0].with = {"nope", "prbs", "offtake_prbs"};
-  c.experiments[1].seed = 1;
+  // The leader's design is of order 4 (Ts 10 s, delay 682 s): 17 = 0b10001 starts that register
+  // as its seed 1 does.
+  c.experiments[1].order = 4;
+  c.experiments[1].seed = 17;
   c.experiments[1].start = ExperimentStart::kOnStart;
   EXPECT_THAT(
       Problems(c),
@@ -258,8 +261,17 @@ TEST(DaemonConfigTest, JointExperimentsNeedUncorrelatedManualPartnersOfOtherActu
                   "(allowed: an experiment of another reach)",
                   "experiment[0].with[2]: experiment \"offtake_prbs\" starts on its own (allowed: "
                   "start = \"manual\"; it starts with \"prbs\")",
-                  "experiment[0].with[2]: experiment \"offtake_prbs\" has this experiment's seed 1 "
-                  "(allowed: another seed, so that the two PRBS are uncorrelated)"));
+                  "experiment[0].with[2]: experiment \"offtake_prbs\" starts its LFSR of order 4 "
+                  "as this one does (seeds 17 and 1) (allowed: another seed in the low 4 bits, so "
+                  "that the two PRBS are uncorrelated)"));
+  // Another order, or another start in the low bits: uncorrelated.
+  c.experiments[0].with = {"offtake_prbs"};
+  c.experiments[1].start = ExperimentStart::kManual;
+  c.experiments[1].order = 5;
+  EXPECT_THAT(Problems(c), IsEmpty());
+  c.experiments[1].order = 4;
+  c.experiments[1].seed = 18;
+  EXPECT_THAT(Problems(c), IsEmpty());
   // No chains, one experiment per partner reach, and never the leader's own actuator.
   DaemonConfig chain = TwoStructureConfig();
   chain.experiments[1].with = {"prbs"};
