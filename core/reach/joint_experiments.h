@@ -60,7 +60,9 @@ class JointExperiments final {
   /// every partner would start (true when it leads none). The caller passes it to
   /// ReachController::StartIfDue, so that an on_start experiment waits for a partner that is busy
   /// or holding a restart's restore instead of being started and stopped at once. A partner that
-  /// can never start (no room around its nominal, logged at start-up) holds it for good.
+  /// can never start (no room around its nominal, logged at start-up) holds it for good. Builds
+  /// a partner's refusal text while it refuses: callers skip it once the on_start experiment ran
+  /// (ReachController::on_start_done).
   bool OnStartAllowed(std::span<ReachController* const> reaches, std::size_t reach) const;
   /// After actions of `reach` that changed its experiment's phase: the starts and stops the joint
   /// rules ask of other reaches (empty: none).

@@ -174,6 +174,8 @@ class ReachController final {
   /// (written at the first poll with the link up), and holds experiments until that restore is
   /// confirmed.
   std::string ApplyRestart(const RestartDecision& decision);
+  /// StartIfDue has started the on_start experiment (it never starts it again).
+  bool on_start_done() const { return started_; }
   /// An experiment may start now (not refused at start-up, no restore pending confirmation).
   bool excitation_allowed() const { return !refused_ && !held_; }
   /// The nominal setpoint being restored and not yet confirmed by the PLC (none: nothing pending).

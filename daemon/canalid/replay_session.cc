@@ -145,7 +145,8 @@ void ReplaySession::OnSample(const std::string& plc_name, const canalid::sample_
   // Once every reach has taken the poll, as the daemon does.
   for (const int index : plc->reaches) {
     Reach& reach = *reaches_[static_cast<std::size_t>(index)];
-    const bool allowed = joints_.OnStartAllowed(controllers_, static_cast<std::size_t>(index));
+    const bool allowed = reach.runner->on_start_done() ||
+                         joints_.OnStartAllowed(controllers_, static_cast<std::size_t>(index));
     if (const auto start = reach.runner->StartIfDue(status_ok, allowed)) Step(reach, *start, t);
   }
   if (options_.snapshot_every > 0 && samples_used_ % options_.snapshot_every == 0) {

@@ -218,8 +218,10 @@ void Daemon::OnPoll(int index, const drivers::PollSample& s) {
   // Once every reach has taken the poll (a joint experiment's partners know their nominals).
   for (const int r : plc.reaches) {
     ReachRuntime& reach = *reaches_[static_cast<std::size_t>(r)];
+    // Asked of the joints only while the on_start experiment waits (no work per poll after).
     const bool allowed =
-        !stopping_ && joints_.OnStartAllowed(controllers_, static_cast<std::size_t>(r));
+        !stopping_ && (reach.runner.on_start_done() ||
+                       joints_.OnStartAllowed(controllers_, static_cast<std::size_t>(r)));
     if (const auto start = reach.runner.StartIfDue(s.status.ok(), allowed)) {
       LogInfo("reach " + reach.name() + ": starting the experiment " +
               reach.runner.experiment_name());
