@@ -45,7 +45,8 @@ struct JointOrder {
 /// The rules only add starts and stops: every actuator keeps its own reach's safety rules, and
 /// every stop restores that actuator's nominal through its own ReachController. A partner's
 /// experiment started on its own (an operator's command) is not joint: nothing follows from it.
-/// Deterministic; allocates only when a phase changes (the orders), never per poll.
+/// Deterministic; allocates when a phase changes (the orders) and while OnStartAllowed finds a
+/// partner refusing, never on a poll otherwise.
 class JointExperiments final {
  public:
   JointExperiments() = default;
@@ -68,8 +69,6 @@ class JointExperiments final {
   /// rules ask of other reaches (empty: none).
   std::vector<JointOrder> AfterPhaseChange(std::span<ReachController* const> reaches,
                                            std::size_t reach);
-  /// The joint experiments, as built.
-  const std::vector<JointExperiment>& joints() const { return joints_; }
 
  private:
   /// Stops every member of joint `j` but `except` that is still running, with `why`.
