@@ -129,7 +129,17 @@ int RunReplay(const ReplayOptions& options) {
               << " (the events before it are used)\n";
   const std::vector<ReplayModel> finals = session.FinalModels();
   if (finals.empty()) {
-    std::cerr << "canalid replay: no model: no reach had samples for an estimate\n";
+    const std::vector<std::string> modelless = session.ReachesWithoutModels();
+    if (!modelless.empty() && modelless.size() == session.reach_count() &&
+        session.samples_used() > 0) {
+      std::string names;
+      for (const std::string& name : modelless) names += (names.empty() ? "" : ", ") + name;
+      std::cerr << "canalid replay: no model: reach " << names
+                << " is configured with none (online_models and batch_models are empty: it only "
+                   "moves its actuator in joint experiments)\n";
+    } else {
+      std::cerr << "canalid replay: no model: no reach had samples for an estimate\n";
+    }
     return kExitFailure;
   }
   for (const ReplayModel& model : finals) CompareWithLive(session, model);

@@ -305,6 +305,15 @@ void ReplaySession::OnlineModels(const Reach& reach, double log_time_s, bool wit
   }
 }
 
+std::vector<std::string> ReplaySession::ReachesWithoutModels() const {
+  std::vector<std::string> names;
+  for (const auto& reach : reaches_) {
+    if (reach->config.online_models.empty() && reach->config.batch_models.empty())
+      names.push_back(reach->config.name);
+  }
+  return names;
+}
+
 std::vector<ReplayModel> ReplaySession::FinalModels() const {
   std::vector<ReplayModel> models;
   for (const auto& reach : reaches_) {

@@ -62,6 +62,11 @@ class ReplaySession final : public drivers::LogMessageVisitor {
   /// (foptd, frac-foptd), then the reach's id model (the last batch model, else the online id
   /// snapshot).
   std::vector<ReplayModel> FinalModels() const;
+  /// The replayed reaches that are configured with no model at all (online_models and
+  /// batch_models empty: they only move their actuator in joint experiments).
+  std::vector<std::string> ReachesWithoutModels() const;
+  /// How many reaches the replay runs (the configuration's, or the one of --reach).
+  std::size_t reach_count() const { return reaches_.size(); }
   /// The key of live_models(): "<model kind>/<estimator>" ("id/batch", "arx/rls-bank").
   static std::string LiveKey(const std::string& kind, const std::string& estimator) {
     return kind + "/" + estimator;

@@ -422,6 +422,14 @@ TEST(DaemonCanalsim, TwoStructureExperimentStopsWholeWhenThePartnerAborts) {
     EXPECT_EQ(replay.err.find("diverges"), std::string::npos) << reach << "\n" << replay.err;
     EXPECT_NE(replay.err.find("samples of"), std::string::npos) << replay.err;
   }
+  // The offtake's reach alone has nothing to report, and says why.
+  const ProgramRun offtake = RunProgram(
+      CanalidProgram() + " replay " + (dir / "run.lcmlog").string() + " --reach pool2_offtake",
+      dir);
+  EXPECT_EQ(offtake.exit_code, 1);
+  EXPECT_NE(offtake.err.find("no model: reach pool2_offtake is configured with none"),
+            std::string::npos)
+      << offtake.err;
 }
 
 // The demo's designed experiment on pool 2 (closed loop: a fixed gate ends the pool), with the
