@@ -49,26 +49,25 @@ class Writer {
   void Bool(const char* key, bool value) { Key(key, std::string(value ? "true" : "false")); }
   template <class E>
   void List(const char* key, const std::vector<E>& values) {
-    std::string text = "[";
-    for (std::size_t i = 0; i < values.size(); ++i) {
-      text += (i == 0 ? "" : ", ") + String(config::EnumName(values[i]));
-    }
-    Key(key, text + "]");
+    Array(key, values, [](const E& value) { return String(config::EnumName(value)); });
   }
   void Strings(const char* key, const std::vector<std::string>& values) {
-    std::string text = "[";
-    for (std::size_t i = 0; i < values.size(); ++i)
-      text += (i == 0 ? "" : ", ") + String(values[i]);
-    Key(key, text + "]");
+    Array(key, values, [](const std::string& value) { return String(value); });
   }
   void Numbers(const char* key, const std::vector<double>& values) {
-    std::string text = "[";
-    for (std::size_t i = 0; i < values.size(); ++i) text += (i == 0 ? "" : ", ") + Float(values[i]);
-    Key(key, text + "]");
+    Array(key, values, [](double value) { return Float(value); });
   }
   std::string Take() { return std::move(out_); }
 
  private:
+  // `key = [a, b, ...]`, each element written by `item`.
+  template <class T, class Item>
+  void Array(const char* key, const std::vector<T>& values, Item item) {
+    std::string text = "[";
+    for (std::size_t i = 0; i < values.size(); ++i) text += (i == 0 ? "" : ", ") + item(values[i]);
+    Key(key, text + "]");
+  }
+
   std::string out_;
 };
 
