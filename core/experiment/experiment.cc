@@ -8,10 +8,6 @@
 namespace canalid::core {
 namespace {
 
-bool Running(ExperimentPhase phase) {
-  return phase == ExperimentPhase::kSettling || phase == ExperimentPhase::kExciting;
-}
-
 ExperimentTransition Abort(const ExperimentPlan& plan, ExperimentState state, AbortReason reason) {
   state.phase = ExperimentPhase::kAborted;
   state.abort_reason = reason;
@@ -45,7 +41,7 @@ double ExcitationSetpoint(const ExperimentPlan& plan, ExperimentState& state) {
 
 ExperimentTransition OnSample(const ExperimentPlan& plan, ExperimentState state,
                               const ExperimentSample& s) {
-  if (!Running(state.phase)) return {state, {}};
+  if (!IsRunning(state.phase)) return {state, {}};
   if (!s.link_ok) return Abort(plan, state, AbortReason::kLinkLost);
   if (std::isfinite(s.time_s)) {
     const double gap = s.time_s - state.last_sample_time_s;
@@ -148,6 +144,12 @@ std::string AbortReasonText(const ExperimentPlan& plan, const ExperimentState& s
   return text;
 }
 
+std::string PhaseReasonText(const ExperimentPlan& plan, const ExperimentState& state) {
+  if (state.phase == ExperimentPhase::kAborted) return AbortReasonText(plan, state);
+  if (state.phase == ExperimentPhase::kDone && state.ended_with_joint) return kEndedWithJoint;
+  return ExperimentPhaseName(state.phase);
+}
+
 void ExperimentPlan::Validate() const {
   prbs.Validate();
   if (settle_samples < 0) {
@@ -182,7 +184,8 @@ ExperimentTransition Step(const ExperimentPlan& plan, const ExperimentState& sta
                           const ExperimentEvent& event) {
   switch (event.kind) {
     case ExperimentEventKind::kStart: {
-      if (Running(state.phase) || state.phase == ExperimentPhase::kIdentifying) return {state, {}};
+      if (IsRunning(state.phase) || state.phase == ExperimentPhase::kIdentifying)
+        return {state, {}};
       ExperimentState fresh;
       fresh.setpoint = plan.prbs.nominal;
       // The run's first sample must follow the last one before the start within the bound.
@@ -202,19 +205,28 @@ ExperimentTransition Step(const ExperimentPlan& plan, const ExperimentState& sta
     }
     case ExperimentEventKind::kStop:
     case ExperimentEventKind::kJointStop:
-      if (Running(state.phase) || state.phase == ExperimentPhase::kIdentifying) {
+      if (IsRunning(state.phase) || state.phase == ExperimentPhase::kIdentifying) {
         return Abort(plan, state,
                      event.kind == ExperimentEventKind::kStop ? AbortReason::kOperatorStop
                                                               : AbortReason::kJointStop);
       }
       return {state, {}};
+    case ExperimentEventKind::kJointEnd: {
+      if (!IsRunning(state.phase)) return {state, {}};
+      ExperimentTransition t = Enter(state, ExperimentPhase::kDone);
+      t.state.ended_with_joint = true;
+      t.state.setpoint = plan.prbs.nominal;
+      t.actions.write_setpoint = plan.prbs.nominal;
+      t.actions.restore_nominal = true;
+      return t;
+    }
     case ExperimentEventKind::kSample:
       return OnSample(plan, state, event.sample);
     case ExperimentEventKind::kWriteFailed:
-      if (Running(state.phase)) return Abort(plan, state, AbortReason::kWriteFailed);
+      if (IsRunning(state.phase)) return Abort(plan, state, AbortReason::kWriteFailed);
       return {state, {}};
     case ExperimentEventKind::kGuardNotPersisted:
-      if (Running(state.phase)) return Abort(plan, state, AbortReason::kGuardNotPersisted);
+      if (IsRunning(state.phase)) return Abort(plan, state, AbortReason::kGuardNotPersisted);
       return {state, {}};
     case ExperimentEventKind::kIdentificationSucceeded:
       if (state.phase == ExperimentPhase::kIdentifying) return Enter(state, ExperimentPhase::kDone);

@@ -21,6 +21,11 @@ enum class ExperimentPhase : std::uint8_t {
   kAborted
 };
 
+/// Settling or exciting: the experiment owns the actuator.
+constexpr bool IsRunning(ExperimentPhase phase) {
+  return phase == ExperimentPhase::kSettling || phase == ExperimentPhase::kExciting;
+}
+
 /// Why an experiment was aborted (kNone otherwise).
 enum class AbortReason : std::uint8_t {
   kNone,
@@ -32,8 +37,7 @@ enum class AbortReason : std::uint8_t {
   kIdentificationFailed,  ///< the batch identification found no usable model
   kGuardNotPersisted,     ///< the restart guard could not be written before an excitation write
   kSampleGap,  ///< two samples further apart than max_sample_gap_s (stall, overrun, reconnect)
-  /// Another experiment of its joint experiment ended (core/reach/joint_experiments.h): the
-  /// leader's excitation is over, or a member aborted.
+  /// Another member of its joint experiment aborted (core/reach/joint_experiments.h).
   kJointStop,
 };
 
@@ -72,7 +76,10 @@ struct ExperimentSample {
 enum class ExperimentEventKind : std::uint8_t {
   kStart,  ///< begin (from idle, done or aborted); sample.time_s: the last sample's time (or NaN)
   kStop,   ///< operator stop: abort with kOperatorStop
-  kJointStop,          ///< its joint experiment ended: abort with kJointStop
+  kJointStop,  ///< a member of its joint experiment aborted: abort with kJointStop
+  /// Its joint experiment's leader completed its excitation: a running experiment ends done, its
+  /// nominal restored, without identification (its record served the leader's).
+  kJointEnd,
   kSample,             ///< a new sample
   kWriteFailed,        ///< a setpoint write failed
   kGuardNotPersisted,  ///< the restart guard (core/experiment/experiment_guard.h) could not be
@@ -97,6 +104,8 @@ struct ExperimentState {
   double last_sample_time_s = std::numeric_limits<double>::quiet_NaN();
   /// kSampleGap: the offending gap (s; negative when time went back).
   double sample_gap_s = 0.0;
+  /// Done by kJointEnd: the joint experiment's leader completed its excitation.
+  bool ended_with_joint = false;
   std::optional<PrbsGenerator> prbs;
 };
 
@@ -119,6 +128,11 @@ struct ExperimentTransition {
 /// for kSampleGap "sample gap of X s (bound Y s)" (or "sample time went back by X s").
 std::string AbortReasonText(const ExperimentPlan& plan, const ExperimentState& state);
 
+/// The text of experiment_state_t.reason: AbortReasonText when aborted, kEndedWithJoint when
+/// done by kJointEnd, else the phase's name.
+std::string PhaseReasonText(const ExperimentPlan& plan, const ExperimentState& state);
+inline constexpr const char* kEndedWithJoint = "ended with its joint experiment";
+
 /// The experiment's state machine as a pure function: (state, event) -> (state, actions).
 /// Safety rules, in this order, on every sample while settling or exciting:
 ///   link lost -> abort (kLinkLost) and restore nominal;
@@ -131,7 +145,8 @@ std::string AbortReasonText(const ExperimentPlan& plan, const ExperimentState& s
 /// in the same transition (the caller writes it before the next sample).  While exciting, each
 /// sample asks for the next PRBS value and is recorded; the last one ends the excitation with the
 /// nominal setpoint and starts the identification.  Start while running is ignored; Stop outside
-/// settling/exciting/identifying is ignored.
+/// settling/exciting/identifying is ignored; JointEnd outside settling/exciting is ignored (an
+/// experiment identifying its own record finishes it).
 /// @pre plan.Validate() passed.
 ExperimentTransition Step(const ExperimentPlan& plan, const ExperimentState& state,
                           const ExperimentEvent& event);

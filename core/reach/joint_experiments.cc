@@ -5,10 +5,6 @@
 namespace canalid::core {
 namespace {
 
-bool Running(ExperimentPhase phase) {
-  return phase == ExperimentPhase::kSettling || phase == ExperimentPhase::kExciting;
-}
-
 // The experiment an operator's `name` means on this reach (empty: its only one, else none).
 std::string_view Resolved(const ReachController& reach, std::string_view name) {
   if (!name.empty()) return name;
@@ -75,17 +71,19 @@ bool JointExperiments::OnStartAllowed(std::span<ReachController* const> reaches,
 }
 
 void JointExperiments::StopOthers(std::span<ReachController* const> reaches, std::size_t j,
-                                  std::size_t except, const std::string& why,
+                                  std::size_t except, JointStop how, const std::string& why,
                                   std::vector<JointOrder>* orders) const {
   const JointExperiment& joint = joints_[j];
   auto stop = [&](const JointExperiment::Member& member) {
     ReachController* controller = At(reaches, member.reach);
     if (member.reach == except || controller == nullptr) return;
-    if (!Running(controller->pipeline().experiment_state().phase) ||
+    if (!IsRunning(controller->pipeline().experiment_state().phase) ||
         controller->experiment_name() != member.experiment) {
       return;
     }
-    orders->push_back({member.reach, controller->StopJoint(), why});
+    orders->push_back({member.reach,
+                       how == JointStop::kEnd ? controller->EndJoint() : controller->StopJoint(),
+                       why});
   };
   stop(joint.leader);
   for (const JointExperiment::Member& partner : joint.partners) stop(partner);
@@ -101,7 +99,7 @@ std::vector<JointOrder> JointExperiments::AfterPhaseChange(
   for (std::size_t j = 0; j < joints_.size(); ++j) {
     const JointExperiment& joint = joints_[j];
     if (joint.leader.reach == reach && joint.leader.experiment == name) {
-      if (Running(phase) && active_[j] == 0) {
+      if (IsRunning(phase) && active_[j] == 0) {
         std::string refusal;
         for (const JointExperiment::Member& partner : joint.partners) {
           const ReachController* other = At(reaches, partner.reach);
@@ -119,9 +117,11 @@ std::vector<JointOrder> JointExperiments::AfterPhaseChange(
           orders.push_back({partner.reach, other->Start(partner.experiment),
                             "started with experiment '" + name + "' of reach " + changed->name()});
         }
-      } else if (!Running(phase) && active_[j] != 0) {
+      } else if (!IsRunning(phase) && active_[j] != 0) {
+        // Its excitation is over (identifying): the partners end with it; it aborted: they stop.
         active_[j] = 0;
         StopOthers(reaches, j, reach,
+                   phase == ExperimentPhase::kAborted ? JointStop::kAbort : JointStop::kEnd,
                    "experiment '" + name + "' of reach " + changed->name() + " is " +
                        ExperimentPhaseName(phase),
                    &orders);
@@ -132,7 +132,7 @@ std::vector<JointOrder> JointExperiments::AfterPhaseChange(
     for (const JointExperiment::Member& partner : joint.partners) {
       if (partner.reach != reach || partner.experiment != name) continue;
       active_[j] = 0;
-      StopOthers(reaches, j, reach,
+      StopOthers(reaches, j, reach, JointStop::kAbort,
                  "experiment '" + name + "' of reach " + changed->name() + " aborted (" +
                      AbortReasonName(changed->pipeline().experiment_state().abort_reason) + ")",
                  &orders);

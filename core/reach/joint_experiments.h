@@ -1,5 +1,6 @@
 #pragma once
 #include <cstddef>
+#include <cstdint>
 #include <span>
 #include <string>
 #include <string_view>
@@ -39,8 +40,10 @@ struct JointOrder {
 ///   and when the leader starts (settling or exciting from another phase) with a partner unable to
 ///   start, the leader stops at once (kJointStop) and nothing else moves;
 /// - when the leader starts, each partner's experiment starts with it, at the same poll;
-/// - when the leader leaves settling/exciting (its excitation is over, or it aborted), the partners
-///   still running stop (kJointStop): they move their actuators for the leader's record only;
+/// - when the leader's excitation is over (it leaves exciting to identify its record), the
+///   partners still running end with it (kJointEnd: done, not identified): they move their
+///   actuators for the leader's record only;
+/// - when the leader aborts, the partners still running stop (kJointStop: aborted);
 /// - when a partner aborts while the leader runs, the leader and the other partners stop.
 /// The rules only add starts and stops: every actuator keeps its own reach's safety rules, and
 /// every stop restores that actuator's nominal through its own ReachController. A partner's
@@ -71,9 +74,14 @@ class JointExperiments final {
                                            std::size_t reach);
 
  private:
-  /// Stops every member of joint `j` but `except` that is still running, with `why`.
+  enum class JointStop : std::uint8_t {
+    kEnd,    ///< ReachController::EndJoint: done with the leader
+    kAbort,  ///< ReachController::StopJoint: aborted
+  };
+  /// Ends or stops (`how`) every member of joint `j` but `except` that is still running, with
+  /// `why`.
   void StopOthers(std::span<ReachController* const> reaches, std::size_t j, std::size_t except,
-                  const std::string& why, std::vector<JointOrder>* orders) const;
+                  JointStop how, const std::string& why, std::vector<JointOrder>* orders) const;
 
   std::vector<JointExperiment> joints_;
   std::vector<char> active_;  ///< per joint: its leader started it and it has not ended

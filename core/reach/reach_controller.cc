@@ -150,8 +150,7 @@ std::string ReachController::StartRefusal(std::string_view name) const {
   if (held_)
     return "an interrupted experiment's nominal is not restored yet (see the start-up log)";
   const ExperimentPhase phase = pipeline_.experiment_state().phase;
-  if (phase == ExperimentPhase::kSettling || phase == ExperimentPhase::kExciting ||
-      phase == ExperimentPhase::kIdentifying) {
+  if (IsRunning(phase) || phase == ExperimentPhase::kIdentifying) {
     return "experiment '" + experiment_name() + "' is running";
   }
   return {};
@@ -167,6 +166,8 @@ ReachActions ReachController::Start(std::string_view name) {
 ReachActions ReachController::Stop() { return Track(pipeline_.StopExperiment()); }
 
 ReachActions ReachController::StopJoint() { return Track(pipeline_.StopJointExperiment()); }
+
+ReachActions ReachController::EndJoint() { return Track(pipeline_.EndJointExperiment()); }
 
 ReachActions ReachController::OnLinkLost() { return Track(pipeline_.OnLinkLost()); }
 
@@ -196,8 +197,7 @@ ReachWriteOutcome ReachController::OnWriteResult(const ActuatorWrite& write) {
   restore_pending_.reset();
   restore_first_write_.reset();
   outcome.restore_confirmed = true;
-  const ExperimentPhase phase = pipeline_.experiment_state().phase;
-  if (phase == ExperimentPhase::kSettling || phase == ExperimentPhase::kExciting) {
+  if (IsRunning(pipeline_.experiment_state().phase)) {
     return outcome;  // a new experiment's settling write, not an end: its guard stays
   }
   outcome.remove_guard = guard_on_disk_ && !keep_guard_;

@@ -145,9 +145,12 @@ class ReachController final {
   ReachActions Start(std::string_view name = {});
   /// An operator's stop, or the daemon's: aborts a running experiment, restoring the nominal.
   ReachActions Stop();
-  /// Its joint experiment ended (JointExperiments): aborts a running experiment (kJointStop),
-  /// restoring the nominal.
+  /// A member of its joint experiment aborted (JointExperiments): aborts a running experiment
+  /// (kJointStop), restoring the nominal.
   ReachActions StopJoint();
+  /// Its joint experiment's leader completed its excitation (JointExperiments): a running
+  /// experiment ends done (kJointEnd), restoring the nominal, without identification.
+  ReachActions EndJoint();
   /// The link to the PLC is down between polls: aborts a running experiment.
   ReachActions OnLinkLost();
   /// The caller queued the write of the last actions to the actuator, under `id` (ids increase

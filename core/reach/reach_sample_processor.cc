@@ -107,6 +107,12 @@ ReachActions ReachSampleProcessor::StopJointExperiment() {
   return Apply(event);
 }
 
+ReachActions ReachSampleProcessor::EndJointExperiment() {
+  ExperimentEvent event;
+  event.kind = ExperimentEventKind::kJointEnd;
+  return Apply(event);
+}
+
 ReachActions ReachSampleProcessor::OnLinkLost() {
   ExperimentEvent event;
   event.kind = ExperimentEventKind::kSample;
@@ -132,10 +138,7 @@ void ReachSampleProcessor::ResetOnlineEstimator() {
 
 bool ReachSampleProcessor::SetExperimentPlan(const ExperimentPlan& plan) {
   const ExperimentPhase phase = experiment_state_.phase;
-  if (phase == ExperimentPhase::kSettling || phase == ExperimentPhase::kExciting ||
-      phase == ExperimentPhase::kIdentifying) {
-    return false;
-  }
+  if (IsRunning(phase) || phase == ExperimentPhase::kIdentifying) return false;
   plan.Validate();
   options_.experiment = plan;
   const auto n = static_cast<Eigen::Index>(plan.excite_samples);

@@ -80,9 +80,12 @@ class ReachSampleProcessor final {
   /// Starts at the time of the last sample: the next one must follow within the plan's gap bound.
   ReachActions StartExperiment();
   ReachActions StopExperiment();
-  /// Its joint experiment ended (core/reach/joint_experiments.h): aborts a running experiment
-  /// with kJointStop, restoring the nominal.
+  /// A member of its joint experiment aborted (core/reach/joint_experiments.h): aborts a running
+  /// experiment with kJointStop, restoring the nominal.
   ReachActions StopJointExperiment();
+  /// Its joint experiment's leader completed its excitation: a running experiment ends done
+  /// (kJointEnd), restoring the nominal, without identification.
+  ReachActions EndJointExperiment();
   /// The PLC link is down and no samples come (the poller is reconnecting): abort if running.
   /// Nothing else changes (no estimator update, no sample counted).
   ReachActions OnLinkLost();

@@ -10,10 +10,6 @@
 namespace canalid::cli {
 namespace {
 
-bool Running(core::ExperimentPhase phase) {
-  return phase == core::ExperimentPhase::kSettling || phase == core::ExperimentPhase::kExciting;
-}
-
 bool LiveRunning(std::int8_t state) {
   return state == canalid::experiment_state_t::STATE_SETTLING ||
          state == canalid::experiment_state_t::STATE_EXCITING;
@@ -226,15 +222,19 @@ void ReplaySession::OnExperiment(const canalid::experiment_state_t& live,
     core::ReachController& runner = *reach->runner;
     const core::ExperimentPhase ours = runner.pipeline().experiment_state().phase;
     const double t = first_utime_ ? static_cast<double>(live.utime - *first_utime_) * 1e-6 : 0.0;
-    if (LiveRunning(live.state) && !Running(ours)) {
+    if (LiveRunning(live.state) && !core::IsRunning(ours)) {
       // Started by an operator command between two polls.
       Step(*reach, runner.Start(live.experiment), t);
-      if (!Running(runner.pipeline().experiment_state().phase)) {
+      if (!core::IsRunning(runner.pipeline().experiment_state().phase)) {
         on_warning_(At(options_.log_path, event) + ": reach " + live.reach + ": the live run " +
                     "started experiment '" + live.experiment + "', which the replay cannot (" +
                     runner.StartRefusal(live.experiment) + ")");
       }
-    } else if (live.state == canalid::experiment_state_t::STATE_ABORTED && Running(ours)) {
+    } else if (live.state == canalid::experiment_state_t::STATE_DONE &&
+               live.reason == core::kEndedWithJoint && core::IsRunning(ours)) {
+      // Ended with a joint experiment whose leader this replay does not run (--reach).
+      Step(*reach, runner.EndJoint(), t);
+    } else if (live.state == canalid::experiment_state_t::STATE_ABORTED && core::IsRunning(ours)) {
       // Ended by something the samples do not carry.
       if (live.reason == core::AbortReasonName(core::AbortReason::kLinkLost)) {
         Step(*reach, runner.OnLinkLost(), t);

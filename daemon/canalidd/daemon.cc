@@ -301,8 +301,11 @@ void Daemon::Handle(ReachRuntime& reach, const core::ReachActions& actions, doub
                                  ActuatorName(plcs_, reach), time_s);
     std::string message =
         "reach " + name + ": experiment " + core::ExperimentPhaseName(state.phase);
-    if (state.phase == core::ExperimentPhase::kAborted)
-      message += " (" + core::AbortReasonText(*plan, state) + ")";
+    // Why it aborted, or that it ended with its joint experiment.
+    if (const std::string reason = core::PhaseReasonText(*plan, state);
+        reason != core::ExperimentPhaseName(state.phase)) {
+      message += " (" + reason + ")";
+    }
     (state.phase == core::ExperimentPhase::kAborted ? LogWarning(message) : LogInfo(message));
     NotifyStatus(Status());
   }

@@ -194,9 +194,7 @@ void LcmPublisher::PublishExperiment(const std::string& reach, const std::string
   experiment_.num_steps = static_cast<int32_t>(plan.excite_samples);
   experiment_.setpoint_channel = actuator;
   experiment_.setpoint = state.setpoint;
-  experiment_.reason = state.phase == core::ExperimentPhase::kAborted
-                           ? core::AbortReasonText(plan, state)
-                           : core::ExperimentPhaseName(state.phase);
+  experiment_.reason = core::PhaseReasonText(plan, state);
   Send(Channel(experiment_channels_, "EXPERIMENT_", reach), experiment_);
 }
 

@@ -118,6 +118,56 @@ TEST(Experiment, EveryFaultAbortsAndRestoresNominalInTheSameTransition) {
   }
 }
 
+TEST(Experiment, JointEndEndsARunningExperimentDoneAtItsNominal) {
+  for (int warmup : {2, 9}) {  // while settling, and while exciting
+    Driver run;
+    run.Apply(Event(ExperimentEventKind::kStart));
+    for (int k = 0; k < warmup; ++k) run.Apply(Sample(2.1));
+    const ExperimentActions a = run.Apply(Event(ExperimentEventKind::kJointEnd));
+    EXPECT_EQ(run.state.phase, ExperimentPhase::kDone);
+    EXPECT_EQ(run.state.abort_reason, AbortReason::kNone);
+    EXPECT_TRUE(run.state.ended_with_joint);
+    EXPECT_EQ(PhaseReasonText(run.plan, run.state), "ended with its joint experiment");
+    // No identification of its partial record; the nominal in the same transition.
+    EXPECT_FALSE(a.start_identification);
+    EXPECT_FALSE(a.record_sample);
+    EXPECT_TRUE(a.phase_changed);
+    EXPECT_TRUE(a.restore_nominal);
+    ASSERT_TRUE(a.write_setpoint.has_value());
+    EXPECT_DOUBLE_EQ(*a.write_setpoint, 0.5);
+    for (int k = 0; k < 5; ++k) EXPECT_FALSE(run.Apply(Sample(2.1)).write_setpoint.has_value());
+    // A new start forgets it.
+    run.Apply(Event(ExperimentEventKind::kStart));
+    EXPECT_FALSE(run.state.ended_with_joint);
+    EXPECT_EQ(PhaseReasonText(run.plan, run.state), "settling");
+  }
+}
+
+TEST(Experiment, JointEndLeavesAnExperimentThatIsNotRunningAsItIs) {
+  // Idle; identifying its own record; done; aborted.
+  Driver idle;
+  EXPECT_FALSE(idle.Apply(Event(ExperimentEventKind::kJointEnd)).phase_changed);
+  EXPECT_EQ(idle.state.phase, ExperimentPhase::kIdle);
+  Driver run;
+  run.Apply(Event(ExperimentEventKind::kStart));
+  while (run.state.phase != ExperimentPhase::kIdentifying) run.Apply(Sample(2.1));
+  const ExperimentActions a = run.Apply(Event(ExperimentEventKind::kJointEnd));
+  EXPECT_FALSE(a.phase_changed);
+  EXPECT_FALSE(a.write_setpoint.has_value());
+  EXPECT_EQ(run.state.phase, ExperimentPhase::kIdentifying);
+  run.Apply(Event(ExperimentEventKind::kIdentificationSucceeded));
+  run.Apply(Event(ExperimentEventKind::kJointEnd));
+  EXPECT_EQ(run.state.phase, ExperimentPhase::kDone);
+  EXPECT_FALSE(run.state.ended_with_joint);
+  EXPECT_EQ(PhaseReasonText(run.plan, run.state), "done");
+  Driver aborted;
+  aborted.Apply(Event(ExperimentEventKind::kStart));
+  aborted.Apply(Event(ExperimentEventKind::kStop));
+  aborted.Apply(Event(ExperimentEventKind::kJointEnd));
+  EXPECT_EQ(aborted.state.phase, ExperimentPhase::kAborted);
+  EXPECT_EQ(PhaseReasonText(aborted.plan, aborted.state), "stopped by operator");
+}
+
 TEST(Experiment, ToleratesSingleInvalidSamplesButNotARunOfThem) {
   Driver run;  // max_invalid_samples = 1
   run.Apply(Event(ExperimentEventKind::kStart));

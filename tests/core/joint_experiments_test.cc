@@ -155,10 +155,6 @@ class Rig {
   double time_s_ = 0.0;
 };
 
-bool Running(ExperimentPhase phase) {
-  return phase == ExperimentPhase::kSettling || phase == ExperimentPhase::kExciting;
-}
-
 TEST(JointExperiments, TheLeadersStartStartsThePartnerAtTheSamePoll) {
   Rig rig(Gate(), Offtake());
   rig.Poll();
@@ -182,14 +178,19 @@ TEST(JointExperiments, TheLeadersStartStartsThePartnerAtTheSamePoll) {
   EXPECT_NEAR(std::abs(rig.offtake_actuator - kOfftakeNominal), 0.05, 1e-12);
 }
 
-TEST(JointExperiments, TheEndOfTheLeadersExcitationStopsThePartnerAndRestoresIt) {
+TEST(JointExperiments, TheEndOfTheLeadersExcitationEndsThePartnerDoneAndRestoresIt) {
   Rig rig(Gate(), Offtake());
   rig.Poll();
   rig.Start(0);
-  for (int k = 0; k < kSettle + kExcite + 2 && Running(rig.Phase(0)); ++k) rig.Poll();
-  EXPECT_FALSE(Running(rig.Phase(0)));
-  EXPECT_EQ(rig.Phase(1), ExperimentPhase::kAborted);
-  EXPECT_EQ(rig.Reason(1), AbortReason::kJointStop);
+  for (int k = 0; k < kSettle + kExcite + 2 && IsRunning(rig.Phase(0)); ++k) rig.Poll();
+  EXPECT_FALSE(IsRunning(rig.Phase(0)));
+  // A normal end: done with the leader, not aborted (its own PRBS would have run longer).
+  EXPECT_EQ(rig.Phase(1), ExperimentPhase::kDone);
+  EXPECT_EQ(rig.Reason(1), AbortReason::kNone);
+  EXPECT_TRUE(rig.reach(1).pipeline().experiment_state().ended_with_joint);
+  EXPECT_NE(rig.why.back().find("experiment 'gate-prbs' of reach gate is identifying"),
+            std::string::npos)
+      << rig.why.back();
   // Its last write is its nominal, confirmed: nothing pending.
   EXPECT_DOUBLE_EQ(rig.offtake_actuator, kOfftakeNominal);
   EXPECT_FALSE(rig.reach(1).restore_pending().has_value());

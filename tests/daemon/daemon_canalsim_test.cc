@@ -300,21 +300,21 @@ TEST(DaemonCanalsim, TwoStructureExperimentFitsP22FromTheDataAndRestoresBoth) {
   ASSERT_FALSE(idz_line.empty()) << daemon->output();
   const nlohmann::json idz = JsonAfter(idz_line, "identified idz ");
   ASSERT_TRUE(idz.is_object()) << idz_line;
-  // The offtake started with the gate's experiment and stopped when its excitation ended.
+  // The offtake started with the gate's experiment and ended with it (done, not aborted) when
+  // the gate's excitation ended.
   const std::string& log = daemon->output();
   const std::size_t started = log.find(
       "reach pool2_offtake: joint experiment: started with experiment 'pool2_two_structures' of "
       "reach pool2");
   const std::size_t identifying = log.find("reach pool2: experiment identifying");
-  const std::size_t stopped = log.find(
-      "reach pool2_offtake: experiment aborted (stopped with its "
-      "joint experiment)");
+  const std::size_t stopped =
+      log.find("reach pool2_offtake: experiment done (ended with its joint experiment)");
   ASSERT_NE(started, std::string::npos) << log;
   ASSERT_NE(identifying, std::string::npos) << log;
   ASSERT_NE(stopped, std::string::npos) << log;
   EXPECT_LT(started, identifying);
   EXPECT_LT(identifying, stopped);
-  EXPECT_EQ(log.find("reach pool2: experiment aborted"), std::string::npos) << log;
+  EXPECT_EQ(log.find("experiment aborted"), std::string::npos) << log;
   ASSERT_FALSE(daemon->WaitForLine("reach pool2_offtake: nominal setpoint", 10000, stopped).empty())
       << log;
 
@@ -374,6 +374,26 @@ TEST(DaemonCanalsim, TwoStructureExperimentFitsP22FromTheDataAndRestoresBoth) {
   }
   ASSERT_TRUE(replayed.has_value()) << replay.out;
   EXPECT_EQ(JsonNumbersDiffer(idz, *replayed, 1e-9), "") << idz_line << "\n" << replayed->dump();
+
+  // On the bus, the offtake's experiment ended done with the gate's, and says so.
+  std::vector<std::pair<int, std::string>> offtake_states;
+  lcm::LogFile bus((dir / "run.lcmlog").string(), "r");
+  while (const lcm::LogEvent* e = bus.readNextEvent()) {
+    if (e->channel != "CANALID_ASCE2_EXPERIMENT_pool2_offtake") continue;
+    canalid::experiment_state_t m;
+    if (m.decode(e->data, 0, e->datalen) != e->datalen) continue;
+    offtake_states.emplace_back(m.state, m.reason);
+  }
+  ASSERT_FALSE(offtake_states.empty());
+  EXPECT_EQ(offtake_states.back(), std::make_pair(+canalid::experiment_state_t::STATE_DONE,
+                                                  std::string("ended with its joint experiment")));
+  // A replay of the offtake alone, whose leader it does not run, ends it as the live run did.
+  const ProgramRun alone = RunProgram(
+      CanalidProgram() + " replay " + (dir / "run.lcmlog").string() + " --reach pool2_offtake",
+      dir);
+  EXPECT_EQ(alone.err.find("diverges"), std::string::npos) << alone.err;
+  EXPECT_NE(alone.err.find("reach pool2_offtake is configured with none"), std::string::npos)
+      << alone.err;
 }
 
 // The same experiment with the offtake's level band narrowed to 5 mm above the pool's level at
