@@ -1454,11 +1454,13 @@ TEST(DaemonCanalsim, CommandsStartOnlyWhenGenuine) {
 TEST(DaemonCanalsim, AnOperatorStartedExperimentReplaysFromTheBusLog) {
   const fs::path dir = TestDir();
   // The first experiment (pool2_short, 127 bits of 2 samples) is not the one started; the second
-  // is shorter: 63 bits of 2 samples (12.6 s at 600 x).
+  // is shorter: 63 bits of 2 samples (12.6 s at 600 x). Its gap bound is 2 s (20 polls), not the
+  // demo's 0.5 s: this test is about the replay, and on two cores shared with other suites a poll
+  // came 0.5 s late once and aborted it (the gap rule has its own test, AStalledDaemon...).
   const std::string quick =
       "[[experiment]]\nname = \"pool2_quick\"\nreach = \"pool2\"\nmode = \"explicit\"\n"
       "amplitude = 0.05\nclock_period_s = 120.0\norder = 6\nseed = 3\nsettle_s = 0.0\n"
-      "start = \"manual\"\nmax_invalid_samples = 3\nmax_sample_gap_periods = 5.0\n";
+      "start = \"manual\"\nmax_invalid_samples = 3\nmax_sample_gap_periods = 20.0\n";
   CommandRig rig;
   StartCommandRig(dir, ExplicitExperiment(0.05, 7, "manual", "") + "\n" + quick, rig);
   ASSERT_FALSE(::testing::Test::HasFailure());
