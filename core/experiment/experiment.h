@@ -37,7 +37,8 @@ enum class AbortReason : std::uint8_t {
   kIdentificationFailed,  ///< the batch identification found no usable model
   kGuardNotPersisted,     ///< the restart guard could not be written before an excitation write
   kSampleGap,  ///< two samples further apart than max_sample_gap_s (stall, overrun, reconnect)
-  /// Another member of its joint experiment aborted (core/reach/joint_experiments.h).
+  /// Another member of its joint experiment aborted, or (the leader) a partner could not start
+  /// with it (core/reach/joint_experiments.h).
   kJointStop,
 };
 
@@ -76,7 +77,7 @@ struct ExperimentSample {
 enum class ExperimentEventKind : std::uint8_t {
   kStart,  ///< begin (from idle, done or aborted); sample.time_s: the last sample's time (or NaN)
   kStop,   ///< operator stop: abort with kOperatorStop
-  kJointStop,  ///< a member of its joint experiment aborted: abort with kJointStop
+  kJointStop,  ///< its joint experiment fails (AbortReason::kJointStop): abort with it
   /// Its joint experiment's leader completed its excitation: a running experiment ends done, its
   /// nominal restored, without identification (its record served the leader's).
   kJointEnd,

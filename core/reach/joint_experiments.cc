@@ -53,6 +53,17 @@ std::string JointExperiments::StartRefusal(std::span<ReachController* const> rea
   return {};
 }
 
+bool JointExperiments::HasOtherMember(std::size_t reach, std::string_view experiment) const {
+  for (const JointExperiment& joint : joints_) {
+    if (joint.partners.empty()) continue;  // every partner is on another reach than the leader
+    if (joint.leader.reach == reach && joint.leader.experiment == experiment) return true;
+    for (const JointExperiment::Member& partner : joint.partners) {
+      if (partner.reach == reach && partner.experiment == experiment) return true;
+    }
+  }
+  return false;
+}
+
 bool JointExperiments::OnStartAllowed(std::span<ReachController* const> reaches,
                                       std::size_t reach) const {
   const ReachController* leader = At(reaches, reach);
@@ -70,9 +81,9 @@ bool JointExperiments::OnStartAllowed(std::span<ReachController* const> reaches,
   return true;
 }
 
-void JointExperiments::StopOthers(std::span<ReachController* const> reaches, std::size_t j,
-                                  std::size_t except, JointStop how, const std::string& why,
-                                  std::vector<JointOrder>* orders) const {
+void JointExperiments::EndOthers(std::span<ReachController* const> reaches, std::size_t j,
+                                 std::size_t except, Ending how, const std::string& why,
+                                 std::vector<JointOrder>* orders) const {
   const JointExperiment& joint = joints_[j];
   auto stop = [&](const JointExperiment::Member& member) {
     ReachController* controller = At(reaches, member.reach);
@@ -82,7 +93,7 @@ void JointExperiments::StopOthers(std::span<ReachController* const> reaches, std
       return;
     }
     orders->push_back({member.reach,
-                       how == JointStop::kEnd ? controller->EndJoint() : controller->StopJoint(),
+                       how == Ending::kDone ? controller->EndJoint() : controller->StopJoint(),
                        why});
   };
   stop(joint.leader);
@@ -120,11 +131,11 @@ std::vector<JointOrder> JointExperiments::AfterPhaseChange(
       } else if (!IsRunning(phase) && active_[j] != 0) {
         // Its excitation is over (identifying): the partners end with it; it aborted: they stop.
         active_[j] = 0;
-        StopOthers(reaches, j, reach,
-                   phase == ExperimentPhase::kAborted ? JointStop::kAbort : JointStop::kEnd,
-                   "experiment '" + name + "' of reach " + changed->name() + " is " +
-                       ExperimentPhaseName(phase),
-                   &orders);
+        EndOthers(reaches, j, reach,
+                  phase == ExperimentPhase::kAborted ? Ending::kAborted : Ending::kDone,
+                  "experiment '" + name + "' of reach " + changed->name() + " is " +
+                      ExperimentPhaseName(phase),
+                  &orders);
       }
       continue;
     }
@@ -132,10 +143,10 @@ std::vector<JointOrder> JointExperiments::AfterPhaseChange(
     for (const JointExperiment::Member& partner : joint.partners) {
       if (partner.reach != reach || partner.experiment != name) continue;
       active_[j] = 0;
-      StopOthers(reaches, j, reach, JointStop::kAbort,
-                 "experiment '" + name + "' of reach " + changed->name() + " aborted (" +
-                     AbortReasonName(changed->pipeline().experiment_state().abort_reason) + ")",
-                 &orders);
+      EndOthers(reaches, j, reach, Ending::kAborted,
+                "experiment '" + name + "' of reach " + changed->name() + " aborted (" +
+                    AbortReasonName(changed->pipeline().experiment_state().abort_reason) + ")",
+                &orders);
       break;
     }
   }

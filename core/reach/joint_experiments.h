@@ -45,9 +45,13 @@ struct JointOrder {
 ///   actuators for the leader's record only;
 /// - when the leader aborts, the partners still running stop (kJointStop: aborted);
 /// - when a partner aborts while the leader runs, the leader and the other partners stop.
-/// The rules only add starts and stops: every actuator keeps its own reach's safety rules, and
-/// every stop restores that actuator's nominal through its own ReachController. A partner's
+/// The rules only add starts, ends and stops: every actuator keeps its own reach's safety rules,
+/// and every stop restores that actuator's nominal through its own ReachController. A partner's
 /// experiment started on its own (an operator's command) is not joint: nothing follows from it.
+/// The rules act on the poll's phase changes in the order the caller passes them (the daemon and
+/// the replay: reach by reach, in configuration order). When the leader's excitation ends on the
+/// poll where a partner aborts, the first one handled decides: a partner handled after the
+/// leader has already ended done; one handled before aborts and stops the leader.
 /// Deterministic; allocates when a phase changes (the orders) and while OnStartAllowed finds a
 /// partner refusing, never on a poll otherwise.
 class JointExperiments final {
@@ -68,20 +72,24 @@ class JointExperiments final {
   /// a partner's refusal text while it refuses: callers skip it once the on_start experiment ran
   /// (ReachController::on_start_done).
   bool OnStartAllowed(std::span<ReachController* const> reaches, std::size_t reach) const;
+  /// Whether experiment `experiment` of `reach` is in a joint experiment with a member on another
+  /// reach: then that member's end or abort reaches it through AfterPhaseChange (a replay of one
+  /// reach has no joint experiment with the reaches it does not run).
+  bool HasOtherMember(std::size_t reach, std::string_view experiment) const;
   /// After actions of `reach` that changed its experiment's phase: the starts and stops the joint
   /// rules ask of other reaches (empty: none).
   std::vector<JointOrder> AfterPhaseChange(std::span<ReachController* const> reaches,
                                            std::size_t reach);
 
  private:
-  enum class JointStop : std::uint8_t {
-    kEnd,    ///< ReachController::EndJoint: done with the leader
-    kAbort,  ///< ReachController::StopJoint: aborted
+  /// How the other members of a joint experiment end.
+  enum class Ending : std::uint8_t {
+    kDone,     ///< ReachController::EndJoint: done with the leader
+    kAborted,  ///< ReachController::StopJoint: aborted with it
   };
-  /// Ends or stops (`how`) every member of joint `j` but `except` that is still running, with
-  /// `why`.
-  void StopOthers(std::span<ReachController* const> reaches, std::size_t j, std::size_t except,
-                  JointStop how, const std::string& why, std::vector<JointOrder>* orders) const;
+  /// Ends (`how`) every member of joint `j` but `except` that is still running, with `why`.
+  void EndOthers(std::span<ReachController* const> reaches, std::size_t j, std::size_t except,
+                 Ending how, const std::string& why, std::vector<JointOrder>* orders) const;
 
   std::vector<JointExperiment> joints_;
   std::vector<char> active_;  ///< per joint: its leader started it and it has not ended

@@ -145,8 +145,8 @@ class ReachController final {
   ReachActions Start(std::string_view name = {});
   /// An operator's stop, or the daemon's: aborts a running experiment, restoring the nominal.
   ReachActions Stop();
-  /// A member of its joint experiment aborted (JointExperiments): aborts a running experiment
-  /// (kJointStop), restoring the nominal.
+  /// Its joint experiment fails (JointExperiments: a member aborted, or a partner could not start
+  /// with the leader): aborts a running experiment (kJointStop), restoring the nominal.
   ReachActions StopJoint();
   /// Its joint experiment's leader completed its excitation (JointExperiments): a running
   /// experiment ends done (kJointEnd), restoring the nominal, without identification.

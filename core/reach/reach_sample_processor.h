@@ -80,8 +80,8 @@ class ReachSampleProcessor final {
   /// Starts at the time of the last sample: the next one must follow within the plan's gap bound.
   ReachActions StartExperiment();
   ReachActions StopExperiment();
-  /// A member of its joint experiment aborted (core/reach/joint_experiments.h): aborts a running
-  /// experiment with kJointStop, restoring the nominal.
+  /// Its joint experiment fails (core/reach/joint_experiments.h): aborts a running experiment
+  /// with kJointStop, restoring the nominal.
   ReachActions StopJointExperiment();
   /// Its joint experiment's leader completed its excitation: a running experiment ends done
   /// (kJointEnd), restoring the nominal, without identification.

@@ -217,9 +217,19 @@ void ReplaySession::OnExperiment(const canalid::experiment_state_t& live,
     pending_restarts_[live.reach] = {live.reason, live.setpoint};
     return;
   }
-  for (auto& reach : reaches_) {
+  for (std::size_t index = 0; index < reaches_.size(); ++index) {
+    const std::unique_ptr<Reach>& reach = reaches_[index];
     if (reach->config.name != live.reach || !reach->runner) continue;
     core::ReachController& runner = *reach->runner;
+    // A joint end or stop the replay's own joint rules should have made already.
+    auto joint_diverges = [&] {
+      if (!joints_.HasOtherMember(index, live.experiment)) return;
+      on_warning_(At(options_.log_path, event) + ": reach " + live.reach +
+                  ": the live experiment " +
+                  (live.state == canalid::experiment_state_t::STATE_DONE ? "ended" : "stopped") +
+                  " with its joint experiment where the replay's did not: the replay diverges "
+                  "from the live run");
+    };
     const core::ExperimentPhase ours = runner.pipeline().experiment_state().phase;
     const double t = first_utime_ ? static_cast<double>(live.utime - *first_utime_) * 1e-6 : 0.0;
     if (LiveRunning(live.state) && !core::IsRunning(ours)) {
@@ -233,6 +243,7 @@ void ReplaySession::OnExperiment(const canalid::experiment_state_t& live,
     } else if (live.state == canalid::experiment_state_t::STATE_DONE &&
                live.reason == core::kEndedWithJoint && core::IsRunning(ours)) {
       // Ended with a joint experiment whose leader this replay does not run (--reach).
+      joint_diverges();
       Step(*reach, runner.EndJoint(), t);
     } else if (live.state == canalid::experiment_state_t::STATE_ABORTED && core::IsRunning(ours)) {
       // Ended by something the samples do not carry.
@@ -244,6 +255,7 @@ void ReplaySession::OnExperiment(const canalid::experiment_state_t& live,
         Step(*reach, runner.OnGuardNotPersisted(), t);
       } else if (live.reason == core::AbortReasonName(core::AbortReason::kJointStop)) {
         // Stopped with a joint experiment whose other reach this replay does not run (--reach).
+        joint_diverges();
         Step(*reach, runner.StopJoint(), t);
       } else {
         if (live.reason != core::AbortReasonName(core::AbortReason::kOperatorStop)) {

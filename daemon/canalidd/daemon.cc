@@ -302,10 +302,8 @@ void Daemon::Handle(ReachRuntime& reach, const core::ReachActions& actions, doub
     std::string message =
         "reach " + name + ": experiment " + core::ExperimentPhaseName(state.phase);
     // Why it aborted, or that it ended with its joint experiment.
-    if (const std::string reason = core::PhaseReasonText(*plan, state);
-        reason != core::ExperimentPhaseName(state.phase)) {
-      message += " (" + reason + ")";
-    }
+    if (state.phase == core::ExperimentPhase::kAborted || state.ended_with_joint)
+      message += " (" + core::PhaseReasonText(*plan, state) + ")";
     (state.phase == core::ExperimentPhase::kAborted ? LogWarning(message) : LogInfo(message));
     NotifyStatus(Status());
   }

@@ -193,8 +193,9 @@ struct ExperimentConfig {
   /// PLC, [1.1, 1000]; a longer gap (a stall, an overrun, a reconnect) aborts it.
   double max_sample_gap_periods = 1.5;
   /// Experiments of other reaches that run with this one, by name (a joint experiment,
-  /// core/reach/joint_experiments.h: they start with it, stop when its excitation ends, and an
-  /// abort of any stops all). A pool's two-structure experiment names its offtake's here.
+  /// core/reach/joint_experiments.h: they start with it, end with it, done, when its excitation
+  /// ends, and an abort of any stops all). A pool's two-structure experiment names its offtake's
+  /// here.
   std::vector<std::string> with;
   bool operator==(const ExperimentConfig&) const = default;
 };

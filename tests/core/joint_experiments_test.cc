@@ -112,11 +112,17 @@ class Rig {
   }
   void Act(std::size_t r, const ReachActions& a) {
     ReachController& c = *reaches_[r];
+    // As the daemon: the guard is written before the first excitation write, and removed when
+    // the PLC confirms the restore with no experiment running.
+    if (c.needs_guard(a)) {
+      c.OnGuardPersisted();
+      guard[r] = true;
+    }
     if (a.write_setpoint) {
       written.push_back({r, *a.write_setpoint, a.restore_nominal});
       (r == 0 ? gate_actuator : offtake_actuator) = *a.write_setpoint;
       c.OnWriteQueued(++write_id_);
-      c.OnWriteResult({true, *a.write_setpoint, write_id_});
+      if (c.OnWriteResult({true, *a.write_setpoint, write_id_}).remove_guard) guard[r] = false;
     }
     if (a.experiment_phase_changed) {
       for (const JointOrder& order : joints_.AfterPhaseChange(reaches_, r)) {
@@ -145,6 +151,7 @@ class Rig {
   double offtake_actuator = kOfftakeNominal;
   std::vector<Written> written;
   std::vector<std::string> why;
+  std::array<bool, 2> guard{};  // each reach's experiment guard on disk
 
  private:
   ReachController gate_;
@@ -191,6 +198,9 @@ TEST(JointExperiments, TheEndOfTheLeadersExcitationEndsThePartnerDoneAndRestores
   EXPECT_NE(rig.why.back().find("experiment 'gate-prbs' of reach gate is identifying"),
             std::string::npos)
       << rig.why.back();
+  // Both guards were written before the excitation and are gone with the confirmed restores.
+  EXPECT_FALSE(rig.guard[0]);
+  EXPECT_FALSE(rig.guard[1]);
   // Its last write is its nominal, confirmed: nothing pending.
   EXPECT_DOUBLE_EQ(rig.offtake_actuator, kOfftakeNominal);
   EXPECT_FALSE(rig.reach(1).restore_pending().has_value());
@@ -199,6 +209,31 @@ TEST(JointExperiments, TheEndOfTheLeadersExcitationEndsThePartnerDoneAndRestores
   const std::size_t writes = rig.written.size();
   for (int k = 0; k < 5; ++k) rig.Poll();
   EXPECT_EQ(rig.written.size(), writes);
+}
+
+TEST(JointExperiments, BothGuardsAreWrittenBeforeTheExcitation) {
+  Rig rig(Gate(), Offtake());
+  rig.Poll();
+  rig.Start(0);
+  for (int k = 0; k < 4; ++k) rig.Poll();
+  ASSERT_EQ(rig.Phase(1), ExperimentPhase::kExciting);
+  EXPECT_TRUE(rig.guard[0]);
+  EXPECT_TRUE(rig.guard[1]);
+}
+
+TEST(JointExperiments, HasOtherMemberOnlyWithAMemberOnAnotherReach) {
+  JointExperiment joint;
+  joint.leader = {0, "gate-prbs"};
+  joint.partners.push_back({1, "offtake-prbs"});
+  JointExperiment alone;  // a replay of the leader's reach alone: no partner left
+  alone.leader = {2, "lonely"};
+  const JointExperiments joints({joint, alone});
+  EXPECT_TRUE(joints.HasOtherMember(0, "gate-prbs"));
+  EXPECT_TRUE(joints.HasOtherMember(1, "offtake-prbs"));
+  EXPECT_FALSE(joints.HasOtherMember(0, "offtake-prbs"));
+  EXPECT_FALSE(joints.HasOtherMember(1, "gate-prbs"));
+  EXPECT_FALSE(joints.HasOtherMember(2, "lonely"));
+  EXPECT_FALSE(JointExperiments().HasOtherMember(0, "gate-prbs"));
 }
 
 TEST(JointExperiments, APartnersAbortStopsTheLeaderAndBothRestore) {

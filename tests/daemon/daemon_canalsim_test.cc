@@ -394,6 +394,22 @@ TEST(DaemonCanalsim, TwoStructureExperimentFitsP22FromTheDataAndRestoresBoth) {
   EXPECT_EQ(alone.err.find("diverges"), std::string::npos) << alone.err;
   EXPECT_NE(alone.err.find("reach pool2_offtake is configured with none"), std::string::npos)
       << alone.err;
+  // Re-identified with the gate settling 5 samples longer, the replay's joint rules have not
+  // ended the offtake's experiment when the live one ends: it says the replay diverges there.
+  std::string longer = ReadText(dir / "canalidd.toml");
+  const std::size_t joint_at = longer.find("name = \"pool2_two_structures\"");
+  const std::size_t settle_at = longer.find("settle_s = 600.0", joint_at);
+  ASSERT_NE(settle_at, std::string::npos);
+  longer.replace(settle_at, 16, "settle_s = 900.0");
+  std::ofstream(dir / "longer.toml") << longer;
+  const ProgramRun diverged =
+      RunProgram(CanalidProgram() + " replay " + (dir / "run.lcmlog").string() + " --config " +
+                     (dir / "longer.toml").string(),
+                 dir);
+  EXPECT_NE(diverged.err.find("reach pool2_offtake: the live experiment ended with its joint "
+                              "experiment where the replay's did not: the replay diverges"),
+            std::string::npos)
+      << diverged.err;
 }
 
 // The same experiment with the offtake's level band narrowed to 5 mm above the pool's level at
