@@ -242,7 +242,8 @@ void ReplaySession::OnExperiment(const canalid::experiment_state_t& live,
       }
     } else if (live.state == canalid::experiment_state_t::STATE_DONE &&
                live.reason == core::kEndedWithJoint && core::IsRunning(ours)) {
-      // Ended with a joint experiment whose leader this replay does not run (--reach).
+      // Ended with a joint experiment whose leader this replay does not run (--reach); when it
+      // runs the leader too, its own joint rules should have ended it: a divergence.
       joint_diverges();
       Step(*reach, runner.EndJoint(), t);
     } else if (live.state == canalid::experiment_state_t::STATE_ABORTED && core::IsRunning(ours)) {
@@ -254,7 +255,8 @@ void ReplaySession::OnExperiment(const canalid::experiment_state_t& live,
       } else if (live.reason == core::AbortReasonName(core::AbortReason::kGuardNotPersisted)) {
         Step(*reach, runner.OnGuardNotPersisted(), t);
       } else if (live.reason == core::AbortReasonName(core::AbortReason::kJointStop)) {
-        // Stopped with a joint experiment whose other reach this replay does not run (--reach).
+        // Stopped with a joint experiment whose other reach this replay does not run (--reach);
+        // else a divergence, as above.
         joint_diverges();
         Step(*reach, runner.StopJoint(), t);
       } else {

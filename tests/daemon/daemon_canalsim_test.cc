@@ -307,15 +307,15 @@ TEST(DaemonCanalsim, TwoStructureExperimentFitsP22FromTheDataAndRestoresBoth) {
       "reach pool2_offtake: joint experiment: started with experiment 'pool2_two_structures' of "
       "reach pool2");
   const std::size_t identifying = log.find("reach pool2: experiment identifying");
-  const std::size_t stopped =
+  const std::size_t ended =
       log.find("reach pool2_offtake: experiment done (ended with its joint experiment)");
   ASSERT_NE(started, std::string::npos) << log;
   ASSERT_NE(identifying, std::string::npos) << log;
-  ASSERT_NE(stopped, std::string::npos) << log;
+  ASSERT_NE(ended, std::string::npos) << log;
   EXPECT_LT(started, identifying);
-  EXPECT_LT(identifying, stopped);
+  EXPECT_LT(identifying, ended);
   EXPECT_EQ(log.find("experiment aborted"), std::string::npos) << log;
-  ASSERT_FALSE(daemon->WaitForLine("reach pool2_offtake: nominal setpoint", 10000, stopped).empty())
+  ASSERT_FALSE(daemon->WaitForLine("reach pool2_offtake: nominal setpoint", 10000, ended).empty())
       << log;
 
   // The tolerances: p22 from the data and within 25 %, p21 within 25 %, the area within
