@@ -85,7 +85,7 @@ void JointExperiments::EndOthers(std::span<ReachController* const> reaches, std:
                                  std::size_t except, Ending how, const std::string& why,
                                  std::vector<JointOrder>* orders) const {
   const JointExperiment& joint = joints_[j];
-  auto stop = [&](const JointExperiment::Member& member) {
+  auto end = [&](const JointExperiment::Member& member) {
     ReachController* controller = At(reaches, member.reach);
     if (member.reach == except || controller == nullptr) return;
     if (!IsRunning(controller->pipeline().experiment_state().phase) ||
@@ -96,8 +96,8 @@ void JointExperiments::EndOthers(std::span<ReachController* const> reaches, std:
                        how == Ending::kDone ? controller->EndJoint() : controller->StopJoint(),
                        why});
   };
-  stop(joint.leader);
-  for (const JointExperiment::Member& partner : joint.partners) stop(partner);
+  end(joint.leader);
+  for (const JointExperiment::Member& partner : joint.partners) end(partner);
 }
 
 std::vector<JointOrder> JointExperiments::AfterPhaseChange(

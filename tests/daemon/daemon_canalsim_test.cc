@@ -387,7 +387,8 @@ TEST(DaemonCanalsim, TwoStructureExperimentFitsP22FromTheDataAndRestoresBoth) {
   ASSERT_FALSE(offtake_states.empty());
   EXPECT_EQ(offtake_states.back(), std::make_pair(+canalid::experiment_state_t::STATE_DONE,
                                                   std::string("ended with its joint experiment")));
-  // A replay of the offtake alone, whose leader it does not run, ends it as the live run did.
+  // A replay of the offtake alone does not run its leader: the live end is no divergence there
+  // (HasOtherMember is false), so nothing is said.
   const ProgramRun alone = RunProgram(
       CanalidProgram() + " replay " + (dir / "run.lcmlog").string() + " --reach pool2_offtake",
       dir);
