@@ -82,14 +82,9 @@ int RunCompare(const IdentifyOptions& options) {
   nlohmann::json per_file = nlohmann::json::array();
   for (std::size_t f = 0; f < files.size(); ++f) {
     if (progress) std::cerr << "\rfile " << f + 1 << "/" << files.size() << ": " << files[f];
-    drivers::CsvTable table;
-    try {
-      table = drivers::CsvTable::Read(files[f]);
-    } catch (const drivers::CsvError& e) {
-      throw InputError(e.what());
-    }
-    const Eigen::VectorXd u = RequireMovingColumn(table, options.u);
-    const Eigen::VectorXd y = RequireColumn(table, options.y);
+    const drivers::CsvTable table = ReadTable(files[f]);
+    const auto u = RequireMovingColumn(table, options.u);
+    const auto y = RequireColumn(table, options.y);
     nlohmann::json entry = {{"file", files[f]}, {"rows", table.rows()}};
     for (std::size_t k = 0; k < kinds.size(); ++k) {
       try {

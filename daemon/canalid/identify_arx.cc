@@ -1,4 +1,6 @@
+#include <new>
 #include <stdexcept>
+#include <utility>
 
 #include "core/linear/arx.h"
 #include "core/numerics/metrics.h"
@@ -30,27 +32,41 @@ ArxData ReadArxData(const IdentifyOptions& options, const drivers::CsvTable& tab
   } catch (const std::invalid_argument& e) {
     throw InputError(e.what());
   }
-  data.y = RequireColumn(table, options.y);
-  data.u.resize(table.rows(), static_cast<Eigen::Index>(m));
-  for (std::size_t i = 0; i < m; ++i) {
-    data.u.col(static_cast<Eigen::Index>(i)) = RequireMovingColumn(table, data.inputs[i]);
-  }
+  const auto y = RequireColumn(table, options.y);
+  const Eigen::Index rows = table.rows();
   data.preprocessing = {{"detrended", options.detrend}};
   if (options.detrend) {
-    const core::DetrendResult line = core::RemoveLinearTrend(data.y);
-    data.y = line.detrended;
+    core::DetrendResult line = core::RemoveLinearTrend(y);
+    data.y_copy_ = std::move(line.detrended);
+    new (&data.y) Eigen::Map<const Eigen::VectorXd>(data.y_copy_.data(), rows);
     data.preprocessing["y_trend"] = {{"intercept", line.intercept},
                                      {"slope_per_sample", line.slope_per_sample}};
-    for (Eigen::Index i = 0; i < data.u.cols(); ++i) {
-      data.u.col(i) = core::RemoveLinearTrend(data.u.col(i)).detrended;
-    }
+  } else {
+    new (&data.y) Eigen::Map<const Eigen::VectorXd>(y.data(), rows);
   }
+  if (m == 1 && !options.detrend) {
+    const auto u = RequireMovingColumn(table, data.inputs.front());
+    new (&data.u) Eigen::Map<const Eigen::MatrixXd>(u.data(), rows, 1);
+    return data;
+  }
+  data.u_copy_.resize(rows, static_cast<Eigen::Index>(m));
+  for (std::size_t i = 0; i < m; ++i) {
+    const auto u = RequireMovingColumn(table, data.inputs[i]);
+    data.u_copy_.col(static_cast<Eigen::Index>(i)) =
+        options.detrend ? core::RemoveLinearTrend(u).detrended : u;
+  }
+  new (&data.u)
+      Eigen::Map<const Eigen::MatrixXd>(data.u_copy_.data(), rows, static_cast<Eigen::Index>(m));
   return data;
 }
 
 nlohmann::json IdentifyArx(const IdentifyOptions& options, const drivers::CsvTable& table) {
   const ArxData data = ReadArxData(options, table);
-  const auto& [inputs, orders, y, u, preprocessing] = data;
+  const std::vector<std::string>& inputs = data.inputs;
+  const core::ArxOrders& orders = data.orders;
+  const auto& y = data.y;
+  const auto& u = data.u;
+  const nlohmann::json& preprocessing = data.preprocessing;
   try {
     const core::ArxModel model = core::FitArx(y, u, orders);
     nlohmann::json json = drivers::ToJson(model);

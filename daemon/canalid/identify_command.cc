@@ -11,6 +11,7 @@
 #include "daemon/canalid/cli.h"
 #include "daemon/canalid/closed_loop_option.h"
 #include "daemon/canalid/input_error.h"
+#include "daemon/canalid/table_columns.h"
 #include "drivers/csv/csv_table.h"
 
 namespace canalid::cli {
@@ -20,12 +21,7 @@ int RunIdentify(const IdentifyOptions& options) {
   if (!options.compare.empty()) return RunCompare(options);
   if (options.model.empty()) throw InputError("identify: give --model KIND or --compare KINDS");
   RequireIdzOptionsUsed(options, {options.model});
-  drivers::CsvTable table;
-  try {
-    table = drivers::CsvTable::Read(options.input);
-  } catch (const drivers::CsvError& e) {
-    throw InputError(e.what());
-  }
+  const drivers::CsvTable table = ReadTable(options.input);
   const nlohmann::json model = IdentifyModel(options, table);
   const std::string text = options.pretty ? model.dump(2) : model.dump();
   if (!options.out.empty()) {

@@ -96,12 +96,25 @@ double IdzP22Prior(const IdentifyOptions& options, double mean_inflow_m3s, nlohm
 
 /// The ARX problem as the options describe it: orders (one nb/nk for all inputs, or one each),
 /// the output and input columns (inputs must move), optionally detrended.  @throws InputError.
+/// `y` and `u` view the table's own columns when they can (one input, not detrended), else the
+/// copies held here: the table must outlive the data, which can be moved but not copied.
 struct ArxData {
+  ArxData() = default;
+  ArxData(const ArxData&) = delete;
+  ArxData(ArxData&&) = default;  // the views keep pointing at the moved columns' memory
+  ArxData& operator=(const ArxData&) = delete;
+  ArxData& operator=(ArxData&&) = delete;  // a Map's assignment copies values, not the view
+
   std::vector<std::string> inputs;
   core::ArxOrders orders;
-  Eigen::VectorXd y;
-  Eigen::MatrixXd u;
+  Eigen::Map<const Eigen::VectorXd> y{nullptr, 0};
+  Eigen::Map<const Eigen::MatrixXd> u{nullptr, 0, 0};
   nlohmann::json preprocessing;
+
+ private:
+  friend ArxData ReadArxData(const IdentifyOptions& options, const drivers::CsvTable& table);
+  Eigen::VectorXd y_copy_;
+  Eigen::MatrixXd u_copy_;
 };
 ArxData ReadArxData(const IdentifyOptions& options, const drivers::CsvTable& table);
 /// foptd, soptd, frac-foptd, frac-ss: core::FitProcessBatch, as the daemon's batch_models.

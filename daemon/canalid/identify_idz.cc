@@ -35,9 +35,9 @@ double IdzP22Prior(const IdentifyOptions& options, double mean_inflow_m3s, nlohm
 }
 
 nlohmann::json IdentifyIdz(const IdentifyOptions& options, const drivers::CsvTable& table) {
-  const Eigen::VectorXd q_in = RequireMovingColumn(table, options.qin);
-  const Eigen::VectorXd q_out = RequireColumn(table, options.qout);
-  const Eigen::VectorXd level = RequireColumn(table, options.level);
+  const auto q_in = RequireMovingColumn(table, options.qin);
+  const auto q_out = RequireColumn(table, options.qout);
+  const auto level = RequireColumn(table, options.level);
   const double ts = table.sample_time_s();
   // The p22 prior and what it came from (the theory at the record's mean inflow, or --p22).
   nlohmann::json prior;

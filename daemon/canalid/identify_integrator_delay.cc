@@ -16,9 +16,9 @@ nlohmann::json IdentifyId(const IdentifyOptions& options, const drivers::CsvTabl
         "--closed-loop iv: the instrumental-variable bank is --online only (the batch fit reports "
         "its IV estimate under cross_check)");
   }
-  const Eigen::VectorXd q_in = RequireMovingColumn(table, options.qin);
-  const Eigen::VectorXd q_out = RequireColumn(table, options.qout);
-  const Eigen::VectorXd level = RequireColumn(table, options.level);
+  const auto q_in = RequireMovingColumn(table, options.qin);
+  const auto q_out = RequireColumn(table, options.qout);
+  const auto level = RequireColumn(table, options.level);
   const double ts = table.sample_time_s();
   core::IntegratorDelayIdentificationOptions pipeline;
   pipeline.remove_level_outliers = !options.keep_outliers;

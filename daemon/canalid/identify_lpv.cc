@@ -106,9 +106,9 @@ nlohmann::json IdentifyLpv(const IdentifyOptions& options, const drivers::CsvTab
   const double ts = table.sample_time_s();
   const core::LocalModelKind kind = LocalKind(options, table);
   const std::vector<double> edges = Edges(options);
-  const Eigen::VectorXd u = RequireMovingColumn(table, options.u);
-  const Eigen::VectorXd y = RequireColumn(table, options.y);
-  const Eigen::VectorXd theta = RequireColumn(table, options.schedule);
+  const auto u = RequireMovingColumn(table, options.u);
+  const auto y = RequireColumn(table, options.y);
+  const auto theta = RequireColumn(table, options.schedule);
   // Every band must hold an operating point: a short one would give a local model fitted on
   // too little data and silently bend the polynomials.
   for (const core::LpvOperatingPoint& p : core::SplitByScheduling(theta, edges)) {

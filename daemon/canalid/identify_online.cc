@@ -25,8 +25,8 @@ namespace canalid::cli {
 namespace {
 
 nlohmann::json OnlineId(const IdentifyOptions& options, const drivers::CsvTable& table) {
-  const Eigen::VectorXd q_in = RequireMovingColumn(table, options.qin);
-  const Eigen::VectorXd q_out = RequireColumn(table, options.qout);
+  const auto q_in = RequireMovingColumn(table, options.qin);
+  const auto q_out = RequireColumn(table, options.qout);
   Eigen::VectorXd level = RequireColumn(table, options.level);
   const double ts = table.sample_time_s();
   const auto n = level.size();

@@ -104,7 +104,11 @@ ArxRecursion RunSized(const core::RlsOptions& options, int d, const ArxData& dat
 
 nlohmann::json IdentifyOnlineArx(const IdentifyOptions& options, const drivers::CsvTable& table) {
   const ArxData data = ReadArxData(options, table);
-  const auto& [inputs, orders, y, u, preprocessing] = data;
+  const std::vector<std::string>& inputs = data.inputs;
+  const core::ArxOrders& orders = data.orders;
+  const auto& y = data.y;
+  const auto& u = data.u;
+  const nlohmann::json& preprocessing = data.preprocessing;
   const int d = orders.num_parameters();
   const Eigen::Index first = orders.min_first_sample();
   const Eigen::Index n = y.size();

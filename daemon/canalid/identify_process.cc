@@ -47,8 +47,8 @@ nlohmann::json IdentifyProcessModel(const IdentifyOptions& options,
                                     const drivers::CsvTable& table) {
   const core::ProcessBatchKind kind = KindOf(options.model);
   const core::ProcessBatchOptions batch = OptionsFromFlags(options, table);
-  const Eigen::VectorXd u = RequireMovingColumn(table, options.u);
-  const Eigen::VectorXd y = RequireColumn(table, options.y);
+  const auto u = RequireMovingColumn(table, options.u);
+  const auto y = RequireColumn(table, options.y);
   const core::ProcessBatchResult result =
       core::FitProcessBatch(kind, u, y, table.sample_time_s(), batch);
   if (!result.fitted()) throw InputError(table.source() + ": " + result.problem);

@@ -7,19 +7,12 @@
 
 #include "daemon/canalid/input_error.h"
 #include "daemon/canalid/log_export.h"
+#include "daemon/canalid/table_columns.h"
 #include "daemon/config/config_loader.h"
 #include "drivers/lcm/log_reader.h"
 
 namespace canalid::cli {
 namespace {
-
-drivers::CsvTable ReadCsv(const std::string& path) {
-  try {
-    return drivers::CsvTable::Read(path);
-  } catch (const drivers::CsvError& e) {
-    throw InputError(e.what());
-  }
-}
 
 ReportInput FromLog(const std::string& path, const ReportLogOptions& options) {
   std::optional<config::DaemonConfig> config;
@@ -65,8 +58,9 @@ ReportInput FromLog(const std::string& path, const ReportLogOptions& options) {
   const auto channels = exporter.reach_channels().find(reach);
   if (channels == exporter.reach_channels().end())
     throw InputError("--reach " + reach + ": no samples of this reach in " + path);
-  ReportInput input{ReadCsv((std::filesystem::path(options.data_dir) / (reach + ".csv")).string()),
-                    channels->second, recorder.Trajectories(reach)};
+  ReportInput input{
+      ReadTable((std::filesystem::path(options.data_dir) / (reach + ".csv")).string()),
+      channels->second, recorder.Trajectories(reach)};
   return input;
 }
 
@@ -85,7 +79,7 @@ ReportInput LoadReportInput(const std::string& path, const ReportLogOptions& log
   if (IsLcmLog(path)) return FromLog(path, log);
   if (!log.reach.empty() || !log.config.empty())
     throw InputError(path + ": --reach and --config apply to an LCM log input, not to a CSV");
-  return ReportInput{ReadCsv(path), std::nullopt, {}};
+  return ReportInput{ReadTable(path), std::nullopt, {}};
 }
 
 IdentifyOptions WithReachColumns(IdentifyOptions options,

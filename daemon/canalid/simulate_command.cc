@@ -26,12 +26,7 @@ nlohmann::json ReadModelFile(const std::string& path) {
 
 int RunSimulate(const SimulateOptions& options) {
   const nlohmann::json model = ReadModelFile(options.model_json);
-  drivers::CsvTable table;
-  try {
-    table = drivers::CsvTable::Read(options.input);
-  } catch (const drivers::CsvError& e) {
-    throw InputError(e.what());
-  }
+  const drivers::CsvTable table = ReadTable(options.input);
   const SimulatedOutput sim = SimulateModel(model, options.model_json, table, options);
   const Eigen::Index rows = sim.y.size();
   const Eigen::VectorXd time = table.time_s().tail(rows);

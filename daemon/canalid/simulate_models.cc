@@ -59,8 +59,8 @@ SimulatedOutput SimulateId(const nlohmann::json& model, const std::string& sourc
     r.model.sample_time_s = table.sample_time_s();
   }
   const auto names = InputNames(model, source, options, {"q_in", "q_out"});
-  const Eigen::VectorXd q_in = RequireColumn(table, names[0]);
-  const Eigen::VectorXd q_out = RequireColumn(table, names[1]);
+  const auto q_in = RequireColumn(table, names[0]);
+  const auto q_out = RequireColumn(table, names[1]);
   const int k0 = r.fit_from_sample;
   RequireRowsFrom(table, k0);
   Eigen::Vector4d theta(r.model.b, r.p21_s_per_m2, r.offset_m,
@@ -83,8 +83,8 @@ SimulatedOutput SimulateIdz(const nlohmann::json& model, const std::string& sour
   if (r.sample_time_s > 0.0) RequireSampleTime(table, r.sample_time_s, source);
   r.model.drift_m_per_sample = r.drift_m_per_s * ts;
   const auto names = InputNames(model, source, options, {"q_in", "q_out"});
-  const Eigen::VectorXd q_in = RequireColumn(table, names[0]);
-  const Eigen::VectorXd q_out = RequireColumn(table, names[1]);
+  const auto q_in = RequireColumn(table, names[0]);
+  const auto q_out = RequireColumn(table, names[1]);
   const int k0 = r.fit_from_sample;
   RequireRowsFrom(table, k0);
   SimulatedOutput out;
@@ -145,7 +145,7 @@ struct Deviations {
 };
 Deviations FromFirstInput(const drivers::CsvTable& table, const std::string& column,
                           double input_offset) {
-  const Eigen::VectorXd u = RequireColumn(table, column);
+  const auto u = RequireColumn(table, column);
   return {u.array() - u(0), u(0) - input_offset};
 }
 

@@ -7,7 +7,16 @@
 
 namespace canalid::cli {
 
-Eigen::VectorXd RequireColumn(const drivers::CsvTable& table, const std::string& name) {
+drivers::CsvTable ReadTable(const std::string& path) {
+  try {
+    return drivers::CsvTable::Read(path);
+  } catch (const drivers::CsvError& e) {
+    throw InputError(e.what());
+  }
+}
+
+drivers::CsvTable::ColumnView RequireColumn(const drivers::CsvTable& table,
+                                            const std::string& name) {
   try {
     return table.Column(name);
   } catch (const drivers::CsvError& e) {
@@ -15,8 +24,9 @@ Eigen::VectorXd RequireColumn(const drivers::CsvTable& table, const std::string&
   }
 }
 
-Eigen::VectorXd RequireMovingColumn(const drivers::CsvTable& table, const std::string& name) {
-  Eigen::VectorXd column = RequireColumn(table, name);
+drivers::CsvTable::ColumnView RequireMovingColumn(const drivers::CsvTable& table,
+                                                  const std::string& name) {
+  const drivers::CsvTable::ColumnView column = RequireColumn(table, name);
   if (column.maxCoeff() == column.minCoeff()) {
     throw InputError(table.source() + ": column '" + name + "' never moves (constant " +
                      std::to_string(column(0)) + " over " + std::to_string(column.size()) +

@@ -7,10 +7,17 @@
 
 namespace canalid::cli {
 
-/// A column that must carry information: present, and (for inputs) not constant.
+/// A CSV record (drivers::CsvTable::Read).  @throws InputError with the reader's message (file,
+/// line, column).
+drivers::CsvTable ReadTable(const std::string& path);
+
+/// A column that must carry information: present, and (for inputs) not constant.  The table's
+/// own column (a view): copy it to keep it past the table.
 /// @throws InputError naming the file, the column and the problem.
-Eigen::VectorXd RequireColumn(const drivers::CsvTable& table, const std::string& name);
-Eigen::VectorXd RequireMovingColumn(const drivers::CsvTable& table, const std::string& name);
+drivers::CsvTable::ColumnView RequireColumn(const drivers::CsvTable& table,
+                                            const std::string& name);
+drivers::CsvTable::ColumnView RequireMovingColumn(const drivers::CsvTable& table,
+                                                  const std::string& name);
 
 /// Splits "a,b,c" into its non-empty parts.  @throws InputError on an empty part.
 std::vector<std::string> SplitList(const std::string& text, const std::string& option);

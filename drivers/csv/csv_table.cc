@@ -37,42 +37,19 @@ std::vector<std::string> SplitCells(std::string_view line) {
   return cells;
 }
 
-// The newlines in `text`, 16 bytes per step with GCC's vector extensions (SSE2, the x86-64
-// baseline): counting them with a memchr call per line costs a call per line, and a plain loop
-// over the bytes is not vectorised at -O2.
-std::size_t CountNewlines(std::string_view text) {
-  using Bytes = unsigned char __attribute__((vector_size(16)));
-  constexpr std::ptrdiff_t kWidth = sizeof(Bytes);
-  constexpr std::ptrdiff_t kMaxSteps = 255;  // before a lane's 8-bit count could wrap
-  const char* p = text.data();
-  const char* const end = text.data() + text.size();
-  std::size_t count = 0;
-  while (end - p >= kWidth) {
-    Bytes counts{};
-    const char* const stop = p + kWidth * std::min((end - p) / kWidth, kMaxSteps);
-    for (; p < stop; p += kWidth) {
-      Bytes chunk;
-      std::memcpy(&chunk, p, sizeof chunk);
-      // A match is -1 (all bits set), 255 as an unsigned byte: subtracting it adds 1.
-      counts -= __builtin_convertvector(chunk == '\n', Bytes);
-    }
-    for (int lane = 0; lane < kWidth; ++lane) count += counts[lane];
-  }
-  for (; p < end; ++p) count += *p == '\n' ? 1 : 0;
-  return count;
-}
-
-// The lines of a text, without copying: Next() gives each one (without its '\n') and counts them.
+// The lines of a text, without copying: Next() gives each one (without its '\n') and counts them,
+// continuing from the `first_number` lines already counted.  A text that ends with '\n' has no
+// empty line after it.
 class Lines {
  public:
-  explicit Lines(std::string_view text) : rest_(text) {}
+  Lines(std::string_view text, std::size_t first_number) : rest_(text), number_(first_number) {}
   bool Next(std::string_view& line) {
-    if (done_) return false;
+    if (rest_.empty()) return false;
     ++number_;
     const void* nl = std::memchr(rest_.data(), '\n', rest_.size());
     if (nl == nullptr) {
       line = rest_;
-      done_ = true;
+      rest_ = {};
       return true;
     }
     const auto length = static_cast<std::size_t>(static_cast<const char*>(nl) - rest_.data());
@@ -81,29 +58,18 @@ class Lines {
     return true;
   }
   std::size_t number() const { return number_; }
-  /// The most lines Next can still return that are not blank: the newlines left, plus an
-  /// unterminated last line.
-  std::size_t MaxLinesLeft() const {
-    if (done_ || rest_.empty()) return 0;
-    return CountNewlines(rest_) + (rest_.back() == '\n' ? 0 : 1);
-  }
-  /// What Next has not returned yet (empty once it returned the last line).
-  std::string_view rest() const { return done_ ? std::string_view() : rest_; }
+  /// What Next has not returned yet.
+  std::string_view rest() const { return rest_; }
   /// Takes the next line as read by the caller: `length` bytes of rest() and the '\n' after
   /// them (or the end of the text).  @pre rest()[length] is '\n', or length == rest().size().
   void Consume(std::size_t length) {
     ++number_;
-    if (length >= rest_.size()) {
-      done_ = true;
-    } else {
-      rest_.remove_prefix(length + 1);
-    }
+    rest_.remove_prefix(std::min(length + 1, rest_.size()));
   }
 
  private:
   std::string_view rest_;
-  std::size_t number_ = 0;
-  bool done_ = false;
+  std::size_t number_;
 };
 
 [[noreturn]] void Fail(const std::string& source, std::size_t line, const std::string& what);
@@ -181,16 +147,162 @@ bool CsvTable::HasColumn(const std::string& name) const {
   return false;
 }
 
-Eigen::VectorXd CsvTable::Column(const std::string& name) const {
+std::size_t CsvTable::ColumnIndex(const std::string& name) const {
   for (std::size_t i = 0; i < columns_.size(); ++i) {
-    if (columns_[i] == name) return data_.col(static_cast<Eigen::Index>(i));
+    if (columns_[i] == name) return i;
   }
   std::string known;
   for (const auto& c : columns_) known += (known.empty() ? "" : ", ") + c;
   throw CsvError(source_ + ": no column '" + name + "' (columns: " + known + ")");
 }
 
-CsvTable CsvTable::Read(const std::string& path) {
+namespace {
+
+// The reader behind Parse and Read: text fed in pieces of whole lines, each row's values put
+// straight into their column of one column-major block, which grows by doubling unless
+// reserved.  One block rather than one per column: malloc keeps a freed block of that size for
+// the next read of a file like it, where it gave a set of per-column blocks back to the system
+// and the next read faulted their pages in again (csv_bench: about 1000 page faults a read).
+class CsvParser {
+ public:
+  explicit CsvParser(std::string name) : name_(std::move(name)) {}
+
+  /// `text`: whole lines, each with its '\n'; the last piece of the input may end without one.
+  void Feed(std::string_view text) {
+    Lines lines(text, line_number_);
+    if (!FindHeader(lines)) {
+      line_number_ = lines.number();
+      return;
+    }
+    const std::size_t width = columns_.size();
+    std::string_view line;
+    while (true) {
+      if (rows_ == values_.rows()) Grow();
+      // The common row first: `width` numbers with single commas between them and the line's
+      // end right after the last (a '\r' allowed), parsed without finding the line's end first.
+      // Any other line (blank, spaces, a bad cell) goes through the checks below, from its start.
+      const std::string_view rest = lines.rest();
+      const char* at = rest.data();
+      const char* const end = rest.data() + rest.size();
+      std::size_t c = 0;
+      for (; c < width; ++c) {
+        double v = 0.0;
+        const auto [ptr, ec] = std::from_chars(at, end, v);
+        if (ec != std::errc() || ptr == at || !std::isfinite(v)) break;
+        values_(rows_, static_cast<Eigen::Index>(c)) = v;
+        at = ptr;
+        if (c + 1 < width) {
+          if (at == end || *at != ',') break;
+          ++at;
+        }
+      }
+      const char* line_end = at;
+      if (line_end < end && *line_end == '\r') ++line_end;
+      if (c == width && (line_end == end || *line_end == '\n')) {
+        lines.Consume(static_cast<std::size_t>(line_end - rest.data()));
+        RowParsed(lines.number());
+        continue;
+      }
+      if (!lines.Next(line)) break;
+      if (TrimView(line).empty()) continue;
+      // The cells in place: `width` of them, each a number parsed where it lies (from_chars
+      // stops at the comma); a cell that is not exactly one number, or a wrong cell count, is
+      // reported with the cell's text.
+      at = line.data();
+      const char* const line_stop = line.data() + line.size();
+      for (c = 0; c < width; ++c) {
+        const char* const cell_start = at;
+        while (at < line_stop && (*at == ' ' || *at == '\t' || *at == '\r')) ++at;
+        double v = 0.0;
+        const auto [ptr, ec] = std::from_chars(at, line_stop, v);
+        const char* after = ptr;
+        while (after < line_stop && (*after == ' ' || *after == '\t' || *after == '\r')) ++after;
+        const bool last = c + 1 == width;
+        const bool delimited = last ? after == line_stop : (after < line_stop && *after == ',');
+        if (ec != std::errc() || ptr == at || !delimited || !std::isfinite(v)) {
+          CellProblem(name_, lines.number(), line, cell_start, columns_, c, width);
+        }
+        values_(rows_, static_cast<Eigen::Index>(c)) = v;
+        at = after + 1;
+      }
+      RowParsed(lines.number());
+    }
+    line_number_ = lines.number();
+  }
+
+  /// Room for `rows` rows in every column, once the header has been read (nothing when there is
+  /// room already).
+  void Reserve(Eigen::Index rows) {
+    if (!header_ || rows <= values_.rows()) return;
+    Eigen::MatrixXd bigger(rows, values_.cols());
+    bigger.topRows(rows_) = values_.topRows(rows_);
+    values_.swap(bigger);
+  }
+  Eigen::Index rows() const { return rows_; }
+
+  /// The values: the first rows() rows of each column.  @throws CsvError without a header or
+  /// 2 rows.
+  Eigen::MatrixXd Finish() {
+    if (!header_) throw CsvError(name_ + ": empty file (no header row)");
+    if (rows_ < 2) {
+      throw CsvError(name_ + ": needs at least 2 data rows, found " + std::to_string(rows_));
+    }
+    return std::move(values_);
+  }
+  const std::vector<std::string>& columns() const { return columns_; }
+  double sample_time_s() const { return sample_time_s_; }
+
+ private:
+  // Header: the first line that is not blank.  False while there is none yet.
+  bool FindHeader(Lines& lines) {
+    std::string_view line;
+    while (!header_ && lines.Next(line)) {
+      if (TrimView(line).empty()) continue;
+      columns_ = SplitCells(line);
+      if (const std::string problem = HeaderProblem(columns_); !problem.empty()) {
+        Fail(name_, lines.number(), problem);
+      }
+      values_.resize(0, static_cast<Eigen::Index>(columns_.size()));
+      header_ = true;
+    }
+    return header_;
+  }
+
+  void Grow() { Reserve(std::max<Eigen::Index>(1024, 2 * values_.rows())); }
+
+  // Time checks as rows arrive, so the message names the offending line.
+  void RowParsed(std::size_t line_number) {
+    ++rows_;
+    if (rows_ < 2) return;
+    const auto t = values_.col(0);
+    const Eigen::Index r = rows_ - 1;
+    const std::string problem =
+        TimeProblem(t(0), t(r - 1), t(r), static_cast<std::size_t>(rows_), sample_time_s_);
+    if (!problem.empty()) Fail(name_, line_number, problem);
+  }
+
+  std::string name_;
+  std::size_t line_number_ = 0;  // lines fed so far
+  bool header_ = false;
+  std::vector<std::string> columns_;
+  Eigen::MatrixXd values_;  // a column per column, the first rows_ rows used
+  Eigen::Index rows_ = 0;
+  double sample_time_s_ = 0.0;
+};
+
+}  // namespace
+
+CsvTable::CsvTable(std::string source, std::vector<std::string> columns, Eigen::MatrixXd values,
+                   Eigen::Index rows, double sample_time_s)
+    : source_(std::move(source)),
+      columns_(std::move(columns)),
+      values_(std::move(values)),
+      rows_(rows),
+      sample_time_s_(sample_time_s) {}
+
+CsvTable CsvTable::Read(const std::string& path) { return Read(path, kReadChunkBytes); }
+
+CsvTable CsvTable::Read(const std::string& path, std::size_t chunk_bytes) {
   struct Fd {
     int fd;
     ~Fd() {
@@ -202,14 +314,18 @@ CsvTable CsvTable::Read(const std::string& path) {
   if (::fstat(file.fd, &st) == 0 && S_ISDIR(st.st_mode)) {
     throw CsvError(path + ": is a directory, not a CSV file");
   }
-  // One buffer, read from the descriptor already open (a pipe cannot be opened twice), sized
-  // from a regular file's length and grown for anything else; not zero-filled first. (Mapping
-  // the file instead saves the copy but dies of SIGBUS when another process shrinks it.)
-  std::size_t capacity = S_ISREG(st.st_mode) && st.st_size > 0
-                             ? static_cast<std::size_t>(st.st_size) + 1
-                             : std::size_t{65536};
+  // A chunk at a time, from the descriptor already open (a pipe cannot be opened twice), into one
+  // buffer reused for the whole file: the parser gets the whole lines read so far and the
+  // unfinished last one moves to the buffer's start.  The buffer grows only for a line longer
+  // than it.  (A buffer of the whole file would be written once and read once, and its pages
+  // cost more than the parsing; mapping the file instead dies of SIGBUS when another process
+  // shrinks it.)
+  std::size_t capacity = std::max<std::size_t>(chunk_bytes, 1);
   auto buffer = std::make_unique_for_overwrite<char[]>(capacity);
   std::size_t size = 0;
+  CsvParser parser(path);
+  std::size_t fed = 0;
+  bool reserved = false;
   while (true) {
     if (size == capacity) {
       auto bigger = std::make_unique_for_overwrite<char[]>(2 * capacity);
@@ -218,112 +334,40 @@ CsvTable CsvTable::Read(const std::string& path) {
       capacity *= 2;
     }
     const ssize_t n = ::read(file.fd, buffer.get() + size, capacity - size);
-    if (n > 0) {
-      size += static_cast<std::size_t>(n);
-    } else if (n == 0) {
-      break;
-    } else if (errno != EINTR) {
+    if (n < 0) {
+      if (errno == EINTR) continue;
       throw CsvError(path + ": cannot read file (" + core::ErrnoText(errno) + ")");
     }
+    if (n == 0) break;
+    const std::string_view read(buffer.get() + size, static_cast<std::size_t>(n));
+    const std::size_t last_newline = read.rfind('\n');
+    size += static_cast<std::size_t>(n);
+    if (last_newline == std::string_view::npos) continue;
+    const std::size_t whole =
+        static_cast<std::size_t>(read.data() - buffer.get()) + last_newline + 1;
+    parser.Feed(std::string_view(buffer.get(), whole));
+    fed += whole;
+    if (!reserved && parser.rows() > 0 && S_ISREG(st.st_mode)) {
+      // The first rows tell the bytes per row: room for the whole file at once (a quarter more,
+      // for rows that get longer), one allocation instead of one per doubling.
+      const double rows_per_byte = static_cast<double>(parser.rows()) / static_cast<double>(fed);
+      parser.Reserve(
+          static_cast<Eigen::Index>(1.25 * rows_per_byte * static_cast<double>(st.st_size)) + 16);
+      reserved = true;
+    }
+    std::memmove(buffer.get(), buffer.get() + whole, size - whole);
+    size -= whole;
   }
-  return Parse(std::string_view(buffer.get(), size), path);
+  parser.Feed(std::string_view(buffer.get(), size));
+  Eigen::MatrixXd values = parser.Finish();
+  return CsvTable(path, parser.columns(), std::move(values), parser.rows(), parser.sample_time_s());
 }
 
 CsvTable CsvTable::Parse(std::string_view text, const std::string& name) {
-  CsvTable table;
-  table.source_ = name;
-  Lines lines(text);
-  std::string_view line;
-  // Header: the first line that is not blank.
-  bool header = false;
-  while (lines.Next(line)) {
-    if (!TrimView(line).empty()) {
-      header = true;
-      break;
-    }
-  }
-  if (!header) throw CsvError(name + ": empty file (no header row)");
-  table.columns_ = SplitCells(line);
-  if (const std::string problem = HeaderProblem(table.columns_); !problem.empty()) {
-    Fail(name, lines.number(), problem);
-  }
-  const std::size_t width = table.columns_.size();
-  // Room for every remaining line's values at once (a row per line is the most there can be);
-  // the values go straight into their columns (column-major, as the table keeps them), and the
-  // matrix becomes the table's without a copy unless blank lines left rows unused.
-  const std::size_t capacity = lines.MaxLinesLeft();
-  Eigen::MatrixXd values(static_cast<Eigen::Index>(capacity), static_cast<Eigen::Index>(width));
-  std::size_t rows = 0;
-  // Time checks as rows arrive, so the message names the offending line.
-  const auto row_parsed = [&] {
-    ++rows;
-    if (rows < 2) return;
-    const auto r = static_cast<Eigen::Index>(rows - 1);
-    const std::string problem =
-        TimeProblem(values(0, 0), values(r - 1, 0), values(r, 0), rows, table.sample_time_s_);
-    if (!problem.empty()) Fail(name, lines.number(), problem);
-  };
-  while (true) {
-    // The common row first: `width` numbers with single commas between them and the line's end
-    // right after the last (a '\r' allowed), parsed without finding the line's end first.  Any
-    // other line (blank, spaces, a bad cell) goes through the checks below, from its start.
-    if (rows < capacity) {
-      const std::string_view rest = lines.rest();
-      const char* at = rest.data();
-      const char* const end = rest.data() + rest.size();
-      std::size_t c = 0;
-      for (; c < width; ++c) {
-        double v = 0.0;
-        const auto [ptr, ec] = std::from_chars(at, end, v);
-        if (ec != std::errc() || ptr == at || !std::isfinite(v)) break;
-        values(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(c)) = v;
-        at = ptr;
-        if (c + 1 < width) {
-          if (at == end || *at != ',') break;
-          ++at;
-        }
-      }
-      const char* line_end = at;
-      if (line_end < end && *line_end == '\r') ++line_end;
-      if (c == width && (line_end == end || *line_end == '\n')) {
-        lines.Consume(static_cast<std::size_t>(line_end - rest.data()));
-        row_parsed();
-        continue;
-      }
-    }
-    if (!lines.Next(line)) break;
-    if (TrimView(line).empty()) continue;
-    if (rows == capacity) Fail(name, lines.number(), "more rows than the lines counted (a bug)");
-    // The cells in place: `width` of them, each a number parsed where it lies (from_chars
-    // stops at the comma); a cell that is not exactly one number, or a wrong cell count, is
-    // reported with the cell's text.
-    const char* at = line.data();
-    const char* const end = line.data() + line.size();
-    for (std::size_t c = 0; c < width; ++c) {
-      const char* const cell_start = at;
-      while (at < end && (*at == ' ' || *at == '\t' || *at == '\r')) ++at;
-      double v = 0.0;
-      const auto [ptr, ec] = std::from_chars(at, end, v);
-      const char* after = ptr;
-      while (after < end && (*after == ' ' || *after == '\t' || *after == '\r')) ++after;
-      const bool last = c + 1 == width;
-      const bool delimited = last ? after == end : (after < end && *after == ',');
-      if (ec != std::errc() || ptr == at || !delimited || !std::isfinite(v)) {
-        CellProblem(name, lines.number(), line, cell_start, table.columns_, c, width);
-      }
-      values(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(c)) = v;
-      at = after + 1;
-    }
-    row_parsed();
-  }
-  if (rows < 2)
-    throw CsvError(name + ": needs at least 2 data rows, found " + std::to_string(rows));
-  if (rows == capacity) {
-    table.data_ = std::move(values);
-  } else {
-    table.data_ = values.topRows(static_cast<Eigen::Index>(rows));
-  }
-  return table;
+  CsvParser parser(name);
+  parser.Feed(text);
+  Eigen::MatrixXd values = parser.Finish();
+  return CsvTable(name, parser.columns(), std::move(values), parser.rows(), parser.sample_time_s());
 }
 
 CsvTable CsvTable::FromColumns(const std::string& source, const std::vector<std::string>& names,
@@ -337,10 +381,6 @@ CsvTable CsvTable::FromColumns(const std::string& source, const std::vector<std:
   }
   const Eigen::Index rows = columns.front().size();
   if (rows < 2) throw CsvError(source + ": needs at least 2 rows, found " + std::to_string(rows));
-  CsvTable table;
-  table.source_ = source;
-  table.columns_ = names;
-  table.data_.resize(rows, static_cast<Eigen::Index>(names.size()));
   for (std::size_t c = 0; c < names.size(); ++c) {
     if (columns[c].size() != rows) {
       throw CsvError(source + ": column '" + names[c] + "' has " +
@@ -353,19 +393,23 @@ CsvTable CsvTable::FromColumns(const std::string& source, const std::vector<std:
                        "' is not finite");
       }
     }
-    table.data_.col(static_cast<Eigen::Index>(c)) = columns[c];
   }
   const Eigen::VectorXd& t = columns.front();
+  double sample_time_s = 0.0;
   for (Eigen::Index r = 1; r < rows; ++r) {
     const std::string problem =
-        TimeProblem(t(0), t(r - 1), t(r), static_cast<std::size_t>(r + 1), table.sample_time_s_);
+        TimeProblem(t(0), t(r - 1), t(r), static_cast<std::size_t>(r + 1), sample_time_s);
     if (!problem.empty()) {
       std::string message = source + ": row " + std::to_string(r + 1) + ": ";
       message += problem;
       throw CsvError(message);
     }
   }
-  return table;
+  Eigen::MatrixXd values(rows, static_cast<Eigen::Index>(names.size()));
+  for (std::size_t c = 0; c < names.size(); ++c) {
+    values.col(static_cast<Eigen::Index>(c)) = columns[c];
+  }
+  return CsvTable(source, names, std::move(values), rows, sample_time_s);
 }
 
 void WriteCsv(const std::string& path, const std::vector<std::string>& names,

@@ -1,5 +1,6 @@
 #pragma once
 #include <Eigen/Core>
+#include <cstddef>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -22,10 +23,15 @@ class CsvError : public std::runtime_error {
 /// fewer than 2 rows.
 class CsvTable {
  public:
+  /// The bytes Read reads at a time: the buffer it reuses for the whole file.
+  static constexpr std::size_t kReadChunkBytes = std::size_t{64} * 1024;
+  /// Reads a file or a pipe, a chunk at a time, parsing each whole line where it lies.
   /// @throws CsvError
   static CsvTable Read(const std::string& path);
-  /// Parses text as if it were the contents of a file called `name` (for tests; Read reads a
-  /// file or pipe into one buffer and parses that), in place: no copies of lines or cells.
+  /// Read with another chunk size (for tests: lines across chunks, lines longer than a chunk).
+  static CsvTable Read(const std::string& path, std::size_t chunk_bytes);
+  /// Parses text as if it were the contents of a file called `name` (for tests), in place: no
+  /// copies of lines or cells.
   /// @throws CsvError
   static CsvTable Parse(std::string_view text, const std::string& name);
   /// A table from columns in memory (e.g. decoded from a log), checked as Read checks a file;
@@ -36,17 +42,34 @@ class CsvTable {
 
   const std::string& source() const { return source_; }
   const std::vector<std::string>& columns() const { return columns_; }
-  Eigen::Index rows() const { return data_.rows(); }
+  Eigen::Index rows() const { return rows_; }
   double sample_time_s() const { return sample_time_s_; }
-  Eigen::VectorXd time_s() const { return data_.col(0); }
+  /// A column of the table: a view of the table's own values, valid while the table lives (copy
+  /// it into an Eigen::VectorXd to keep it longer).
+  using ColumnView = Eigen::Map<const Eigen::VectorXd>;
+  ColumnView time_s() const& { return View(0); }
+  /// From a temporary table, a copy: a view would outlive it.
+  Eigen::VectorXd time_s() && { return View(0); }
   bool HasColumn(const std::string& name) const;
   /// @throws CsvError naming the file, the missing column and the columns there are.
-  Eigen::VectorXd Column(const std::string& name) const;
+  ColumnView Column(const std::string& name) const& { return View(ColumnIndex(name)); }
+  Eigen::VectorXd Column(const std::string& name) && { return View(ColumnIndex(name)); }
 
  private:
+  CsvTable(std::string source, std::vector<std::string> columns, Eigen::MatrixXd values,
+           Eigen::Index rows, double sample_time_s);
+  /// @throws CsvError as Column does.
+  std::size_t ColumnIndex(const std::string& name) const;
+  ColumnView View(std::size_t column) const {
+    return {values_.col(static_cast<Eigen::Index>(column)).data(), rows_};
+  }
+
   std::string source_;
   std::vector<std::string> columns_;
-  Eigen::MatrixXd data_;
+  // A column per column, in one block; its first rows_ rows are the table's (the reader may
+  // leave room after them).
+  Eigen::MatrixXd values_;
+  Eigen::Index rows_ = 0;
   double sample_time_s_ = 0.0;
 };
 

@@ -151,33 +151,40 @@ std::vector<std::vector<double>> ReferenceRows(const std::string& text) {
   return rows;
 }
 
-// Rows in the common shape are parsed without looking for the line's end first, and the lines
-// are counted 16 bytes at a time: files long enough to cross the counter's blocks (255 x 16
-// bytes), with and without blank lines (which leave room unused), CRLF, spaces and a last line
-// without its newline, all give what a line-by-line reader gives, and an error after thousands
-// of rows still names its line.
-TEST(CsvTable, LongFilesOfEveryLineShapeMatchALineByLineReader) {
-  for (const char* shape : {"plain", "crlf", "blank lines", "spaces", "no last newline"}) {
-    const std::string kind = shape;
-    std::string text = "time_s,a,b\n";
-    for (int k = 0; k < 5000; ++k) {
-      const std::string t = std::to_string(0.25 * k);
-      const std::string a = std::to_string(std::sin(0.01 * k));
-      const std::string b = std::to_string(k % 7 - 3) + "e-" + std::to_string(k % 5);
-      if (kind == "spaces" && k % 3 == 0) {
-        text.append(" ").append(t).append(" ,\t").append(a).append(", ").append(b).append(" \n");
-      } else {
-        text.append(t).append(",").append(a).append(",").append(b);
-        text.append(kind == "crlf" ? "\r\n" : "\n");
-      }
-      if (kind == "blank lines" && k % 1000 == 999) text += "\n  \n";
+// A record of `rows` rows in one of the line shapes the parser meets: "plain", "crlf", "blank
+// lines", "spaces" (around some cells) or "no last newline".
+std::string ShapedText(const std::string& kind, int rows) {
+  std::string text = "time_s,a,b\n";
+  for (int k = 0; k < rows; ++k) {
+    const std::string t = std::to_string(0.25 * k);
+    const std::string a = std::to_string(std::sin(0.01 * k));
+    const std::string b = std::to_string(k % 7 - 3) + "e-" + std::to_string(k % 5);
+    if (kind == "spaces" && k % 3 == 0) {
+      text.append(" ").append(t).append(" ,\t").append(a).append(", ").append(b).append(" \n");
+    } else {
+      text.append(t).append(",").append(a).append(",").append(b);
+      text.append(kind == "crlf" ? "\r\n" : "\n");
     }
-    if (kind == "no last newline") text.pop_back();
+    if (kind == "blank lines" && k % 1000 == 999) text += "\n  \n";
+  }
+  if (kind == "no last newline") text.pop_back();
+  return text;
+}
+
+constexpr const char* kShapes[] = {"plain", "crlf", "blank lines", "spaces", "no last newline"};
+
+// Rows in the common shape are parsed without looking for the line's end first: long files
+// (their columns grow several times), with and without blank lines, CRLF, spaces and a last
+// line without its newline, all give what a line-by-line reader gives, and an error after
+// thousands of rows still names its line.
+TEST(CsvTable, LongFilesOfEveryLineShapeMatchALineByLineReader) {
+  for (const std::string kind : kShapes) {
+    const std::string text = ShapedText(kind, 40000);
     const CsvTable t = CsvTable::Parse(text, "f.csv");
     const std::vector<std::vector<double>> expected = ReferenceRows(text);
     ASSERT_EQ(t.rows(), static_cast<Eigen::Index>(expected.size())) << kind;
-    const Eigen::VectorXd a = t.Column("a");
-    const Eigen::VectorXd b = t.Column("b");
+    const auto a = t.Column("a");
+    const auto b = t.Column("b");
     for (std::size_t r = 0; r < expected.size(); ++r) {
       const auto i = static_cast<Eigen::Index>(r);
       ASSERT_EQ(t.time_s()(i), expected[r][0]) << kind << " row " << r;
@@ -195,15 +202,78 @@ TEST(CsvTable, LongFilesOfEveryLineShapeMatchALineByLineReader) {
   EXPECT_EQ(ErrorOf(text + "4000,1\r\r5\n"), "f.csv:4002: column 'a': '1\r\r5' is not a number");
 }
 
-// Read maps a regular file and reads anything else (a pipe, /dev/stdin) as a stream, with the
-// same result; a directory is named as such.
+// A scratch directory for one test, removed with it.
+class TempDir {
+ public:
+  TempDir()
+      : path_(std::filesystem::temp_directory_path() /
+              ("csv_table_test_" + std::to_string(::getpid()))) {
+    std::filesystem::create_directories(path_);
+  }
+  ~TempDir() { std::filesystem::remove_all(path_); }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  std::string File(const std::string& name, const std::string& text) const {
+    const std::filesystem::path file = path_ / name;
+    std::ofstream(file, std::ios::binary) << text;
+    return file.string();
+  }
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+std::string ReadErrorOf(const std::string& path, std::size_t chunk_bytes) {
+  try {
+    CsvTable::Read(path, chunk_bytes);
+  } catch (const CsvError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+// Read parses a file a chunk at a time: lines cut anywhere by the chunks (1 byte, a few bytes,
+// the default), and lines longer than a chunk, give the table Parse gives from the whole text,
+// and errors name the same line.
+TEST(CsvTable, ReadingInChunksGivesWhatParsingTheWholeTextGives) {
+  const TempDir dir;
+  for (const std::string kind : kShapes) {
+    const std::string text = ShapedText(kind, 3000);
+    const std::string path = dir.File("f.csv", text);
+    const CsvTable whole = CsvTable::Parse(text, path);
+    for (const std::size_t chunk : {std::size_t{1}, std::size_t{3}, std::size_t{7}, std::size_t{64},
+                                    std::size_t{4093}, CsvTable::kReadChunkBytes}) {
+      const CsvTable read = CsvTable::Read(path, chunk);
+      ASSERT_EQ(read.rows(), whole.rows()) << kind << ", chunk " << chunk;
+      EXPECT_EQ(read.columns(), whole.columns()) << kind << ", chunk " << chunk;
+      EXPECT_EQ(read.time_s(), whole.time_s()) << kind << ", chunk " << chunk;
+      EXPECT_EQ(read.Column("a"), whole.Column("a")) << kind << ", chunk " << chunk;
+      EXPECT_EQ(read.Column("b"), whole.Column("b")) << kind << ", chunk " << chunk;
+      EXPECT_EQ(read.sample_time_s(), whole.sample_time_s()) << kind << ", chunk " << chunk;
+    }
+  }
+  std::string text = "\n\ntime_s,a\n";
+  for (int k = 0; k < 4000; ++k) text += std::to_string(k) + "," + std::to_string(k) + "\n";
+  const std::string bad = dir.File("bad.csv", text + "4000,x\n");
+  const std::string late = dir.File("late.csv", text + "4001,1\n");
+  const std::string header_only = dir.File("header.csv", "\n  \ntime_s,a\n\n");
+  for (const std::size_t chunk : {std::size_t{1}, std::size_t{5}, CsvTable::kReadChunkBytes}) {
+    EXPECT_EQ(ReadErrorOf(bad, chunk), bad + ":4004: column 'a': 'x' is not a number");
+    EXPECT_EQ(ReadErrorOf(late, chunk),
+              late + ":4004: time_s 4001 breaks uniform sampling (expected 4000, sample time 1 s)");
+    EXPECT_EQ(ReadErrorOf(header_only, chunk),
+              header_only + ": needs at least 2 data rows, found 0");
+  }
+}
+
+// Read reads a regular file and anything else (a pipe, /dev/stdin) alike, with the same
+// result; a directory is named as such.
 TEST(CsvTable, ReadsFilesAndStreamsAlikeAndRefusesADirectory) {
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("csv_table_test_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
+  const TempDir temp;
+  const std::filesystem::path& dir = temp.path();
   const std::string text = "time_s,a\n0,1\n1,2\n2,4\n";
-  std::ofstream(dir / "f.csv") << text;
-  const CsvTable file = CsvTable::Read((dir / "f.csv").string());
+  const CsvTable file = CsvTable::Read(temp.File("f.csv", text));
   EXPECT_EQ(file.Column("a")(2), 4.0);
   EXPECT_EQ(file.source(), (dir / "f.csv").string());
   ASSERT_EQ(::mkfifo((dir / "pipe").c_str(), 0600), 0);
@@ -227,7 +297,6 @@ TEST(CsvTable, ReadsFilesAndStreamsAlikeAndRefusesADirectory) {
   } catch (const CsvError& e) {
     EXPECT_EQ(std::string(e.what()), dir.string() + ": is a directory, not a CSV file");
   }
-  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
