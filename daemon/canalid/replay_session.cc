@@ -33,6 +33,9 @@ struct ReplaySession::Reach {
   std::optional<ReplayModel> last_batch;
   std::map<std::string, ReplayModel> last_process_batch;  // idz and process models, by kind
   double last_time_s = 0.0;
+  // The live run ended its excitation while this replay's experiment still runs: said once per
+  // experiment of the replay's (the daemon publishes the state again with its health).
+  bool live_end_reported = false;
 };
 
 ReplaySession::ReplaySession(ReplaySessionOptions options, ModelSink on_model,
@@ -167,6 +170,9 @@ void ReplaySession::Joint(const Reach& reach, const core::ReachActions& actions)
 
 void ReplaySession::Step(Reach& reach, const core::ReachActions& actions, double log_time_s) {
   Joint(reach, actions);
+  if (!core::IsRunning(reach.runner->pipeline().experiment_state().phase)) {
+    reach.live_end_reported = false;
+  }
   if (!actions.experiment_record_complete) return;
   core::ReachActions after;
   const core::ReachSampleProcessor& pipeline = reach.runner->pipeline();
@@ -246,6 +252,18 @@ void ReplaySession::OnExperiment(const canalid::experiment_state_t& live,
       // runs the leader too, its own joint rules should have ended it: a divergence.
       joint_diverges();
       Step(*reach, runner.EndJoint(), t);
+    } else if ((live.state == canalid::experiment_state_t::STATE_RECOVERING ||
+                live.state == canalid::experiment_state_t::STATE_DONE) &&
+               core::IsRunning(ours)) {
+      // The live excitation ended on its own.  The daemon publishes that after the sample of the
+      // same poll, which the replay has already run: its experiment runs on, so its samples or
+      // rules differ from the live run's.
+      if (!reach->live_end_reported) {
+        on_warning_(At(options_.log_path, event) + ": reach " + live.reach +
+                    ": the live experiment ended its excitation where the replay's still runs: "
+                    "the replay diverges from the live run");
+        reach->live_end_reported = true;
+      }
     } else if (live.state == canalid::experiment_state_t::STATE_ABORTED && core::IsRunning(ours)) {
       // Ended by something the samples do not carry.
       if (live.reason == core::AbortReasonName(core::AbortReason::kLinkLost)) {

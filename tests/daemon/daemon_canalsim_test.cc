@@ -411,6 +411,14 @@ TEST(DaemonCanalsim, TwoStructureExperimentFitsP22FromTheDataAndRestoresBoth) {
                               "experiment where the replay's did not: the replay diverges"),
             std::string::npos)
       << diverged.err;
+  // The leader too: its live excitation ended 5 samples before the replay's, said once although
+  // the daemon publishes the state again with its health.
+  const std::string leader_diverges =
+      "reach pool2: the live experiment ended its excitation where the replay's still runs: the "
+      "replay diverges";
+  const std::size_t first = diverged.err.find(leader_diverges);
+  EXPECT_NE(first, std::string::npos) << diverged.err;
+  EXPECT_EQ(diverged.err.find(leader_diverges, first + 1), std::string::npos) << diverged.err;
 }
 
 // The same experiment with the offtake's level band narrowed to 5 mm above the pool's level at
