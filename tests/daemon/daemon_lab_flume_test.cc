@@ -146,7 +146,9 @@ TEST(DaemonLabFlume, StepOnlineFractionalModelMatchesTheBatchFit) {
   // to 2.17 s. Three passes over the record reach 2.58 s; a gradient-filtered recursion
   // (RPEM) 2.20 s in one pass (2.52 s in three), re-simulating the last 10-120 outputs at the
   // current estimate 2.10-2.18 s, forgetting that starts at 0.9-0.98 and tends to 1 2.02-2.28
-  // s, P0 from 2e6 to 3e7 2.24-2.26 s: none reaches 20 % in one pass.
+  // s, P0 from 2e6 to 3e7 2.24-2.26 s: none reaches 20 % in one pass.  A dead zone of 0.5
+  // innovation standard deviations (2026-11-29, to stop the drift in the last hold) left T at
+  // 2.08 s and put the PRBS test's K and T 31-33 % off.
   ExpectOnlineNearTheBatch(run, 0.30);
 }
 
