@@ -158,6 +158,13 @@ std::size_t CsvTable::ColumnIndex(const std::string& name) const {
 
 namespace {
 
+// Rows of a value block for `rows` rows: a multiple of 8, so that every column starts 64 bytes
+// after the one before, as aligned as the block itself (Eigen's allocation), as an
+// Eigen::VectorXd of its own would be.  Eigen's vectorised sums peel off the unaligned head of
+// a vector, so a column at another alignment sums its values in another order: a first version
+// gave `canalid identify --detrend` other last bits than the column copies before it.
+Eigen::Index AlignedRows(Eigen::Index rows) { return (rows + 7) / 8 * 8; }
+
 // The reader behind Parse and Read: text fed in pieces of whole lines, each row's values put
 // straight into their column of one column-major block, which grows by doubling unless
 // reserved.  One block rather than one per column: malloc keeps a freed block of that size for
@@ -234,7 +241,7 @@ class CsvParser {
   /// room already).
   void Reserve(Eigen::Index rows) {
     if (!header_ || rows <= values_.rows()) return;
-    Eigen::MatrixXd bigger(rows, values_.cols());
+    Eigen::MatrixXd bigger(AlignedRows(rows), values_.cols());
     bigger.topRows(rows_) = values_.topRows(rows_);
     values_.swap(bigger);
   }
@@ -405,9 +412,9 @@ CsvTable CsvTable::FromColumns(const std::string& source, const std::vector<std:
       throw CsvError(message);
     }
   }
-  Eigen::MatrixXd values(rows, static_cast<Eigen::Index>(names.size()));
+  Eigen::MatrixXd values(AlignedRows(rows), static_cast<Eigen::Index>(names.size()));
   for (std::size_t c = 0; c < names.size(); ++c) {
-    values.col(static_cast<Eigen::Index>(c)) = columns[c];
+    values.col(static_cast<Eigen::Index>(c)).head(rows) = columns[c];
   }
   return CsvTable(source, names, std::move(values), rows, sample_time_s);
 }
