@@ -1,10 +1,10 @@
 #include "core/linear/correlation.h"
 
+#include <Eigen/QR>
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
-
-#include "core/linear/arx.h"
 
 namespace canalid::core {
 
@@ -15,9 +15,35 @@ Eigen::VectorXd FitAr(const Eigen::Ref<const Eigen::VectorXd>& x, int order) {
                                 " samples are too few for order " + std::to_string(order) +
                                 " (need more than " + std::to_string(2 * order) + ")");
   }
-  ArxOrders orders;
-  orders.na = order;
-  return FitArx(x, Eigen::MatrixXd(x.size(), 0), orders).a;
+  // Rows t = p..N-1 of [-x(t-1) .. -x(t-p), x(t)], a block at a time, folded into the triangular
+  // factor R of the whole matrix by a QR of [R; block] (TSQR): the least-squares solution of a
+  // QR without the N x (p + 1) matrix (80 MB for an AR(10) over a million samples).
+  const Eigen::Index p = order;
+  const Eigen::Index width = p + 1;
+  constexpr Eigen::Index kBlockRows = 1024;
+  Eigen::MatrixXd stacked(width + kBlockRows, width);
+  Eigen::MatrixXd r = Eigen::MatrixXd::Zero(width, width);
+  Eigen::VectorXd squared_norms = Eigen::VectorXd::Zero(width);
+  Eigen::HouseholderQR<Eigen::MatrixXd> qr(width + kBlockRows, width);
+  for (Eigen::Index t0 = p; t0 < x.size(); t0 += kBlockRows) {
+    const Eigen::Index rows = std::min(kBlockRows, x.size() - t0);
+    stacked.topRows(width) = r;
+    auto block = stacked.middleRows(width, rows);
+    for (Eigen::Index j = 1; j <= p; ++j) block.col(j - 1) = -x.segment(t0 - j, rows);
+    block.col(p) = x.segment(t0, rows);
+    squared_norms += block.colwise().squaredNorm().transpose();
+    qr.compute(stacked.topRows(width + rows));
+    r = qr.matrixQR().topRows(width).triangularView<Eigen::Upper>();
+  }
+  // R = [R11 r12; 0 r22]: c = R11^-1 r12.  A diagonal entry of R11 that vanishes against its
+  // column's norm is a rank-deficient regressor (e.g. a constant series).
+  for (Eigen::Index j = 0; j < p; ++j) {
+    if (!(std::abs(r(j, j)) > 1e-10 * std::sqrt(squared_norms(j)))) {
+      throw std::invalid_argument("FitAr: the lagged series are rank deficient at lag " +
+                                  std::to_string(j + 1) + " (a constant or periodic series?)");
+    }
+  }
+  return r.topLeftCorner(p, p).triangularView<Eigen::Upper>().solve(r.col(p).head(p));
 }
 
 Eigen::VectorXd ApplyPolynomialFilter(const Eigen::Ref<const Eigen::VectorXd>& c,

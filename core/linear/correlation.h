@@ -3,8 +3,9 @@
 
 namespace canalid::core {
 
-/// Least-squares AR model of a series, x(t) + c_1 x(t-1) + ... + c_n x(t-n) = e(t), fitted by QR
-/// (FitArx with no input) over t = n..N-1.  Returns c_1..c_n.
+/// Least-squares AR model of a series, x(t) + c_1 x(t-1) + ... + c_n x(t-n) = e(t), over
+/// t = n..N-1 (FitArx's problem with no input), by a QR folded a block of rows at a time, so that
+/// its memory does not grow with N.  Returns c_1..c_n.
 /// @throws std::invalid_argument if order < 1, the series has <= 2 * order samples, or the
 ///         regressor is rank deficient (e.g. a constant series).
 Eigen::VectorXd FitAr(const Eigen::Ref<const Eigen::VectorXd>& x, int order);

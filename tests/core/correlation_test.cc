@@ -4,6 +4,9 @@
 
 #include <cmath>
 #include <random>
+#include <utility>
+
+#include "core/linear/arx.h"
 
 namespace canalid::core {
 namespace {
@@ -34,6 +37,35 @@ TEST(Correlation, FitArRecoversAKnownArProcess) {
   EXPECT_LT(std::abs(CrossCorrelation(w.head(19997), w.tail(19997), 0)(0)), 0.021);
   EXPECT_THROW(FitAr(x, 0), std::invalid_argument);
   EXPECT_THROW(FitAr(x.head(4), 2), std::invalid_argument);
+}
+
+// FitAr folds its QR a block of rows at a time; it must give the least-squares solution that
+// FitArx (one QR of the whole regressor matrix, compared with Octave elsewhere) gives: on the AR
+// process above, and on a slow PRBS-like series of long bits plus a little noise, whose lagged
+// columns are nearly collinear (the prewhitening of an inflow record), over many blocks.
+TEST(Correlation, FitArEqualsTheWholeMatrixLeastSquares) {
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> e(0.0, 1.0);
+  Eigen::VectorXd ar = Eigen::VectorXd::Zero(20000);
+  for (int t = 2; t < 20000; ++t) ar(t) = 1.3 * ar(t - 1) - 0.4 * ar(t - 2) + e(rng);
+  Eigen::VectorXd slow(50000);
+  std::bernoulli_distribution bit(0.5);
+  double level = 0.0;
+  for (Eigen::Index t = 0; t < slow.size(); ++t) {
+    if (t % 341 == 0) level = bit(rng) ? 1.0 : -1.0;
+    slow(t) = level + 1e-3 * e(rng);
+  }
+  for (const auto& [series, order] : {std::pair{ar, 2}, std::pair{ar, 10}, std::pair{slow, 10}}) {
+    ArxOrders orders;
+    orders.na = order;
+    const Eigen::VectorXd whole = FitArx(series, Eigen::MatrixXd(series.size(), 0), orders).a;
+    const Eigen::VectorXd blocked = FitAr(series, order);
+    ASSERT_EQ(blocked.size(), order);
+    EXPECT_LT((blocked - whole).norm(), 1e-9 * whole.norm()) << order << "\n"
+                                                             << blocked << "\n"
+                                                             << whole;
+  }
+  EXPECT_THROW(FitAr(Eigen::VectorXd::Constant(3000, 2.5), 3), std::invalid_argument);
 }
 
 TEST(Correlation, PolynomialFilterByHand) {
