@@ -158,9 +158,9 @@ std::size_t CsvTable::ColumnIndex(const std::string& name) const {
 
 namespace {
 
-// Rows of a value block for `rows` rows: a multiple of 8, so that every column starts 64 bytes
-// after the one before, as aligned as the block itself (Eigen's allocation), as an
-// Eigen::VectorXd of its own would be.  Eigen's vectorised sums peel off the unaligned head of
+// Rows of a value block for `rows` rows: a multiple of 8, so that every column starts a multiple
+// of 64 bytes after the block's start, as aligned as the block itself (Eigen's allocation), as
+// an Eigen::VectorXd of its own would be.  Eigen's vectorised sums peel off the unaligned head of
 // a vector, so a column at another alignment sums its values in another order: a first version
 // gave `canalid identify --detrend` other last bits than the column copies before it.
 Eigen::Index AlignedRows(Eigen::Index rows) { return (rows + 7) / 8 * 8; }
