@@ -39,8 +39,9 @@ std::vector<std::string> ExpandGlob(const std::string& pattern) {
   return files;  // glob(3) sorts them
 }
 
-double NormError(const std::string& kind, const IdentifyOptions& options, const Eigen::VectorXd& u,
-                 const Eigen::VectorXd& y, double ts) {
+double NormError(const std::string& kind, const IdentifyOptions& options,
+                 const Eigen::Ref<const Eigen::VectorXd>& u,
+                 const Eigen::Ref<const Eigen::VectorXd>& y, double ts) {
   if (kind == "foptd") return core::FitFoptd(u, y, ts).metrics.norm_error;
   if (kind == "soptd") return core::FitSoptd(u, y, ts).metrics.norm_error;
   if (kind == "frac-foptd") return core::FitFractionalFoptd(u, y, ts).metrics.norm_error;
