@@ -220,7 +220,8 @@ void BM_IdBank64(benchmark::State& state) {
 }
 BENCHMARK(BM_IdBank64)->Arg(0)->Arg(1)->Arg(2)->Arg(3)->Arg(4);
 
-// One sample through 8 fractional estimators (alpha grid 0.5..1.4, GL memory L = 200).
+// One sample through the fractional bank: 8 alphas (0.5..1.4) x 25 characteristic times, GL
+// memory L = 200.
 void BM_FractionalBank8(benchmark::State& state) {
   OnlineFractionalOptions options;
   options.sample_time_s = 0.5;

@@ -1,5 +1,6 @@
-// The "frac-foptd" kind of the online registry: OnlineFractionalBank (output error) from the
-// actuator to the level, in deviations from the operating point.
+// The "frac-foptd" kind of the online registry: OnlineFractionalBank (output error over a grid
+// of alpha and T) from the actuator to the level, in deviations from the first sample; the
+// level's operating point is that sample plus the fitted offset.
 #include <cmath>
 #include <limits>
 
@@ -32,19 +33,15 @@ class OnlineFractionalModel final : public ProcessOnlineModel {
     w.Put(s.time_constant_s, s.time_constant_std_s);
     w.Put(s.alpha, kNan);
     w.Put(options_.delay_samples * options_.sample_time_s, kNan);
-    PutOperatingPoint(w);
+    PutOperatingPoint(w, s.offset, s.offset_std);
     int flags = 0;
     // The id kind's default thresholds (IntegratorDelayHealthOptions).
     if (s.information_min <
         IntegratorDelayHealthOptions{}.InformationMin(options_.rls.initial_covariance)) {
       flags |= kFlagLowExcitation;
     }
-    // T at the projection's bound 0, or alpha at an edge of a grid of several values.
-    const int last = bank_.num_candidates() - 1;
-    const int selected = bank_.selected_index();
-    if (!(s.time_constant_s > 0.0) || (last > 0 && (selected == 0 || selected == last))) {
-      flags |= kFlagOutOfBounds;
-    }
+    // T at an end of the grid of characteristic times, or alpha at an end of a grid of several.
+    if (s.at_grid_edge) flags |= kFlagOutOfBounds;
     w.Finish(s.health, s.condition_number, s.information_min, s.innovation_std, condition_max(),
              flags);
   }

@@ -31,15 +31,11 @@ int Samples(const char* name, double seconds, double sample_time_s) {
 
 }  // namespace
 
-double DefaultInitialCovariance(OnlineModelKind kind) {
-  return kind == OnlineModelKind::kFractionalFoptd ? RlsOptions{}.initial_covariance : 1e10;
-}
-
-RlsOptions RlsOptionsFor(const OnlineModelSettings& s, OnlineModelKind kind, int num_params) {
+RlsOptions RlsOptionsFor(const OnlineModelSettings& s, int num_params) {
   RlsOptions rls;
   rls.method = s.rls_method;
   rls.forgetting = s.forgetting;
-  rls.initial_covariance = s.initial_covariance.value_or(DefaultInitialCovariance(kind));
+  rls.initial_covariance = s.initial_covariance.value_or(kDefaultInitialCovariance);
   // Constant trace holds a finite trace: the initial one.
   if (rls.method == RlsMethod::kConstantTrace) {
     rls.trace_max = num_params * rls.initial_covariance;
@@ -75,7 +71,7 @@ OnlineModelOptions OnlineModelOptionsFor(OnlineModelKind kind, const OnlineModel
       o.id.max_delay_samples = Samples("max_delay_s", s.max_delay_s, s.sample_time_s);
       o.id.wave_front_term = s.wave_front_term;
       o.id.wave_front_non_negative = s.wave_front_term;
-      o.id.rls = RlsOptionsFor(s, kind, s.wave_front_term ? 4 : 3);
+      o.id.rls = RlsOptionsFor(s, s.wave_front_term ? 4 : 3);
       o.id.closed_loop = s.closed_loop;
       o.id.outflow_direct_gain_s_per_m2 = s.p22_s_per_m2;
       break;
@@ -85,7 +81,7 @@ OnlineModelOptions OnlineModelOptionsFor(OnlineModelKind kind, const OnlineModel
       o.id.max_delay_samples = Samples("max_delay_s", s.max_delay_s, s.sample_time_s);
       o.id.wave_front_term = true;
       o.id.wave_front_non_negative = true;
-      o.id.rls = RlsOptionsFor(s, kind, 4);
+      o.id.rls = RlsOptionsFor(s, 4);
       o.id.closed_loop = s.closed_loop;
       o.id.outflow_direct_gain_s_per_m2 = s.idz_p22_s_per_m2;
       break;
@@ -94,7 +90,7 @@ OnlineModelOptions OnlineModelOptionsFor(OnlineModelKind kind, const OnlineModel
       o.arx.nb = s.arx_nb;
       o.arx.min_delay_samples = Samples("min_delay_s", s.min_delay_s, s.sample_time_s);
       o.arx.max_delay_samples = Samples("max_delay_s", s.max_delay_s, s.sample_time_s);
-      o.arx.rls = RlsOptionsFor(s, kind, s.arx_na + s.arx_nb);
+      o.arx.rls = RlsOptionsFor(s, s.arx_na + s.arx_nb);
       break;
     case OnlineModelKind::kFractionalFoptd:
       o.fractional.sample_time_s = s.sample_time_s;
@@ -105,14 +101,13 @@ OnlineModelOptions OnlineModelOptionsFor(OnlineModelKind kind, const OnlineModel
         o.fractional.memory_samples =
             Samples("fractional_memory_s", s.fractional_memory_s, s.sample_time_s);
       }
-      o.fractional.rls = RlsOptionsFor(s, kind, 2);
-      o.fractional.output_error = true;
+      o.fractional.rls = RlsOptionsFor(s, 2);
       break;
     case OnlineModelKind::kLpvArx:
       o.lpv.na = s.lpv_na;
       o.lpv.nb = s.lpv_nb;
       o.lpv.delay_samples = Samples("lpv_delay_s", s.lpv_delay_s, s.sample_time_s);
-      o.lpv.rls = RlsOptionsFor(s, kind, 3 * (s.lpv_na + s.lpv_nb));
+      o.lpv.rls = RlsOptionsFor(s, 3 * (s.lpv_na + s.lpv_nb));
       break;
     case OnlineModelKind::kFracSs:
       o.frac_ss.q = s.frac_ss_q;
@@ -121,7 +116,7 @@ OnlineModelOptions OnlineModelOptionsFor(OnlineModelKind kind, const OnlineModel
         o.frac_ss.memory_samples =
             Samples("fractional_memory_s", s.fractional_memory_s, s.sample_time_s);
       }
-      o.frac_ss.rls = RlsOptionsFor(s, kind, o.frac_ss.num_params());
+      o.frac_ss.rls = RlsOptionsFor(s, o.frac_ss.num_params());
       break;
   }
   o.Validate();
@@ -237,9 +232,10 @@ SnapshotWriter ProcessOnlineModel::Writer(OnlineModelSnapshot& out, std::string_
   return SnapshotWriter(out, kind(), estimator, valid, samples_used, names_);
 }
 
-void ProcessOnlineModel::PutOperatingPoint(SnapshotWriter& writer) const {
+void ProcessOnlineModel::PutOperatingPoint(SnapshotWriter& writer, double level_offset,
+                                           double level_offset_std) const {
   writer.Put(point_.input(), 0.0);
-  writer.Put(point_.output(), 0.0);
+  writer.Put(point_.output() + level_offset, level_offset_std);
 }
 
 }  // namespace canalid::core

@@ -57,7 +57,7 @@ struct OnlineModelSettings {
   // Every kind's recursive least squares.
   RlsMethod rls_method = RlsMethod::kUdDirectional;
   double forgetting = 1.0;  ///< (0, 1]
-  /// P0 = p0 I, 0 < p0 <= 1e20; none: each kind's DefaultInitialCovariance.
+  /// P0 = p0 I, 0 < p0 <= 1e20; none: kDefaultInitialCovariance.
   std::optional<double> initial_covariance;
   // id and arx: the delays of the bank (rounded to whole samples).
   double min_delay_s = 0.0;
@@ -100,17 +100,15 @@ struct OnlineModelOptions {
   void Validate() const;
 };
 
-/// P0 = p0 I of `kind` when the settings give none.  The least-squares kinds (id, idz, arx, lpv,
-/// frac-ss): 1e10, so that the prior weighs nothing against the data (||theta||^2 / p0 against
-/// information of 1e2..1e9) and with forgetting 1 the estimate is the batch least-squares fit of
-/// the same rows (to 1e-6 relative; at 1e6 the id kind's p21 was 5e-6 off).  frac-foptd, an
-/// output-error bank: 1e6, RlsOptions' default; at 1e10 its first updates throw the parallel
-/// model far off (alpha 1.2 on the lab flume's step record, where the batch fit gives 0.51).
-double DefaultInitialCovariance(OnlineModelKind kind);
+/// P0 = p0 I of every kind when the settings give none: 1e10, so that the prior weighs nothing
+/// against the data (||theta||^2 / p0 against information of 1e2..1e9) and with forgetting 1 the
+/// estimate is the batch least-squares fit of the same rows (to 1e-6 relative; at 1e6 the id
+/// kind's p21 was 5e-6 off).  frac-foptd's rows are its candidates' simulated outputs.
+inline constexpr double kDefaultInitialCovariance = 1e10;
 
-/// The recursive least squares of `kind` with `num_params` parameters: the settings' method,
+/// The recursive least squares of an estimator with `num_params` parameters: the settings' method,
 /// forgetting and P0 (constant trace holds the initial trace).
-RlsOptions RlsOptionsFor(const OnlineModelSettings& settings, OnlineModelKind kind, int num_params);
+RlsOptions RlsOptionsFor(const OnlineModelSettings& settings, int num_params);
 
 /// `kind`'s options from the settings: delays round(seconds / Ts); throws
 /// std::invalid_argument naming the setting when the result is out of range.

@@ -60,8 +60,11 @@ class ProcessOnlineModel : public OnlineModel {
   Deviations Deviate(const OnlineSample& sample);
   SnapshotWriter Writer(OnlineModelSnapshot& out, std::string_view estimator, bool valid,
                         std::int64_t samples_used) const;
-  /// Puts the two operating-point parameters (exact: standard deviation 0).
-  void PutOperatingPoint(SnapshotWriter& writer) const;
+  /// Puts the two operating-point parameters (exact: standard deviation 0), the level's moved by
+  /// a fitted `level_offset` (the level at rest as a deviation from the first sample's) with its
+  /// standard deviation.
+  void PutOperatingPoint(SnapshotWriter& writer, double level_offset = 0.0,
+                         double level_offset_std = 0.0) const;
   void ResetOperatingPoint() { point_.Reset(); }
 
   double sample_time_s() const { return sample_time_s_; }

@@ -207,7 +207,7 @@ void AddIdentifyCommand(CLI::App& app, IdentifyOptions& options, int& exit_code)
   auto* initial_covariance =
       online->add_option("--initial-covariance", options.initial_covariance,
                          "P0 = p0 I, 0 < p0 <= 1e20 (default as the daemon's initial_covariance: "
-                         "1e10, frac-foptd 1e6)");
+                         "1e10)");
   auto* method = online
                      ->add_option("--method", options.method,
                                   "Update law: ud_directional, ud_exponential, exponential, "

@@ -117,7 +117,7 @@ nlohmann::json IdentifyOnlineArx(const IdentifyOptions& options, const drivers::
                      std::to_string(d) + " ARX parameters");
   }
   const core::RlsOptions rls_options =
-      core::RlsOptionsFor(OnlineSettingsFromFlags(options, table), core::OnlineModelKind::kArx, d);
+      core::RlsOptionsFor(OnlineSettingsFromFlags(options, table), d);
   std::vector<std::string> names;
   for (int j = 1; j <= orders.na; ++j) names.push_back("a" + std::to_string(j));
   for (std::size_t i = 0; i < inputs.size(); ++i) {

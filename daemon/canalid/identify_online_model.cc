@@ -173,7 +173,7 @@ nlohmann::json IdentifyOnlineModel(const IdentifyOptions& options, const drivers
   json["method"] = config::EnumName(settings.rls_method);
   json["forgetting"] = settings.forgetting;
   json["initial_covariance"] =
-      settings.initial_covariance.value_or(core::DefaultInitialCovariance(*kind));
+      settings.initial_covariance.value_or(core::kDefaultInitialCovariance);
   if (!options.config.empty()) json["reach"] = options.reach;
   return json;
 }

@@ -155,8 +155,8 @@ struct ReachConfig {
   double min_delay_s = 0.0;  ///< smallest delay tried online, >= 0
   double max_delay_s = 0.0;  ///< largest, >= min_delay_s, at most 2000 samples
   double forgetting = 1.0;   ///< (0, 1]
-  /// Every online estimator's P0 = initial_covariance I, (0, 1e20]; absent: each kind's
-  /// core::DefaultInitialCovariance.
+  /// Every online estimator's P0 = initial_covariance I, (0, 1e20]; absent:
+  /// core::kDefaultInitialCovariance.
   std::optional<double> initial_covariance;
   RlsMethod rls_method = RlsMethod::kUdDirectional;
   /// Batch identification at the end of an experiment: "auto" decides from the data whether the

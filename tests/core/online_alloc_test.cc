@@ -215,8 +215,7 @@ TEST(OnlineAllocation, FractionalBankUpdateAndSnapshotNeverAllocate) {
   o.delay_samples = 1;
   OnlineFractionalBank bank(o);
   EXPECT_EQ(
-      SisoBankAllocations(bank, 4, 400, 50, [](const FractionalSnapshot& s) { return s.theta1; }),
-      0);
+      SisoBankAllocations(bank, 4, 400, 50, [](const FractionalSnapshot& s) { return s.gain; }), 0);
 }
 
 // Every kind of the online registry, as the daemon runs it (Update, then FillSnapshot for the

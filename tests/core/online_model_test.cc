@@ -161,8 +161,9 @@ std::vector<double> GlWeights(double alpha, int count) {
 }
 
 // K e^{-d h s} / (1 + T s^alpha) discretised with GL1 and memory L, exactly the recursion
-// (1 + c) y(k) + c sum_{j=1..L} w_j y(k-j) = K u(k-d), c = T / h^alpha: the bank recovers K, T
-// and picks alpha from its grid.
+// (1 + c) y(k) + c sum_{j=1..L} w_j y(k-j) = K u(k-d), c = T / h^alpha: the bank picks alpha from
+// its grid and recovers K and T to the parabola's interpolation between grid points of tc
+// (T = 10 s^0.7 puts tc = 26.9 s between the grid's 24.5 and 30.9 s: 0.07 % off).
 TEST(OnlineFractionalModel, RecoversAGlFractionalPlantAndItsAlpha) {
   const double h = 0.15, alpha = 0.7, gain = 0.37, t_const = 10.0;
   const int delay = 27, memory = 200;
@@ -196,16 +197,19 @@ TEST(OnlineFractionalModel, RecoversAGlFractionalPlantAndItsAlpha) {
             (std::vector<std::string>{"gain", "time_constant_s", "alpha", "delay_s",
                                       "input_operating_point", "level_operating_point_m"}));
   EXPECT_EQ(s.Value("alpha"), 0.7);
-  EXPECT_NEAR(s.Value("gain"), gain, 1e-6 * gain);
-  EXPECT_NEAR(s.Value("time_constant_s"), t_const, 1e-6 * t_const);
+  EXPECT_NEAR(s.Value("gain"), gain, 2e-3 * gain);
+  EXPECT_NEAR(s.Value("time_constant_s"), t_const, 2e-3 * t_const);
   EXPECT_NEAR(s.Value("delay_s"), delay * h, 1e-12);
+  // The level at rest: the first sample's, the fitted offset near 0 on a plant that starts there.
+  EXPECT_NEAR(s.Value("level_operating_point_m"), 0.05, 1e-7);
   EXPECT_EQ(s.flags & (kFlagNan | kFlagIllConditioned | kFlagOutOfBounds), 0) << s.flags;
   EXPECT_GT(s.excitation, 0.0);
 }
 
-// The standard deviations of K and T are those of first-order propagation through the full
-// covariance: with noise, 95 % of 40 realisations put the truth within 2 sigma (a loose check
-// that holds for a right sigma; a sigma 3 x too small fails it).
+// The standard deviations of K and T (K's at its grid point plus what it moves with tc; T's from
+// the loss's curvature in log tc): with white output noise, 95 % of 40 realisations put the
+// truth within 2 sigma (a loose check that holds for a right sigma; a sigma 3 x too small fails
+// it).
 TEST(OnlineFractionalModel, GainAndTimeConstantSigmasCoverTheTruth) {
   const double h = 0.15, alpha = 0.8, gain = 0.5, t_const = 5.0;
   const int memory = 100;
@@ -228,14 +232,13 @@ TEST(OnlineFractionalModel, GainAndTimeConstantSigmasCoverTheTruth) {
       for (std::size_t j = 1; j <= static_cast<std::size_t>(memory) && j <= k; ++j) {
         sum += w[j] * x[k - j];
       }
-      // Equation error: e enters the recursion (the model's least-squares assumption).
-      const double e = k == 0 ? 0.0 : 0.02 * rnd.Normal();
-      x[k] = (gain * u[k] - c * sum + e) / (1.0 + c);
+      x[k] = (gain * u[k] - c * sum) / (1.0 + c);
     }
     for (std::size_t k = 0; k < u.size(); ++k) {
       OnlineSample s;
       s.input = u[k];
-      s.level_m = x[k];
+      // Output error: white noise on the measured level (the model's least-squares assumption).
+      s.level_m = x[k] + (k == 0 ? 0.0 : 0.02 * rnd.Normal());
       model->Update(s);
     }
     const OnlineModelSnapshot s = Snap(*model);

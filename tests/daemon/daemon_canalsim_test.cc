@@ -639,9 +639,8 @@ TEST(DaemonCanalsim, EveryOnlineKindIsReproducedByReplayAndIdentify) {
     int compared = 0;
     EXPECT_EQ(SameParameters(model, json, &compared), "");
     EXPECT_EQ(compared, model.num_params) << kind;
-    // The P0 it used, the configuration's default for the kind (docs/configuration.md): 1e6 for
-    // the output-error frac-foptd bank, 1e10 for the least-squares kinds.
-    EXPECT_EQ(json.value("initial_covariance", 0.0), kind == "frac-foptd" ? 1e6 : 1e10) << kind;
+    // The P0 it used, the configuration's default (docs/configuration.md).
+    EXPECT_EQ(json.value("initial_covariance", 0.0), 1e10) << kind;
   }
 
   // `canalid report --input LOG` draws every online kind's trajectory with its +-2 sigma band:

@@ -109,11 +109,11 @@ TEST(OnlineModelsConfig, OrdersGridAndDelaysReachTheEstimators) {
   EXPECT_EQ(d[0].arx.na, 2);
   EXPECT_EQ(d[0].arx.nb, 2);
   EXPECT_EQ(d[0].arx.max_delay_samples, 20);  // 1200 s / 60 s
-  // Without initial_covariance every kind starts from its own P0, the one `canalid identify
-  // --online` defaults to: the least-squares kinds 1e10, the output-error frac-foptd 1e6.
+  // Without initial_covariance every kind starts from the P0 `canalid identify --online`
+  // defaults to: 1e10.
   EXPECT_EQ(defaults.pipeline.online_id.rls.initial_covariance, 1e10);
   EXPECT_EQ(d[0].arx.rls.initial_covariance, 1e10);
-  EXPECT_EQ(d[1].fractional.rls.initial_covariance, 1e6);
+  EXPECT_EQ(d[1].fractional.rls.initial_covariance, 1e10);
   EXPECT_EQ(d[2].lpv.rls.initial_covariance, 1e10);
   EXPECT_EQ(d[1].fractional.alphas.size(), 8U);
   EXPECT_EQ(d[1].fractional.delay_samples, 10);  // expected_delay_s 600 s
