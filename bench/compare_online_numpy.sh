@@ -1,14 +1,15 @@
 #!/usr/bin/env bash
 # Whole-process comparison of issue 4: `canalid identify --model arx --online` over a 100k-sample
 # CSV against the same exponential-forgetting RLS loop in numpy (bench/peers/rls_numpy.py).
-# Checks that both give the same ARX(2,2,1) parameters (1e-6 relative), prints the median of 5
-# wall times of each (Python's perf_counter around the process) and the speed ratio.
-# Usage: bench/compare_online_numpy.sh [BUILD_DIR] [SAMPLES] [FORGETTING]
+# Checks that both give the same ARX(2,2,1) parameters (1e-6 relative), then prints the wall
+# times of each and the speed ratio from interleaved rounds (below).
+# Usage: bench/compare_online_numpy.sh [BUILD_DIR] [SAMPLES] [FORGETTING] [ROUNDS (default 7)]
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${1:-$root/build}
 samples=${2:-100000}
 lambda=${3:-0.999}
+rounds=${4:-7}
 canalid=$build/daemon/canalid/canalid
 python=/usr/bin/python3
 work=$(mktemp -d)
@@ -51,21 +52,30 @@ if worst > 1e-6:
     sys.exit("parameters differ by more than 1e-6 relative")
 PY
 
-median5() {  # prints the median of 5 wall times (s) of the command given (perf_counter, us)
-  "$python" - "$@" <<'PY'
-import subprocess, sys, time
-times = []
-for _ in range(5):
-    t = time.perf_counter()
-    subprocess.run(sys.argv[1:], stdout=subprocess.DEVNULL, check=True)
-    times.append(time.perf_counter() - t)
-print("%.4f" % sorted(times)[2])
-PY
-}
-t_canalid=$(median5 "${canalid_cmd[@]}")
-t_numpy=$(median5 "${numpy_cmd[@]}")
 echo "samples: $samples, forgetting: $lambda"
-echo "canalid identify --model arx --online: ${t_canalid} s (median of 5)"
-echo "numpy RLS loop (bench/peers/rls_numpy.py): ${t_numpy} s (median of 5)"
-"$python" -c "import sys; c, n = float(sys.argv[1]), float(sys.argv[2]); \
-print('speed ratio numpy / canalid: %.1f x' % (n / c))" "$t_canalid" "$t_numpy"
+# Interleaved rounds, so that both sides of each ratio see the same machine (a shared VM's speed
+# drifts by tens of % within a minute): each round times canalid 5 times (its median) and numpy
+# once, with Python's perf_counter around the process; the round's ratio is numpy / canalid.
+# Prints the medians over the rounds.
+"$python" - "$rounds" "${#canalid_cmd[@]}" "${canalid_cmd[@]}" "${numpy_cmd[@]}" <<'PY'
+import statistics, subprocess, sys, time
+rounds, count = int(sys.argv[1]), int(sys.argv[2])
+canalid, numpy = sys.argv[3:3 + count], sys.argv[3 + count:]
+def wall(cmd):
+    t = time.perf_counter()
+    subprocess.run(cmd, stdout=subprocess.DEVNULL, check=True)
+    return time.perf_counter() - t
+ours, theirs, ratios = [], [], []
+for _ in range(rounds):
+    c = statistics.median(wall(canalid) for _ in range(5))
+    n = wall(numpy)
+    ours.append(c)
+    theirs.append(n)
+    ratios.append(n / c)
+print("canalid identify --model arx --online: %.4f s (median of %d rounds, each the median of 5)"
+      % (statistics.median(ours), rounds))
+print("numpy RLS loop (bench/peers/rls_numpy.py): %.4f s (median of %d rounds)"
+      % (statistics.median(theirs), rounds))
+print("speed ratio numpy / canalid: %.1f x (median of the rounds' ratios; range %.1f-%.1f)"
+      % (statistics.median(ratios), min(ratios), max(ratios)))
+PY

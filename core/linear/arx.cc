@@ -175,13 +175,24 @@ ArxModel FitArx(const Eigen::Ref<const Eigen::VectorXd>& y,
 
 Eigen::VectorXd SimulateArx(const ArxModel& model, const Eigen::Ref<const Eigen::MatrixXd>& u,
                             const Eigen::Ref<const Eigen::VectorXd>& y_initial) {
+  Eigen::VectorXd y_sim(u.rows());
+  SimulateArx(model, u, y_initial, y_sim);
+  return y_sim;
+}
+
+void SimulateArx(const ArxModel& model, const Eigen::Ref<const Eigen::MatrixXd>& u,
+                 const Eigen::Ref<const Eigen::VectorXd>& y_initial,
+                 Eigen::Ref<Eigen::VectorXd> y_sim) {
   CheckInputs(model, u.cols(), "SimulateArx");
   if (y_initial.size() > u.rows()) {
     throw std::invalid_argument("SimulateArx: y_initial has " + Str(y_initial.size()) +
                                 " samples, more than u (" + Str(u.rows()) + ")");
   }
   const Eigen::Index n = u.rows();
-  Eigen::VectorXd y_sim(n);
+  if (y_sim.size() != n) {
+    throw std::invalid_argument("SimulateArx: y_sim has " + Str(y_sim.size()) + " values, u has " +
+                                Str(n) + " rows");
+  }
   y_sim.head(y_initial.size()) = y_initial;
   for (Eigen::Index t = y_initial.size(); t < n; ++t) {
     double value = InputPart(model, u, t);
@@ -189,7 +200,6 @@ Eigen::VectorXd SimulateArx(const ArxModel& model, const Eigen::Ref<const Eigen:
       value -= model.a(j - 1) * y_sim(t - j);
     y_sim(t) = value;
   }
-  return y_sim;
 }
 
 Eigen::VectorXd PredictArx(const ArxModel& model, const Eigen::Ref<const Eigen::VectorXd>& y,

@@ -87,6 +87,11 @@ Eigen::MatrixXd ArxRegressors(const Eigen::Ref<const Eigen::VectorXd>& y,
 ///         than u.
 Eigen::VectorXd SimulateArx(const ArxModel& model, const Eigen::Ref<const Eigen::MatrixXd>& u,
                             const Eigen::Ref<const Eigen::VectorXd>& y_initial = Eigen::VectorXd());
+/// The same into `y_sim` (u.rows() values; e.g. a core::LargeBuffer's).
+/// @throws std::invalid_argument as above, or if y_sim.size() != u.rows().
+void SimulateArx(const ArxModel& model, const Eigen::Ref<const Eigen::MatrixXd>& u,
+                 const Eigen::Ref<const Eigen::VectorXd>& y_initial,
+                 Eigen::Ref<Eigen::VectorXd> y_sim);
 
 /// One-step-ahead prediction from measured data:
 ///   y_hat(t) = -sum_j a_j y(t-j) + sum_i sum_j b_ij u_i(t-nk_i-j+1),

@@ -457,7 +457,9 @@ typename Rls<N>::Result Rls<N>::Update(const Eigen::MatrixBase<Derived>& phi, do
           options_.method == RlsMethod::kDirectional ? 1.0 - (1.0 - lambda) / r : 1.0;
       p_.noalias() -= (beta / den) * g_ * g_.transpose();
       if (options_.method == RlsMethod::kExponential) {
-        p_ /= lambda;
+        // One division and n^2 multiplications instead of n^2 divisions (a tenth of the
+        // update's time at n = 4, on CPUs where a division costs ten multiplications).
+        p_ *= 1.0 / lambda;
       } else if (options_.method == RlsMethod::kStabilised) {
         // Here p_ = lambda (lambda R + phi phi')^-1; adding (1 - lambda)/p_prior I to the
         // information gives P (lambda I + c P)^-1 (P and the bracket commute).

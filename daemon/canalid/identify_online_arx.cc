@@ -13,6 +13,7 @@
 #include "core/numerics/metrics.h"
 #include "core/online/online_model.h"
 #include "core/online/rls.h"
+#include "core/system/large_buffer.h"
 #include "daemon/canalid/identify_command.h"
 #include "daemon/canalid/input_error.h"
 #include "daemon/canalid/online_settings_flags.h"
@@ -171,7 +172,10 @@ nlohmann::json IdentifyOnlineArx(const IdentifyOptions& options, const drivers::
   json["health"] = RlsHealthJson(recursion.health);
   try {
     const Eigen::Index warmup = std::max<Eigen::Index>(model.first_sample, 1);
-    const Eigen::VectorXd simulated = core::SimulateArx(model, u, y.head(warmup));
+    // A record-length buffer in huge pages (LargeBuffer): its first touch is most of its cost.
+    core::LargeBuffer buffer(static_cast<std::size_t>(n));
+    Eigen::Map<Eigen::VectorXd> simulated(buffer.data(), n);
+    core::SimulateArx(model, u, y.head(warmup), simulated);
     json["metrics"] = drivers::ToJson(core::ComputeMetrics(
         y.tail(n - warmup), simulated.tail(n - warmup), table.sample_time_s()));
   } catch (const std::invalid_argument& e) {

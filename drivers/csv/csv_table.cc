@@ -159,17 +159,18 @@ std::size_t CsvTable::ColumnIndex(const std::string& name) const {
 namespace {
 
 // Rows of a value block for `rows` rows: a multiple of 8, so that every column starts a multiple
-// of 64 bytes after the block's start, as aligned as the block itself (Eigen's allocation), as
-// an Eigen::VectorXd of its own would be.  Eigen's vectorised sums peel off the unaligned head of
-// a vector, so a column at another alignment sums its values in another order: a first version
-// gave `canalid identify --detrend` other last bits than the column copies before it.
+// of 64 bytes after the block's start, as aligned as the block itself (LargeBuffer: 64 bytes),
+// at least as aligned as an Eigen::VectorXd of its own would be.  Eigen's vectorised sums peel off
+// the unaligned head of a vector, so a column at another alignment sums its values in another
+// order: a first version gave `canalid identify --detrend` other last bits than the column copies
+// before it.
 Eigen::Index AlignedRows(Eigen::Index rows) { return (rows + 7) / 8 * 8; }
 
 // The reader behind Parse and Read: text fed in pieces of whole lines, each row's values put
 // straight into their column of one column-major block, which grows by doubling unless
-// reserved.  One block rather than one per column: malloc keeps a freed block of that size for
-// the next read of a file like it, where it gave a set of per-column blocks back to the system
-// and the next read faulted their pages in again (csv_bench: about 1000 page faults a read).
+// reserved.  One block rather than one per column, a LargeBuffer: a block of a large file is
+// backed by huge pages, whose first touch costs a page fault per 2 MiB instead of per 4 KiB
+// (`canalid identify --online` over 100k rows touched 586 pages of values).
 class CsvParser {
  public:
   explicit CsvParser(std::string name) : name_(std::move(name)) {}
@@ -184,7 +185,8 @@ class CsvParser {
     const std::size_t width = columns_.size();
     std::string_view line;
     while (true) {
-      if (rows_ == values_.rows()) Grow();
+      if (rows_ == stride_) Grow();
+      double* const row = values_.data() + rows_;
       // The common row first: `width` numbers with single commas between them and the line's
       // end right after the last (a '\r' allowed), parsed without finding the line's end first.
       // Any other line (blank, spaces, a bad cell) goes through the checks below, from its start.
@@ -196,7 +198,7 @@ class CsvParser {
         double v = 0.0;
         const auto [ptr, ec] = std::from_chars(at, end, v);
         if (ec != std::errc() || ptr == at || !std::isfinite(v)) break;
-        values_(rows_, static_cast<Eigen::Index>(c)) = v;
+        row[static_cast<Eigen::Index>(c) * stride_] = v;
         at = ptr;
         if (c + 1 < width) {
           if (at == end || *at != ',') break;
@@ -229,7 +231,7 @@ class CsvParser {
         if (ec != std::errc() || ptr == at || !delimited || !std::isfinite(v)) {
           CellProblem(name_, lines.number(), line, cell_start, columns_, c, width);
         }
-        values_(rows_, static_cast<Eigen::Index>(c)) = v;
+        row[static_cast<Eigen::Index>(c) * stride_] = v;
         at = after + 1;
       }
       RowParsed(lines.number());
@@ -240,24 +242,34 @@ class CsvParser {
   /// Room for `rows` rows in every column, once the header has been read (nothing when there is
   /// room already).
   void Reserve(Eigen::Index rows) {
-    if (!header_ || rows <= values_.rows()) return;
-    Eigen::MatrixXd bigger(AlignedRows(rows), values_.cols());
-    bigger.topRows(rows_) = values_.topRows(rows_);
-    values_.swap(bigger);
+    if (!header_ || rows <= stride_) return;
+    const Eigen::Index stride = AlignedRows(rows);
+    const auto width = static_cast<Eigen::Index>(columns_.size());
+    core::LargeBuffer bigger(static_cast<std::size_t>(stride * width));
+    for (Eigen::Index c = 0; c < width; ++c) {
+      std::copy_n(values_.data() + c * stride_, rows_, bigger.data() + c * stride);
+    }
+    values_ = std::move(bigger);
+    stride_ = stride;
   }
   Eigen::Index rows() const { return rows_; }
 
-  /// The values: the first rows() rows of each column.  @throws CsvError without a header or
-  /// 2 rows.
-  Eigen::MatrixXd Finish() {
+  struct Parsed {
+    std::vector<std::string> columns;
+    core::LargeBuffer values;  // column c from values.data() + c * stride
+    Eigen::Index stride;
+    Eigen::Index rows;
+    double sample_time_s;
+  };
+  /// What was parsed: the first rows of each column.  @throws CsvError without a header or 2
+  /// rows.
+  Parsed Finish() && {
     if (!header_) throw CsvError(name_ + ": empty file (no header row)");
     if (rows_ < 2) {
       throw CsvError(name_ + ": needs at least 2 data rows, found " + std::to_string(rows_));
     }
-    return std::move(values_);
+    return {std::move(columns_), std::move(values_), stride_, rows_, sample_time_s_};
   }
-  const std::vector<std::string>& columns() const { return columns_; }
-  double sample_time_s() const { return sample_time_s_; }
 
  private:
   // Header: the first line that is not blank.  False while there is none yet.
@@ -269,22 +281,21 @@ class CsvParser {
       if (const std::string problem = HeaderProblem(columns_); !problem.empty()) {
         Fail(name_, lines.number(), problem);
       }
-      values_.resize(0, static_cast<Eigen::Index>(columns_.size()));
       header_ = true;
     }
     return header_;
   }
 
-  void Grow() { Reserve(std::max<Eigen::Index>(1024, 2 * values_.rows())); }
+  void Grow() { Reserve(std::max<Eigen::Index>(1024, 2 * stride_)); }
 
   // Time checks as rows arrive, so the message names the offending line.
   void RowParsed(std::size_t line_number) {
     ++rows_;
     if (rows_ < 2) return;
-    const auto t = values_.col(0);
+    const double* const t = values_.data();  // column 0
     const Eigen::Index r = rows_ - 1;
     const std::string problem =
-        TimeProblem(t(0), t(r - 1), t(r), static_cast<std::size_t>(rows_), sample_time_s_);
+        TimeProblem(t[0], t[r - 1], t[r], static_cast<std::size_t>(rows_), sample_time_s_);
     if (!problem.empty()) Fail(name_, line_number, problem);
   }
 
@@ -292,18 +303,20 @@ class CsvParser {
   std::size_t line_number_ = 0;  // lines fed so far
   bool header_ = false;
   std::vector<std::string> columns_;
-  Eigen::MatrixXd values_;  // a column per column, the first rows_ rows used
+  core::LargeBuffer values_;  // column c from values_.data() + c * stride_, rows_ rows used
+  Eigen::Index stride_ = 0;
   Eigen::Index rows_ = 0;
   double sample_time_s_ = 0.0;
 };
 
 }  // namespace
 
-CsvTable::CsvTable(std::string source, std::vector<std::string> columns, Eigen::MatrixXd values,
-                   Eigen::Index rows, double sample_time_s)
+CsvTable::CsvTable(std::string source, std::vector<std::string> columns, core::LargeBuffer values,
+                   Eigen::Index stride, Eigen::Index rows, double sample_time_s)
     : source_(std::move(source)),
       columns_(std::move(columns)),
       values_(std::move(values)),
+      stride_(stride),
       rows_(rows),
       sample_time_s_(sample_time_s) {}
 
@@ -366,15 +379,17 @@ CsvTable CsvTable::Read(const std::string& path, std::size_t chunk_bytes) {
     size -= whole;
   }
   parser.Feed(std::string_view(buffer.get(), size));
-  Eigen::MatrixXd values = parser.Finish();
-  return CsvTable(path, parser.columns(), std::move(values), parser.rows(), parser.sample_time_s());
+  CsvParser::Parsed p = std::move(parser).Finish();
+  return CsvTable(path, std::move(p.columns), std::move(p.values), p.stride, p.rows,
+                  p.sample_time_s);
 }
 
 CsvTable CsvTable::Parse(std::string_view text, const std::string& name) {
   CsvParser parser(name);
   parser.Feed(text);
-  Eigen::MatrixXd values = parser.Finish();
-  return CsvTable(name, parser.columns(), std::move(values), parser.rows(), parser.sample_time_s());
+  CsvParser::Parsed p = std::move(parser).Finish();
+  return CsvTable(name, std::move(p.columns), std::move(p.values), p.stride, p.rows,
+                  p.sample_time_s);
 }
 
 CsvTable CsvTable::FromColumns(const std::string& source, const std::vector<std::string>& names,
@@ -412,11 +427,12 @@ CsvTable CsvTable::FromColumns(const std::string& source, const std::vector<std:
       throw CsvError(message);
     }
   }
-  Eigen::MatrixXd values(AlignedRows(rows), static_cast<Eigen::Index>(names.size()));
+  const Eigen::Index stride = AlignedRows(rows);
+  core::LargeBuffer values(names.size() * static_cast<std::size_t>(stride));
   for (std::size_t c = 0; c < names.size(); ++c) {
-    values.col(static_cast<Eigen::Index>(c)).head(rows) = columns[c];
+    std::copy_n(columns[c].data(), rows, values.data() + static_cast<Eigen::Index>(c) * stride);
   }
-  return CsvTable(source, names, std::move(values), rows, sample_time_s);
+  return CsvTable(source, names, std::move(values), stride, rows, sample_time_s);
 }
 
 void WriteCsv(const std::string& path, const std::vector<std::string>& names,

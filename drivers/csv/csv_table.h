@@ -6,6 +6,8 @@
 #include <string_view>
 #include <vector>
 
+#include "core/system/large_buffer.h"
+
 namespace canalid::drivers {
 
 /// A bad CSV file: the message names the file, the line (1-based, the header is line 1) and the
@@ -56,19 +58,20 @@ class CsvTable {
   Eigen::VectorXd Column(const std::string& name) && { return View(ColumnIndex(name)); }
 
  private:
-  CsvTable(std::string source, std::vector<std::string> columns, Eigen::MatrixXd values,
-           Eigen::Index rows, double sample_time_s);
+  CsvTable(std::string source, std::vector<std::string> columns, core::LargeBuffer values,
+           Eigen::Index stride, Eigen::Index rows, double sample_time_s);
   /// @throws CsvError as Column does.
   std::size_t ColumnIndex(const std::string& name) const;
   ColumnView View(std::size_t column) const {
-    return {values_.col(static_cast<Eigen::Index>(column)).data(), rows_};
+    return {values_.data() + static_cast<Eigen::Index>(column) * stride_, rows_};
   }
 
   std::string source_;
   std::vector<std::string> columns_;
-  // A column per column, in one block; its first rows_ rows are the table's (the reader may
-  // leave room after them).
-  Eigen::MatrixXd values_;
+  // A column per column, in one block, column c from values_.data() + c * stride_; its first
+  // rows_ rows are the table's (the reader may leave room after them).
+  core::LargeBuffer values_;
+  Eigen::Index stride_ = 0;
   Eigen::Index rows_ = 0;
   double sample_time_s_ = 0.0;
 };
