@@ -220,7 +220,10 @@ FractionalSnapshot OnlineFractionalBank::Snapshot() const {
   // The profile loss J(log tc) ~ J_min + J''/2 (log tc - log tc*)^2 gives
   // var(log tc) = 2 sigma2 / J''; T = tc^alpha, so std(T) = alpha T std(log tc).  K and the
   // offset at fixed tc have the candidate's variance; as tc varies they follow the interpolated
-  // fit theta*(log tc), which adds (d theta* / d log tc)^2 var(log tc).
+  // fit theta*(log tc), which adds (d theta* / d log tc)^2 var(log tc).  That needs the losses
+  // to be residual sums of squares (kResidual); the prediction-error criterion's are weighted
+  // means, and T's deviation is then not given.
+  if (selector_.criterion() != BankCriterion::kResidual) return s;
   const double sigma2 = estimators_[at_index].innovation_variance();
   const double log_tc_variance = 2.0 * sigma2 * dx * dx / curvature;
   s.time_constant_std_s = s.alpha * s.time_constant_s * std::sqrt(log_tc_variance);

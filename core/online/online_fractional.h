@@ -45,7 +45,9 @@ struct FractionalSnapshot {
   double time_constant_s = 0.0;  ///< T (in s^alpha) = tc^alpha
   double offset = 0.0;           ///< the output at rest, as a deviation from the first sample
   double gain_std = 0.0;
-  double time_constant_std_s = 0.0;  ///< from the loss's curvature in log tc; NaN at a grid edge
+  /// From the loss's curvature in log tc; NaN at a grid edge or when the selector does not
+  /// compare least-squares losses (an RLS method that is not least squares).
+  double time_constant_std_s = 0.0;
   double offset_std = 0.0;
   /// The selected candidate's tc is the grid's first or last (T is then a bound, not a fit), or,
   /// with several alphas, its alpha is the first or last.

@@ -186,6 +186,21 @@ TEST(OnlineFractionalBank, FindsAlphaAndTheTimeConstantBetweenGridPoints) {
   EXPECT_LT(s.gain_std, 0.02);
 }
 
+// With an update law that is not least squares (Kalman) the selector compares prediction errors,
+// whose weighted means give no variance: T is still refined, its deviation is not given.
+TEST(OnlineFractionalBank, ANonLeastSquaresLawGivesNoTimeConstantDeviation) {
+  const Data d = Simulate(0.7, 2.0, 5.0, 0.3, 3000, 0.005);
+  OnlineFractionalOptions o = Options();
+  o.rls.method = RlsMethod::kKalman;
+  OnlineFractionalBank bank(o);
+  for (std::size_t k = 0; k < d.y.size(); ++k) bank.Update(d.u[k], d.y[k]);
+  const FractionalSnapshot s = bank.Snapshot();
+  ASSERT_TRUE(s.valid);
+  EXPECT_DOUBLE_EQ(s.alpha, 0.7);
+  EXPECT_TRUE(std::isnan(s.time_constant_std_s));
+  EXPECT_NEAR(s.time_constant_s, 5.0, 0.05 * 5.0);
+}
+
 // A plant slower than the grid's longest characteristic time: the bank says T is a bound.
 TEST(OnlineFractionalBank, APlantSlowerThanTheGridIsFlaggedAtItsEdge) {
   const Data d = Simulate(0.9, 1.0, 400.0, 0.0, 3000, 0.001);  // tc = 780 s > 100 s
