@@ -7,6 +7,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "core/online/online_gl_regressor.h"
 #include "core/online/option_checks.h"
 
 namespace canalid::core {
@@ -78,11 +79,10 @@ OnlineFractionalBank::OnlineFractionalBank(const OnlineFractionalOptions& option
   const auto memory = static_cast<std::size_t>(memory_);
   reversed_.resize(alphas * memory);
   for (std::size_t a = 0; a < alphas; ++a) {
-    // w_j = w_{j-1} (1 - (alpha + 1) / j) from w_0 = 1, stored from w_L down to w_1.
-    double w = 1.0;
+    // The GL weights, stored from w_L down to w_1.
+    const OnlineGlRegressor gl(options_.alphas[a], memory_);
     for (std::size_t j = 1; j <= memory; ++j) {
-      w *= 1.0 - (options_.alphas[a] + 1.0) / static_cast<double>(j);
-      reversed_[a * memory + memory - j] = w;
+      reversed_[a * memory + memory - j] = gl.weight(static_cast<int>(j));
     }
     for (int t = 0; t < time_points_; ++t) {
       c_.push_back(
