@@ -123,7 +123,7 @@ GlFoptdSimulator::GlFoptdSimulator(const FractionalFoptdParams& params, double s
   const double h = sample_time_s / substeps;
   c_ = params.time_constant_s * std::pow(h, -params.alpha);
   weights_ = GrunwaldLetnikovWeights(params.alpha, memory_length + 1).tail(memory_length);
-  history_ = Eigen::VectorXd::Zero(2 * Eigen::Index{memory_length});
+  history_ = LagLine(memory_length);
   previous_weight_.resize(substeps);
   for (int i = 0; i < substeps; ++i) {
     previous_weight_(i) = std::clamp((f * sample_time_s - i * h) / h, 0.0, 1.0);
@@ -144,19 +144,15 @@ void GlFoptdSimulator::Advance(double input) {
   double y = 0.0;
   for (int i = 0; i < substeps_; ++i) {
     const double v = previous_weight_(i) * previous + (1.0 - previous_weight_(i)) * current;
-    // history_[head_ .. head_ + L) holds y_{n-1}, y_{n-2}, ... (mirrored copy at +L).
-    const double memory = weights_.dot(history_.segment(head_, length));
+    const double memory = weights_.dot(Eigen::Map<const Eigen::VectorXd>(history_.Lags(), length));
     y = (params_.gain * v - c_ * memory) / (1.0 + c_);
-    head_ = head_ == 0 ? length - 1 : head_ - 1;
-    history_(head_) = y;
-    history_(head_ + length) = y;
+    history_.Push(y);
   }
   output_ = y;
 }
 
 void GlFoptdSimulator::Reset() {
-  if (history_.size() > 0) history_.setZero();
-  head_ = 0;
+  history_.Reset();
   delay_.Reset();
   output_ = 0.0;
 }

@@ -2,6 +2,7 @@
 #include <Eigen/Core>
 
 #include "core/fractional/fractional_foptd.h"
+#include "core/numerics/lag_line.h"
 #include "core/signal/fractional_delay.h"
 
 namespace canalid::core {
@@ -60,7 +61,7 @@ class OustaloupFoptdSimulator final {
 /// Grunwald-Letnikov (GL1) simulator on an internal grid h = Ts / substeps:
 ///   y_n = (K v_n - c sum_{j=1..L} w_j y_{n-j}) / (1 + c),  c = T h^-alpha,
 /// where v_n is the mean of the delayed held input over (t_{n-1}, t_n] (exact for the delayed
-/// ZOH split when h divides the interval).  The history is a mirrored ring buffer so each step is
+/// ZOH split when h divides the interval).  The history is a LagLine so each step is
 /// one contiguous dot product of length L (cost O(L) per internal step).  GL1 has O(h) error;
 /// alpha = 1 uses the exact ZOH first order instead.
 class GlFoptdSimulator final {
@@ -80,9 +81,8 @@ class GlFoptdSimulator final {
   int memory_length_;
   double c_ = 0.0;
   Eigen::VectorXd weights_;          // w_1..w_L
-  Eigen::VectorXd history_;          // mirrored: 2 L entries
+  LagLine history_{1};               // y_{n-1}, y_{n-2}, ...: L of them (alpha != 1)
   Eigen::VectorXd previous_weight_;  // share of u_previous in each substep's input mean
-  int head_ = 0;
   ZohDelayLine delay_;
   double output_ = 0.0;
   // alpha = 1: exact ZOH with split
