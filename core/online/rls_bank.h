@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -52,7 +53,8 @@ enum class RlsBankIsa {
 /// lanes of an SSE2 register (the baseline x86-64 ISA) or, where the CPU has AVX2, the four of
 /// an AVX2 register (chosen at run time; neither contracts to FMA, so both are Rls bit for
 /// bit).  Keeping Rls's results bit for bit keeps its bookkeeping (counts, last error, outcome)
-/// per lane, and every branch becomes a select (docs/performance.md).
+/// per lane, and every branch becomes a select (docs/performance.md); a block whose lanes all
+/// take Bierman's update (the usual sample) stores its results without the selects.
 /// Allocates only in the constructor; Update and the accessors never allocate.
 /// Deterministic.  Not thread-safe (Lane() uses a scratch estimator).
 template <int N>
@@ -87,6 +89,12 @@ class RlsBank final {
   double residual_sum_of_squares(int lane) const;
   /// P_ii of lane l (relative to sigma2), as Rls::CovarianceDiagonal.
   double CovarianceDiagonal(int lane, int i) const;
+  /// Every lane's least-squares loss into losses[0, lanes()): its residual sum of squares, or
+  /// with `nonnegative` = i in [0, N) that of its fit constrained to theta_i >= 0: for a lane
+  /// whose theta_i is negative and P_ii > 0, plus theta_i^2 / P_ii (the fit with theta_i = 0,
+  /// P relative to sigma2).  Per lane the arithmetic of residual_sum_of_squares, theta and
+  /// CovarianceDiagonal, bit for bit; all lanes of a block at once.  @pre losses.size() >= lanes().
+  void ResidualLosses(int nonnegative, std::span<double> losses) const;
   /// Lane l as an Rls<N>: a copy of its state in a scratch estimator, valid until the next call
   /// of Lane() or any non-const member.
   const Rls<N>& Lane(int lane) const;
@@ -107,17 +115,17 @@ class RlsBank final {
     Field ssr;
     Field weight;
     // Rls's bookkeeping, kept here so that the update writes it lane-wise (counts as doubles:
-    // exact to 2^53).
-    Field accepted;
+    // exact to 2^53).  Not kept, being known from the rest: Rls's accepted samples (without
+    // innovation guards, updates + frozen_count) and the last result's prediction error (the
+    // last error, or NaN when the last sample was rejected).
     Field updates;
     Field frozen_count;
     Field rejected_invalid;
-    Field last_error;    // of the last valid sample
-    Field excitation;    // r of the last valid sample
-    Field norm2;         // ||phi||^2 of the last valid sample
-    Field frozen;        // 1: the last valid sample froze the lane
-    Field outcome;       // the last Update's RlsOutcome
-    Field result_error;  // and its prediction error (NaN when rejected)
+    Field last_error;  // of the last valid sample
+    Field excitation;  // r of the last valid sample
+    Field norm2;       // ||phi||^2 of the last valid sample
+    Field frozen;      // 1: the last valid sample froze the lane
+    Field outcome;     // the last Update's RlsOutcome
   };
   // The rest of a lane's Rls state (only the box and the trace bounds change it).
   struct LaneState {
@@ -132,6 +140,10 @@ class RlsBank final {
   template <class V>
   [[gnu::always_inline]] static V& At(Field& field, std::size_t at) {
     return *reinterpret_cast<V*>(&field[at]);
+  }
+  template <class V>
+  [[gnu::always_inline]] static const V& At(const Field& field, std::size_t at) {
+    return *reinterpret_cast<const V*>(&field[at]);
   }
   // The helpers take vectors by reference: a 32-byte vector passed or returned by value makes
   // GCC warn (-Wpsabi) that the ABI differs where AVX is off, even when always inlined.
@@ -156,6 +168,15 @@ class RlsBank final {
     target = __builtin_bit_cast(
         L, (__builtin_bit_cast(M, a) & m) | (__builtin_bit_cast(M, target) & ~m));
   }
+  /// Whether every lane of the mask is set.
+  template <class M>
+  [[gnu::always_inline]] static bool AllSet(const M& mask) {
+    std::int64_t lanes[sizeof(M) / sizeof(std::int64_t)];
+    __builtin_memcpy(&lanes, &mask, sizeof(M));
+    std::int64_t all = -1;
+    for (const std::int64_t lane : lanes) all &= lane;
+    return all == -1;
+  }
   /// counter += 1 in the lanes where the mask is set.
   template <class M, class L>
   [[gnu::always_inline]] static void CountWhere(const M& mask, L& counter) {
@@ -166,6 +187,12 @@ class RlsBank final {
   template <int W>
   [[gnu::always_inline]] void UpdateLanes(Block& s, std::size_t at, int first_lane, double y);
   void UpdateBlockBaseline(Block& s, int first_lane, double y);
+  template <int W>
+  [[gnu::always_inline]] void LossLanes(const Block& s, std::size_t at, int constrained,
+                                        double* out) const;
+  template <int W>
+  [[gnu::always_inline]] void LossBlocks(int constrained, double* losses) const;
+  [[gnu::target("avx2,no-fma")]] void LossesAvx2(int constrained, double* losses) const;
   // Compiled for AVX2 alone, called only where the CPU has it.  "no-fma": no contraction of
   // a * b + c, which would round differently from Rls.  (AVX-512 was tried: with its own FMA it
   // contracts anyway, and GCC 12 compares its vectors lane by lane: 1.5 x slower than AVX2.)
@@ -246,7 +273,6 @@ void RlsBank<N>::Store(int lane, const Rls<N>& from) {
   s.ssr[l] = from.ssr_;
   s.weight[l] = from.weight_;
   const RlsHealth& h = from.health_;
-  s.accepted[l] = static_cast<double>(from.accepted_);
   s.updates[l] = static_cast<double>(h.updates);
   s.frozen_count[l] = static_cast<double>(h.frozen_count);
   s.rejected_invalid[l] = static_cast<double>(h.rejected_invalid);
@@ -255,7 +281,6 @@ void RlsBank<N>::Store(int lane, const Rls<N>& from) {
   s.norm2[l] = h.regressor_norm2;
   s.frozen[l] = h.frozen ? 1.0 : 0.0;
   s.outcome[l] = static_cast<double>(RlsOutcome::kRejectedInvalid);
-  s.result_error[l] = std::numeric_limits<double>::quiet_NaN();
   if (lane >= lanes_) return;  // padding: no lane state
   LaneState& st = state_[Index(lane)];
   st.bounded = from.bounded_;
@@ -278,7 +303,7 @@ void RlsBank<N>::Load(int lane, Rls<N>& into) const {
   }
   into.ssr_ = s.ssr[l];
   into.weight_ = s.weight[l];
-  into.accepted_ = static_cast<long long>(s.accepted[l]);
+  into.accepted_ = static_cast<long long>(s.updates[l] + s.frozen_count[l]);
   into.last_error_ = s.last_error[l];
   const LaneState& st = state_[Index(lane)];
   into.bounded_ = st.bounded;
@@ -301,7 +326,10 @@ inline typename RlsBank<N>::Result RlsBank<N>::result(int lane) const {
   if (!soa_) return results_[Index(lane)];
   const Block& s = blocks_[Index(lane / kBlock)];
   const auto l = static_cast<std::size_t>(lane % kBlock);
-  return {s.result_error[l], static_cast<RlsOutcome>(static_cast<int>(s.outcome[l]))};
+  const auto outcome = static_cast<RlsOutcome>(static_cast<int>(s.outcome[l]));
+  return {outcome == RlsOutcome::kRejectedInvalid ? std::numeric_limits<double>::quiet_NaN()
+                                                  : s.last_error[l],
+          outcome};
 }
 
 template <int N>
@@ -317,13 +345,12 @@ void RlsBank<N>::Transform(int lane, const Matrix& t) {
     scalar_[Index(lane)].Transform(t);
     return;
   }
-  const Result last = result(lane);  // Store() does not know it
+  const RlsOutcome last = result(lane).outcome;  // Store() does not know it
   Load(lane, scratch_);
   scratch_.Transform(t);
   Store(lane, scratch_);
   Block& s = blocks_[Index(lane / kBlock)];
-  s.outcome[lane % kBlock] = static_cast<double>(last.outcome);
-  s.result_error[lane % kBlock] = last.prediction_error;
+  s.outcome[lane % kBlock] = static_cast<double>(last);
 }
 
 template <int N>
@@ -352,6 +379,78 @@ inline double RlsBank<N>::CovarianceDiagonal(int lane, int i) const {
 }
 
 template <int N>
+void RlsBank<N>::ResidualLosses(int nonnegative, std::span<double> losses) const {
+  const bool constrain = nonnegative >= 0 && nonnegative < N;
+  if (!soa_) {
+    for (int l = 0; l < lanes_; ++l) {
+      double loss = residual_sum_of_squares(l);
+      if (constrain && theta(l, nonnegative) < 0.0) {
+        const double t = theta(l, nonnegative), pii = CovarianceDiagonal(l, nonnegative);
+        if (pii > 0.0) loss = loss + t * t / pii;
+      }
+      losses[Index(l)] = loss;
+    }
+    return;
+  }
+  const int constrained = constrain ? nonnegative : -1;
+  if (isa_ == RlsBankIsa::kAvx2) {
+    LossesAvx2(constrained, losses.data());
+  } else {
+    LossBlocks<2>(constrained, losses.data());
+  }
+}
+
+template <int N>
+void RlsBank<N>::LossesAvx2(int constrained, double* losses) const {
+  LossBlocks<4>(constrained, losses);
+}
+
+template <int N>
+template <int W>
+inline void RlsBank<N>::LossBlocks(int constrained, double* losses) const {
+  for (std::size_t b = 0; b < blocks_.size(); ++b) {
+    const std::size_t first = b * kLanes;
+    const std::size_t count = std::min(kLanes, Index(lanes_) - first);
+    if (count == kLanes) {  // straight into losses
+      for (std::size_t at = 0; at < kLanes; at += W) {
+        LossLanes<W>(blocks_[b], at, constrained, losses + first);
+      }
+      continue;
+    }
+    double out[kLanes];  // the last block's padding lanes have no place in losses
+    for (std::size_t at = 0; at < kLanes; at += W) LossLanes<W>(blocks_[b], at, constrained, out);
+    for (std::size_t l = 0; l < count; ++l) losses[first + l] = out[l];
+  }
+}
+
+template <int N>
+template <int W>
+inline void RlsBank<N>::LossLanes(const Block& s, std::size_t at, int constrained,
+                                  double* out) const {
+  // ResidualLosses' arithmetic on lanes at..at+W-1, CovarianceDiagonal's sum in its order.
+  using Lanes = typename LaneVectors<W>::Lanes;
+  using Mask = typename LaneVectors<W>::Mask;
+  Lanes loss = At<Lanes>(s.ssr, at);
+  if (constrained >= 0) {
+    const Lanes zero{};
+    const auto ii = static_cast<std::size_t>(constrained);
+    Lanes pii = zero;
+    pii += At<Lanes>(s.d[ii], at);  // u_ii = 1
+#pragma GCC unroll 16
+    for (std::size_t j = 1; j < kN; ++j) {
+      if (j <= ii) continue;
+      const Lanes u = At<Lanes>(s.u[Upper(ii, j)], at);
+      pii += u * u * At<Lanes>(s.d[j], at);
+    }
+    const Lanes t = At<Lanes>(s.theta[ii], at);
+    Mask penalised = (t < zero) & (pii > zero);
+    Hide(penalised);
+    Assign(penalised, loss + t * t / pii, loss);
+  }
+  __builtin_memcpy(out + at, &loss, sizeof(Lanes));
+}
+
+template <int N>
 void RlsBank<N>::Update(double y) {
   if (!soa_) {
     for (int l = 0; l < lanes_; ++l) {
@@ -366,7 +465,6 @@ void RlsBank<N>::Update(double y) {
       for (std::size_t l = 0; l < kLanes; ++l) {
         s.rejected_invalid[l] += 1.0;
         s.outcome[l] = static_cast<double>(RlsOutcome::kRejectedInvalid);
-        s.result_error[l] = std::numeric_limits<double>::quiet_NaN();
       }
     }
     return;
@@ -467,6 +565,7 @@ inline void RlsBank<N>::UpdateLanes(Block& s, std::size_t at, int first_lane, do
   // Bierman's measurement update (Rls::UpdateUdFactors) into new U, D and the gain numerator
   // k = P phi.  For directional forgetting's gain-only lanes Rls sums U g as
   // 0 + 1 g_i + sum_{j > i} u_ij g_j: the accumulator k holds the same sums in the same order.
+  const bool divide_d = exponential && lambda != 1.0;  // D / lambda (exponential forgetting)
   Lanes alpha[kN], inv_alpha[kN];
   Lanes running = measurement;
 #pragma GCC unroll 16
@@ -491,14 +590,35 @@ inline void RlsBank<N>::UpdateLanes(Block& s, std::size_t at, int first_lane, do
     alpha_prev = alpha[j];
     inv_prev = inv_alpha[j];
   }
+  if (AllSet(factors)) {
+    // Every lane takes Bierman's update (the usual sample): what the selects below give then,
+    // without them.
+#pragma GCC unroll 16
+    for (std::size_t i = 0; i < kN; ++i) At<Lanes>(s.theta[i], at) += k[i] * step;
+#pragma GCC unroll 16
+    for (std::size_t j = 0; j < kN; ++j) {
+      At<Lanes>(s.d[j], at) = divide_d ? nd[j] / (zero + lambda) : nd[j];
+#pragma GCC unroll 16
+      for (std::size_t i = 0; i < j; ++i) At<Lanes>(s.u[Upper(i, j)], at) = nu[i][j];
+    }
+    const Lanes nf = (zero + noise_forgetting_);
+    At<Lanes>(s.ssr, at) = nf * At<Lanes>(s.ssr, at) + e * e / scale;
+    At<Lanes>(s.weight, at) = nf * At<Lanes>(s.weight, at) + one;
+    At<Lanes>(s.updates, at) += one;
+    At<Lanes>(s.last_error, at) = e;
+    At<Lanes>(s.excitation, at) = r;
+    At<Lanes>(s.norm2, at) = norm2;
+    At<Lanes>(s.frozen, at) = zero;
+    At<Lanes>(s.outcome, at) = zero + static_cast<double>(RlsOutcome::kUpdated);
+    return;
+  }
   // theta, U and D of the lanes that update; the noise sums and bookkeeping of the valid ones.
 #pragma GCC unroll 16
   for (std::size_t i = 0; i < kN; ++i)
     Assign(apply, At<Lanes>(s.theta[i], at) + k[i] * step, At<Lanes>(s.theta[i], at));
-  const bool divide = exponential && lambda != 1.0;
 #pragma GCC unroll 16
   for (std::size_t j = 0; j < kN; ++j) {
-    Assign(factors, divide ? nd[j] / (zero + lambda) : nd[j], At<Lanes>(s.d[j], at));
+    Assign(factors, divide_d ? nd[j] / (zero + lambda) : nd[j], At<Lanes>(s.d[j], at));
 #pragma GCC unroll 16
     for (std::size_t i = 0; i < j; ++i) Assign(factors, nu[i][j], At<Lanes>(s.u[Upper(i, j)], at));
   }
@@ -507,7 +627,6 @@ inline void RlsBank<N>::UpdateLanes(Block& s, std::size_t at, int first_lane, do
   Assign(valid, nf * At<Lanes>(s.weight, at) + one, At<Lanes>(s.weight, at));
   // Counts: + 1 where the mask is set.
   const Mask invalid = ~valid;
-  CountWhere(valid, At<Lanes>(s.accepted, at));
   CountWhere(invalid, At<Lanes>(s.rejected_invalid, at));
   CountWhere(apply, At<Lanes>(s.updates, at));
   CountWhere(frozen, At<Lanes>(s.frozen_count, at));
@@ -522,9 +641,6 @@ inline void RlsBank<N>::UpdateLanes(Block& s, std::size_t at, int first_lane, do
   Assign(frozen, zero + static_cast<double>(RlsOutcome::kFrozen), outcome);
   Assign(apply, zero + static_cast<double>(RlsOutcome::kUpdated), outcome);
   At<Lanes>(s.outcome, at) = outcome;
-  Lanes result_error = zero + std::numeric_limits<double>::quiet_NaN();
-  Assign(valid, e, result_error);
-  At<Lanes>(s.result_error, at) = result_error;
 }
 
 template <int N>

@@ -1,4 +1,5 @@
-// RlsBank against separate Rls<N> estimators fed the same samples: every lane bit for bit.
+// RlsBank against separate Rls<N> estimators fed the same samples: every lane bit for bit, and
+// the losses a bank's selector compares.
 #include "core/online/rls_bank.h"
 
 #include <gtest/gtest.h>
@@ -111,6 +112,8 @@ void RunAgainstSeparateEstimators(int lanes, RlsBankIsa isa) {
       input[k] = (k / 7) % 2 == 0 ? 1.0 : -1.0;
       if (k > 900 && k < 1100) input[k] = 0.3;  // no excitation
     }
+    std::vector<double> losses(static_cast<std::size_t>(lanes));
+    int penalised = 0;
     for (int k = 40; k < 1500; ++k) {
       const double y = 0.8 * input[static_cast<std::size_t>(k - 5)] + 0.1 + noise(rng);
       const bool absurd_output = k == 300;
@@ -138,10 +141,29 @@ void RunAgainstSeparateEstimators(int lanes, RlsBankIsa isa) {
           ASSERT_EQ(bank.result(l).prediction_error, want.prediction_error) << variant.name;
         }
       }
+      // The losses, each parameter constrained >= 0 in turn (and none), from the reference's
+      // residual sum of squares and P_ii: what the selector of a bank compares.
+      const int constrained = k % (N + 1) - 1;
+      bank.ResidualLosses(constrained, losses);
+      for (int l = 0; l < lanes; ++l) {
+        const Rls<N>& ref = reference[static_cast<std::size_t>(l)];
+        double want = ref.residual_sum_of_squares();
+        if (constrained >= 0 && ref.theta()(constrained) < 0.0) {
+          const double t = ref.theta()(constrained);
+          const double pii = ref.CovarianceDiagonal(constrained);
+          if (pii > 0.0) {
+            want = want + t * t / pii;
+            ++penalised;
+          }
+        }
+        ASSERT_EQ(losses[static_cast<std::size_t>(l)], want)
+            << variant.name << " k " << k << " lane " << l << " constrained " << constrained;
+      }
       if (k % 97 == 0 || k == 1499) {
         ExpectLanesEqual<N>(bank, reference, variant.name + " at k = " + std::to_string(k));
       }
     }
+    EXPECT_GT(penalised, 0) << variant.name << ": no lane's loss was that of a constrained fit";
   }
 }
 
