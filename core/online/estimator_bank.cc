@@ -1,6 +1,7 @@
 #include "core/online/estimator_bank.h"
 
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -53,19 +54,45 @@ void BankSelector::Record(int i, double prediction_error) {
                 (1.0 - options_.loss_forgetting) * prediction_error * prediction_error;
 }
 
+int BankSelector::FirstSmallest() const {
+  // Without a branch per candidate (losses close to each other make such branches
+  // unpredictable: they cost more than the comparisons), and in four chains of comparisons
+  // (candidates i = c mod 4) rather than one: each chain's first smallest, then the smallest of
+  // those, the first on a tie.  A NaN compares false, so it is never smallest; nor is an infinity.
+  constexpr double kInfinity = std::numeric_limits<double>::infinity();
+  const std::size_t n = loss_.size();
+  struct Chain {
+    std::size_t best;
+    double loss = kInfinity;
+    void Take(double l, std::size_t i) {
+      const bool less = (l < loss) & (l > -kInfinity);
+      best = less ? i : best;
+      loss = less ? l : loss;
+    }
+  };
+  Chain c0{n}, c1{n}, c2{n}, c3{n};  // best = n: none yet
+  const double* l = loss_.data();
+  std::size_t i = 0;
+  for (; i + 4 <= n; i += 4) {
+    c0.Take(l[i], i);
+    c1.Take(l[i + 1], i + 1);
+    c2.Take(l[i + 2], i + 2);
+    c3.Take(l[i + 3], i + 3);
+  }
+  if (i < n) c0.Take(l[i], i);
+  if (i + 1 < n) c1.Take(l[i + 1], i + 1);
+  if (i + 2 < n) c2.Take(l[i + 2], i + 2);
+  Chain best = c0;
+  for (const Chain& c : {c1, c2, c3}) {
+    if (c.loss < best.loss || (c.loss == best.loss && c.best < best.best)) best = c;
+  }
+  return best.best == n ? 0 : static_cast<int>(best.best);
+}
+
 int BankSelector::Commit() {
   ++samples_;
   if (samples_ <= options_.warmup_samples) return selected_;
-  // The first smallest loss, without a branch per candidate (losses close to each other make
-  // such branches unpredictable: they cost more than the comparisons).
-  int best = 0;
-  double best_loss = loss_[0];
-  for (int i = 1; i < num_candidates(); ++i) {
-    const double l = loss_[static_cast<std::size_t>(i)];
-    const bool less = l < best_loss;
-    best = less ? i : best;
-    best_loss = less ? l : best_loss;
-  }
+  const int best = FirstSmallest();
   if (options_.criterion == BankCriterion::kResidual) {
     if (!std::isfinite(loss(best))) return selected_;  // no candidate has a loss yet
     if (selected_ >= 0 && best != selected_) ++switches_;

@@ -1,7 +1,9 @@
 #pragma once
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <span>
 #include <vector>
 
 namespace canalid::core {
@@ -57,23 +59,32 @@ class BankSelector final {
   void Record(int i, double prediction_error);
   /// kResidual: candidate i's loss after the current sample (non-finite: the candidate is not
   /// chosen until its loss is finite again; while no loss is finite the choice stays as it was).
-  void SetLoss(int i, double loss) {
-    loss_[static_cast<std::size_t>(i)] =
-        std::isfinite(loss) ? loss : std::numeric_limits<double>::infinity();
+  void SetLoss(int i, double loss) { loss_[static_cast<std::size_t>(i)] = loss; }
+  /// kResidual: SetLoss(i, losses[i]) for every candidate.  @pre losses.size() >= num_candidates().
+  void SetLosses(std::span<const double> losses) {
+    std::copy_n(losses.begin(), loss_.size(), loss_.begin());
   }
   /// Closes the sample: updates the choice.  Returns the selected index (-1 during the warm-up).
   int Commit();
 
   int selected() const { return selected_; }
   BankCriterion criterion() const { return options_.criterion; }
-  double loss(int i) const { return loss_[static_cast<std::size_t>(i)]; }
+  /// Candidate i's loss (infinity where it is not finite).
+  double loss(int i) const {
+    const double l = loss_[static_cast<std::size_t>(i)];
+    return std::isfinite(l) ? l : std::numeric_limits<double>::infinity();
+  }
   int num_candidates() const { return static_cast<int>(loss_.size()); }
   int switches() const { return switches_; }
   void Reset();
 
  private:
+  /// The first candidate of smallest loss (non-finite losses never smallest; 0 when none is
+  /// finite).
+  int FirstSmallest() const;
+
   BankSelectorOptions options_;
-  std::vector<double> loss_;
+  std::vector<double> loss_;  // as given: non-finite ones too
   int samples_ = 0;
   int selected_ = -1;
   int challenger_ = -1;

@@ -138,8 +138,16 @@ OnlineIntegratorDelayBank::OnlineIntegratorDelayBank(const OnlineIntegratorDelay
   iv_active_ = options_.closed_loop != ClosedLoopMode::kOff;
   health_.closed_loop = options_.closed_loop == ClosedLoopMode::kOn || three_step_active_;
   health_.closed_loop_decided = options_.closed_loop != ClosedLoopMode::kAuto;
-  if (ls_active_ && options_.wave_front_term) wave_estimators_.emplace(options_.rls, n);
-  if (ls_active_ && !options_.wave_front_term) estimators_.emplace(options_.rls, n);
+  // The offset's regressor, 1, is set once (UpdateCandidates writes the other rows).
+  if (ls_active_ && options_.wave_front_term) {
+    wave_estimators_.emplace(options_.rls, n);
+    wave_estimators_->regressors().row(2).head(n).setOnes();
+  }
+  if (ls_active_ && !options_.wave_front_term) {
+    estimators_.emplace(options_.rls, n);
+    estimators_->regressors().row(1).head(n).setOnes();
+  }
+  losses_.assign(un, 0.0);
   constrained_error_.assign(un, 0.0);
   constrained_.assign(un, 0);
   if (iv_active_ && options_.wave_front_term) {
@@ -190,11 +198,12 @@ bool OnlineIntegratorDelayBank::Update(double q_in_m3s, double q_out_m3s, double
   if (k_ >= k0_) {
     const double t = static_cast<double>(k_ - k0_);
     if (recentre_period_ > 0 && t - t_centre_ >= recentre_period_) Recentre();
-    for (int i = 0; i < num_candidates(); ++i) {
-      const auto ui = static_cast<std::size_t>(i);
-      const double delayed_inflow = q_in_history_[options_.min_delay_samples + i];
-      q_integrated_[ui] += delayed_inflow - q_out_previous_;
-      qin_integrated_[ui] += delayed_inflow - q_ref_;
+    // The candidates' delayed inflows q_in(k - nk), nk = min..max, side by side.
+    const double* delayed_inflow = q_in_history_.Lags() + options_.min_delay_samples;
+    const Eigen::Map<const Eigen::ArrayXd> delayed(delayed_inflow, num_candidates());
+    Eigen::Map<Eigen::ArrayXd>(q_integrated_.data(), num_candidates()) += delayed - q_out_previous_;
+    if (iv_active_) {  // the instrument; once the IV bank stops it is never read again
+      Eigen::Map<Eigen::ArrayXd>(qin_integrated_.data(), num_candidates()) += delayed - q_ref_;
     }
     const bool level_ok = FiniteWithin(level_m, options_.level_abs_max_m);
     if (!level_ok) ++health_.bad_level_samples;
@@ -202,7 +211,7 @@ bool OnlineIntegratorDelayBank::Update(double q_in_m3s, double q_out_m3s, double
     if (three_step_active_) {
       // Runs on bad levels too: its flow integrators must stay continuous.
       for (int i = 0; i < num_candidates(); ++i) {
-        const double u = q_in_history_[options_.min_delay_samples + i];
+        const double u = delayed_inflow[i];
         three_step_[static_cast<std::size_t>(i)].Update(u, u - q_out_previous_, y_fit, level_ok);
       }
     }
@@ -270,23 +279,22 @@ void OnlineIntegratorDelayBank::UpdateIvCandidates(std::vector<IvRls<N>>& estima
 
 template <int N>
 void OnlineIntegratorDelayBank::UpdateCandidates(RlsBank<N>& estimators, double t, double level_m) {
+  // The regressors row by row, each row a run over the candidates (the offset's, 1, is set in
+  // the constructor).
   typename RlsBank<N>::Regressors& phi = estimators.regressors();
-  for (int i = 0; i < num_candidates(); ++i) {
-    const auto ui = static_cast<std::size_t>(i);
-    const int nk = options_.min_delay_samples + i;
-    phi(0, i) = q_integrated_[ui] - q_centre_[ui];
-    if constexpr (N == 4) {
-      phi(1, i) = q_in_history_[nk];
-      phi(2, i) = 1.0;
-      phi(3, i) = t - t_centre_;
-    } else {
-      phi(1, i) = 1.0;
-      phi(2, i) = t - t_centre_;
-    }
+  const int n = num_candidates();
+  using Row = Eigen::Map<const Eigen::RowVectorXd>;
+  phi.row(0).head(n) = Row(q_integrated_.data(), n) - Row(q_centre_.data(), n);
+  if constexpr (N == 4) {
+    phi.row(1).head(n) = Row(q_in_history_.Lags() + options_.min_delay_samples, n);
   }
+  phi.row(N - 1).head(n).setConstant(t - t_centre_);
   if (selector_.criterion() == BankCriterion::kResidual) {
     estimators.Update(level_m);
-    for (int i = 0; i < num_candidates(); ++i) selector_.SetLoss(i, ResidualLoss<N>(estimators, i));
+    // The snapshot reports the p21 = 0 fit when p21 < 0 (wave_front_non_negative): its loss is
+    // that of the equality-constrained least squares.
+    estimators.ResidualLosses(N == 4 && options_.wave_front_non_negative ? 1 : -1, losses_);
+    selector_.SetLosses(losses_);
     return;
   }
   // The selector sees the error of the estimate the snapshot reports (p21 >= 0): for a candidate
@@ -309,21 +317,6 @@ void OnlineIntegratorDelayBank::UpdateCandidates(RlsBank<N>& estimators, double 
     selector_.Record(
         i, constrained_[ui] != 0 && std::isfinite(error) ? constrained_error_[ui] : error);
   }
-}
-
-template <int N>
-double OnlineIntegratorDelayBank::ResidualLoss(const RlsBank<N>& bank, int candidate) const {
-  const double loss = bank.residual_sum_of_squares(candidate);
-  if constexpr (N == 4) {
-    // The snapshot reports the p21 = 0 fit when p21 < 0: its residual sum of squares is the free
-    // fit's plus p21^2 / P22 (the equality-constrained least squares, P relative to sigma2).
-    const double p21 = bank.theta(candidate, 1);
-    if (options_.wave_front_non_negative && p21 < 0.0) {
-      const double p21_variance = bank.CovarianceDiagonal(candidate, 1);
-      return p21_variance > 0.0 ? loss + p21 * p21 / p21_variance : loss;
-    }
-  }
-  return loss;
 }
 
 template <int N>

@@ -7,7 +7,7 @@
 
 #include "core/integrator_delay/closed_loop_detector.h"
 #include "core/integrator_delay/integrator_delay_model.h"
-#include "core/numerics/ring_buffer.h"
+#include "core/numerics/lag_line.h"
 #include "core/online/estimator_bank.h"
 #include "core/online/online_three_step.h"
 #include "core/online/rls.h"
@@ -257,9 +257,6 @@ class OnlineIntegratorDelayBank final {
   void UpdateIvCandidates(std::vector<IvRls<N>>& estimators, double t, double level_m);
   template <int N>
   static Eigen::Matrix<double, N, N> CentreShift(double dq, double dt);
-  /// The candidate's least-squares loss as the kResidual selector compares it.
-  template <int N>
-  double ResidualLoss(const RlsBank<N>& bank, int candidate) const;
   /// theta with p21 >= 0 (wave_front_non_negative): theta itself, or the estimate constrained
   /// to p21 = 0 through the gain g (P or the IV gain).
   template <int N>
@@ -296,7 +293,8 @@ class OnlineIntegratorDelayBank final {
   bool iv_active_ = false;
   bool three_step_active_ = false;
   double q_ref_ = 0.0;
-  RingBuffer<double> q_in_history_;
+  LagLine q_in_history_;        // lag nk: the inflow nk samples ago
+  std::vector<double> losses_;  // kResidual: the candidates' losses of the current sample
   double q_in_good_ = 0.0;
   double q_out_good_ = 0.0;
   double q_out_previous_ = 0.0;

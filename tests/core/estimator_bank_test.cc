@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstdint>
 #include <limits>
 #include <stdexcept>
 
@@ -46,6 +48,33 @@ TEST(BankSelector, ResidualNeverChoosesANonFiniteLoss) {
   fresh.SetLoss(0, std::numeric_limits<double>::infinity());
   fresh.SetLoss(1, std::numeric_limits<double>::quiet_NaN());
   EXPECT_EQ(fresh.Commit(), -1);
+}
+
+// The choice is the first smallest finite loss, for every bank size (whole chains of four and
+// the rest), with ties, NaNs and infinities of both signs among the losses.  The reference is the
+// plain one-pass search.
+TEST(BankSelector, ResidualChoosesTheFirstSmallestFiniteLossAtEverySize) {
+  const double inf = std::numeric_limits<double>::infinity();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double pool[] = {3.0, 1.0, 2.0, 1.0, nan, inf, -inf, 0.5, 0.5, 7.0};
+  std::uint64_t state = 12345;
+  for (int n = 1; n <= 13; ++n) {
+    for (int trial = 0; trial < 200; ++trial) {
+      BankSelector s(n, Residual(0));
+      int expected = -1;
+      double smallest = inf;
+      for (int i = 0; i < n; ++i) {
+        state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+        const double l = pool[(state >> 33) % 10];
+        s.SetLoss(i, l);
+        if (std::isfinite(l) && l < smallest) {
+          smallest = l;
+          expected = i;
+        }
+      }
+      EXPECT_EQ(s.Commit(), expected) << "n " << n << " trial " << trial;
+    }
+  }
 }
 
 // kPredictionError: a challenger must beat the selected candidate by the margin on
