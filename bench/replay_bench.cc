@@ -3,7 +3,7 @@
 // and run through the daemon's per-reach code (ReplaySession), as `canalid replay` does.  The log
 // holds `samples` polls of 6 channels whose flows and level follow canalsim's PRBS record of pool 2
 // (tests/data/sim), repeated.  Reported: samples per second through the whole path (read, decode,
-// pipeline), and the read-and-decode part alone.
+// pipeline), the same without the online bank, and the read-and-decode part alone.
 #include <benchmark/benchmark.h>
 #include <lcm/lcm-cpp.hpp>
 
@@ -96,15 +96,25 @@ std::string MakeLog(std::int64_t samples) {
 }
 
 // range(1): the online bank's longest delay, s (the config's is 1400 s: 24 delays of 60 s);
-// another value replays with the config changed to it (--config).
+// another value replays with the config changed to it (--config); 0 replays without the online
+// bank (`online_models = []`): the rest of the replay, what the bank's cost is compared with.
 void BM_ReplayThroughput(benchmark::State& state) {
   const std::string log = MakeLog(state.range(0));
   std::optional<canalid::config::DaemonConfig> config;
   if (state.range(1) != 1400) {
     std::string text =
         ReadText(std::string(CANALID_BENCH_SOURCE_DIR) + "/config/canalidd-asce2.toml");
-    const std::string key = "max_delay_s = 1400.0";
-    text.replace(text.find(key), key.size(), "max_delay_s = " + std::to_string(state.range(1)));
+    const std::string key =
+        state.range(1) == 0 ? "online_models = [\"id\"]" : "max_delay_s = 1400.0";
+    const std::string value = state.range(1) == 0
+                                  ? std::string("online_models = []")
+                                  : "max_delay_s = " + std::to_string(state.range(1));
+    const std::size_t at = text.find(key);
+    if (at == std::string::npos) {
+      state.SkipWithError(("config/canalidd-asce2.toml has no `" + key + "`").c_str());
+      return;
+    }
+    text.replace(at, key.size(), value);
     config = canalid::daemon::ParseDaemonConfig(text, "bench");
   }
   std::int64_t samples = 0;
@@ -125,6 +135,7 @@ void BM_ReplayThroughput(benchmark::State& state) {
 BENCHMARK(BM_ReplayThroughput)
     ->Args({200000, 1400})
     ->Args({200000, 600})
+    ->Args({200000, 0})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
