@@ -87,6 +87,42 @@ double LowFrequencyOutflowGain(const LinearisedReach& up, double up_length,
   return x.partialPivLu().solve(p)(1);
 }
 
+// trace(M(s)) of TransferMatrix: (2 V T s + delta)/W.
+double TransferTrace(const LinearisedReach& r, double s) {
+  const double w =
+      (r.celerity_m_s * r.celerity_m_s - r.velocity_m_s * r.velocity_m_s) * r.top_width_m;
+  return (2.0 * r.velocity_m_s * r.top_width_m * s + r.delta) / w;
+}
+
+// p21(s) = y(L)/q(0) with q(L) = 0 over the parts in series (upstream part first).
+double InflowResponse(const LinearisedReach& up, double up_length, const LinearisedReach& down,
+                      double down_length, double s) {
+  Eigen::Matrix2cd phi = TransferMatrix(down, s, down_length);
+  // det exp(M L) = exp(trace(M) L), exactly: the product of the entries would cancel.
+  double log_det = TransferTrace(down, s) * down_length;
+  if (up_length > 0.0) {
+    phi = phi * TransferMatrix(up, s, up_length);
+    log_det += TransferTrace(up, s) * up_length;
+  }
+  return (-std::exp(log_det) / phi(0, 1)).real();
+}
+
+// The delay tau of p21(s) = 1/(A s) - tau/A + e s + O(s^2) at low frequencies, from three real
+// frequencies far below 1/delay (solved exactly for 1/A, -tau/A and e).
+double LowFrequencyInflowDelay(const LinearisedReach& up, double up_length,
+                               const LinearisedReach& down, double down_length, double delay_s) {
+  const double e = 1e-4 / delay_s;
+  Eigen::Matrix3d x;
+  Eigen::Vector3d p;
+  for (int i = 0; i < 3; ++i) {
+    const double s = e * (i + 1);
+    x.row(i) << 1.0 / s, 1.0, s;
+    p(i) = InflowResponse(up, up_length, down, down_length, s);
+  }
+  const Eigen::Vector3d k = x.partialPivLu().solve(p);
+  return -k(1) / k(0);
+}
+
 void CheckPositive(const char* name, double value) {
   if (!std::isfinite(value) || !(value > 0.0)) {
     std::ostringstream os;
@@ -155,6 +191,9 @@ IdzTheory IdzFromGeometry(const PoolGeometry& pool, double flow_m3s) {
   // One part (the pool's only one) or the two in series.
   const bool two_parts = uniform > 0.0 && backwater > 0.0;
   theory.outflow_gain_low_frequency_s_per_m2 = LowFrequencyOutflowGain(
+      up_reach, two_parts ? uniform : 0.0, backwater > 0.0 ? down_reach : up_reach,
+      backwater > 0.0 ? backwater : uniform, m.delay_s);
+  theory.delay_low_frequency_s = LowFrequencyInflowDelay(
       up_reach, two_parts ? uniform : 0.0, backwater > 0.0 ? down_reach : up_reach,
       backwater > 0.0 ? backwater : uniform, m.delay_s);
   return theory;

@@ -30,6 +30,13 @@ struct IdzTheory {
   /// pool 2 at 10 m3/s: 0.0133 against 0.0216) and is the one that a level-driven outflow, slow
   /// beside the delay, couples into the level: the prior of closed-loop identification.
   double outflow_gain_low_frequency_s_per_m2 = 0.0;
+  /// The inflow's delay at low frequencies (s): tau of p21(s) = 1/(A s) - tau/A + O(s) as s -> 0
+  /// (outflow held), from the linearised equations over the same two parts.  It is where the
+  /// integrator's ramp starts, the delay a record shows when the wave front (p21) is too small to
+  /// see: on a diffusive pool it is later than the front's arrival, the model's delay (ASCE canal 1
+  /// pools 5-8: 1.38-1.40 x), and on a backwater pool with a large front earlier (canal 2 pool 2:
+  /// 115 s against 682 s, the front p21 carrying the early response).
+  double delay_low_frequency_s = 0.0;
 };
 
 /// The IDZ model of a pool at a steady flow, by the analytical approximation of the Saint-Venant

@@ -182,7 +182,8 @@ IdzFit FitIdz(const Eigen::Ref<const Eigen::VectorXd>& q_in,
   } else {
     fit.warnings.push_back(
         "p21 came out negative and is held at 0: no wave front reaches the level as a jump (a "
-        "diffusive pool)");
+        "diffusive pool); the delay is where the level's ramp starts, later than the front's "
+        "arrival (canalid theory's delay_low_frequency_s against its delay_s)");
   }
   fit.offset_m = theta(active.Column(2));
   fit.drift_m_per_sample = theta(active.Column(3));

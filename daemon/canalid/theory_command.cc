@@ -45,6 +45,7 @@ nlohmann::json ToJson(const PoolResult& p) {
   json["p21_s_per_m2"] = m.p21_s_per_m2;
   json["p22_s_per_m2"] = m.p22_s_per_m2;
   json["p22_low_frequency_s_per_m2"] = p.theory.outflow_gain_low_frequency_s_per_m2;
+  json["delay_low_frequency_s"] = p.theory.delay_low_frequency_s;
   json["upstream_delay_s"] = m.upstream_delay_s;
   json["upstream_area_m2"] = m.upstream_area_m2;
   json["p11_s_per_m2"] = m.p11_s_per_m2;

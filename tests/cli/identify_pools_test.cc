@@ -23,9 +23,11 @@ struct PoolCase {
   int pool;
   double idz_delay_s;  // high regime, asce_idz_litrico_fromion_2004.csv
   double idz_area_m2;
-  double max_delay_ratio = 1.2;       // ID delay / IDZ delay
-  double idz_p21 = 0.0;               // the table's p21; 0: p21 not checked (see the canal 1 cases)
-  double max_idz_delay_ratio = 1.15;  // --model idz delay / IDZ delay
+  double max_delay_ratio = 1.2;  // ID delay / IDZ delay
+  double idz_p21 = 0.0;          // the table's p21; 0: p21 not checked (see the canal 1 cases)
+  // A diffusive pool: its wave front is too small to see, so a record shows the low-frequency
+  // delay (canalid theory's delay_low_frequency_s), which the IDZ fit is checked against.
+  bool diffusive = false;
 };
 
 std::string CaseName(const ::testing::TestParamInfo<PoolCase>& info) {
@@ -83,14 +85,30 @@ TEST_P(IdentifyPools, PrbsAreaWithinFifteenPercentOfIdz) {
   const auto z = nlohmann::json::parse(idz.out);
   const double z_area = z["area_m2"].get<double>(), z_delay = z["delay_s"].get<double>();
   EXPECT_NEAR(z_area, c.idz_area_m2, 0.10 * c.idz_area_m2) << z.dump();
-  EXPECT_GE(z_delay, 0.85 * c.idz_delay_s) << z.dump();
-  EXPECT_LE(z_delay, c.max_idz_delay_ratio * c.idz_delay_s) << z.dump();
+  double low_frequency_delay = 0.0;
+  if (!c.diffusive) {
+    EXPECT_NEAR(z_delay, c.idz_delay_s, 0.15 * c.idz_delay_s) << z.dump();
+  } else {
+    const ProgramRun theory =
+        RunProgram(CanalidProgram() + " theory --canal " + source + "/config/sim/asce-canal" +
+                       std::to_string(c.canal) + ".toml --pool " + std::to_string(c.pool),
+                   dir);
+    ASSERT_EQ(theory.exit_code, 0) << theory.err;
+    const auto t = nlohmann::json::parse(theory.out);
+    low_frequency_delay = t["delay_low_frequency_s"].get<double>();
+    // The front the table's delay describes is not in the record; the ramp's start is, within
+    // 5 % of where the linearised equations put it (measured -2.5 to +0.5 %).
+    EXPECT_NEAR(z_delay, low_frequency_delay, 0.05 * low_frequency_delay) << z.dump();
+    EXPECT_GT(z_delay, 1.15 * c.idz_delay_s) << "the diffusive case is no longer needed";
+  }
   if (c.idz_p21 > 0.0) {
     EXPECT_NEAR(z["p21_s_per_m2"].get<double>(), c.idz_p21, 0.30 * c.idz_p21) << z.dump();
   }
-  std::printf("canal %d pool %d idz: area %+.1f %%, delay %.2f x, p21 %.4g (table %.4g)\n", c.canal,
-              c.pool, 100.0 * (z_area / c.idz_area_m2 - 1.0), z_delay / c.idz_delay_s,
-              z["p21_s_per_m2"].get<double>(), c.idz_p21);
+  std::printf(
+      "canal %d pool %d idz: area %+.1f %%, delay %.2f x (low-frequency delay %.0f s), p21 %.4g "
+      "(table %.4g)\n",
+      c.canal, c.pool, 100.0 * (z_area / c.idz_area_m2 - 1.0), z_delay / c.idz_delay_s,
+      low_frequency_delay, z["p21_s_per_m2"].get<double>(), c.idz_p21);
 }
 
 INSTANTIATE_TEST_SUITE_P(AsceHighRegime, IdentifyPools,
@@ -113,19 +131,23 @@ INSTANTIATE_TEST_SUITE_P(AsceHighRegime, IdentifyPools,
 // of 0.0007-0.002 s/m2) a flow change travels as a diffusive wave, and the integrator-delay fit
 // puts its delay where the late level ramp starts, 1.35-1.41 x the front's arrival (which the
 // wave-arrival test in tests/sim/saint_venant_test.cc finds within 2 % of the IDZ delay).
-// The IDZ fit does the same on pools 5-8 (measured 1.37-1.41 x) and on pool 2 (1.16 x): the
-// issue's 15 % is not met there. Its p21 is not checked on canal 1: the table's 0.0007-0.05 s/m2
-// fronts are diffusive and the fit holds p21 at 0 (its constraint) on pools 2, 4, 5, 6 and 8.
-// Its area is within 9 % on every pool.
+// The IDZ fit does the same on pools 5-8 (measured 1.37-1.41 x) and on pool 2 (1.16 x): by the
+// table's p21 their fronts move the level by 0.01-0.75 mm at a PRBS switch, against the 3.5-6 mm
+// the ramp adds over one clock, so a least-squares fit is set by the ramp, whose start is the
+// low-frequency delay: 1.19 (pool 2) and 1.38-1.40 x (pools 5-8) the front's by the linearised
+// equations (idz_theory_profile_test checks that figure on the true profile).
+// Those pools are `diffusive`: the 15 % against the table's delay cannot be met by a fit
+// of the record. Its p21 is not checked on canal 1: the fronts are diffusive and the fit holds p21
+// at 0 (its constraint) on pools 2, 4, 5, 6 and 8. Its area is within 9 % on every pool.
 INSTANTIATE_TEST_SUITE_P(AsceCanal1HighRegime, IdentifyPools,
                          ::testing::Values(PoolCase{1, 1, 29.6, 331.2, 1.5},
-                                           PoolCase{1, 2, 337.4, 575.9, 1.5, 0.0, 1.2},
+                                           PoolCase{1, 2, 337.4, 575.9, 1.5, 0.0, true},
                                            PoolCase{1, 3, 117.0, 436.3, 1.5},
                                            PoolCase{1, 4, 238.2, 575.8, 1.5},
-                                           PoolCase{1, 5, 610.8, 620.8, 1.5, 0.0, 1.45},
-                                           PoolCase{1, 6, 541.3, 496.2, 1.5, 0.0, 1.45},
-                                           PoolCase{1, 7, 531.0, 467.6, 1.5, 0.0, 1.45},
-                                           PoolCase{1, 8, 603.5, 518.8, 1.5, 0.0, 1.45}),
+                                           PoolCase{1, 5, 610.8, 620.8, 1.5, 0.0, true},
+                                           PoolCase{1, 6, 541.3, 496.2, 1.5, 0.0, true},
+                                           PoolCase{1, 7, 531.0, 467.6, 1.5, 0.0, true},
+                                           PoolCase{1, 8, 603.5, 518.8, 1.5, 0.0, true}),
                          CaseName);
 
 // The closed-loop issue's experiment that makes p22 identifiable: the same scenario with a second,

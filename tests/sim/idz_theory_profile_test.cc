@@ -62,7 +62,29 @@ TEST(IdzTheoryProfile, DelayIsTheWaveTravelTimeOnTheSimulatorsProfile) {
 struct LowFrequency {
   double area_m2;
   double outflow_gain_s_per_m2;
+  double inflow_delay_s;  // tau of p21(s) = 1/(A s) - tau/A + O(s), the outflow held
 };
+
+// k0 + k1 s + k2 s^2 (with its terms' own powers: `power` of each column) through three points,
+// by Gauss-Jordan: the matrix is well conditioned once scaled.
+struct ThreeTerms {
+  double k[3];
+};
+ThreeTerms FitThreeTerms(const double (&s)[3], const double (&value)[3], const int (&power)[3]) {
+  double m[3][4];
+  for (int i = 0; i < 3; ++i) {
+    for (int c = 0; c < 3; ++c) m[i][c] = std::pow(s[i], power[c]);
+    m[i][3] = value[i];
+  }
+  for (int c = 0; c < 3; ++c) {
+    for (int r = 0; r < 3; ++r) {
+      if (r == c) continue;
+      const double f = m[r][c] / m[c][c];
+      for (int k = 0; k < 4; ++k) m[r][k] -= f * m[c][k];
+    }
+  }
+  return ThreeTerms{{m[0][3] / m[0][0], m[1][3] / m[1][1], m[2][3] / m[2][2]}};
+}
 
 LowFrequency LinearisedAlongProfile(const Pool& pool, double flow, int cells, double delay_s) {
   const std::vector<double> depth = SteadyProfile(pool, flow, cells, pool.target_depth_m);
@@ -84,57 +106,63 @@ LowFrequency LinearisedAlongProfile(const Pool& pool, double flow, int cells, do
     *d0 = -t * s * qy1;
     *d1 = -((s + n_q) * qy0 + n_qx * (*d0) + n_y * qy1) / n_yx;
   };
-  auto p22 = [&](double s) {
-    // Two columns: start from q(0) = 0, y(0) = 1 (the response with no inflow).
-    double q = 0.0, y = 1.0;
-    for (int i = 0; i < cells; ++i) {
-      const double y0 = depth[static_cast<std::size_t>(i)];
-      const double y1 = depth[static_cast<std::size_t>(i) + 1];
-      const double slope = (y1 - y0) / dx;
+  // RK4 along the profile from one end to the other: [q(L); y(L)] from [q(0); y(0)], or back.
+  auto propagate = [&](double s, bool backwards, double* q, double* y) {
+    const double h = backwards ? -dx : dx;
+    for (int j = 0; j < cells; ++j) {
+      const int i = backwards ? cells - 1 - j : j;
+      const double ya = depth[static_cast<std::size_t>(i)];
+      const double yb = depth[static_cast<std::size_t>(i) + 1];
+      const double slope = (yb - ya) / dx;
+      const double y0 = backwards ? yb : ya, y1 = backwards ? ya : yb;
       const double ym = 0.5 * (y0 + y1);
       double k1q, k1y, k2q, k2y, k3q, k3y, k4q, k4y;
-      rate(y0, slope, s, q, y, &k1q, &k1y);
-      rate(ym, slope, s, q + 0.5 * dx * k1q, y + 0.5 * dx * k1y, &k2q, &k2y);
-      rate(ym, slope, s, q + 0.5 * dx * k2q, y + 0.5 * dx * k2y, &k3q, &k3y);
-      rate(y1, slope, s, q + dx * k3q, y + dx * k3y, &k4q, &k4y);
-      q += dx / 6 * (k1q + 2 * k2q + 2 * k3q + k4q);
-      y += dx / 6 * (k1y + 2 * k2y + 2 * k3y + k4y);
+      rate(y0, slope, s, *q, *y, &k1q, &k1y);
+      rate(ym, slope, s, *q + 0.5 * h * k1q, *y + 0.5 * h * k1y, &k2q, &k2y);
+      rate(ym, slope, s, *q + 0.5 * h * k2q, *y + 0.5 * h * k2y, &k3q, &k3y);
+      rate(y1, slope, s, *q + h * k3q, *y + h * k3y, &k4q, &k4y);
+      *q += h / 6 * (k1q + 2 * k2q + 2 * k3q + k4q);
+      *y += h / 6 * (k1y + 2 * k2y + 2 * k3y + k4y);
     }
-    return y / q;
   };
-  // p22(s) = -1/(A s) - c - e s at three low frequencies.
+  // At three low frequencies: p22(s) = y(L)/q(L) from q(0) = 0, y(0) = 1, and p21(s) = y(L)/q(0)
+  // from q(L) = 0, y(L) = 1 integrated back upstream (the mode that grows downstream in uniform
+  // flow then decays, instead of cancelling between two forward solutions).
   const double e = 1e-4 / delay_s;
-  double m[3][4];
+  double s[3], p21[3], p22[3];
   for (int i = 0; i < 3; ++i) {
-    const double s = e * (i + 1);
-    m[i][0] = -1.0 / s;
-    m[i][1] = -1.0;
-    m[i][2] = -s;
-    m[i][3] = p22(s);
+    s[i] = e * (i + 1);
+    double q = 0.0, y = 1.0;
+    propagate(s[i], false, &q, &y);
+    p22[i] = y / q;
+    q = 0.0;
+    y = 1.0;
+    propagate(s[i], true, &q, &y);
+    p21[i] = 1.0 / q;
   }
-  for (int c = 0; c < 3; ++c) {  // Gauss-Jordan, the matrix is well conditioned once scaled
-    for (int r = 0; r < 3; ++r) {
-      if (r == c) continue;
-      const double f = m[r][c] / m[c][c];
-      for (int k = 0; k < 4; ++k) m[r][k] -= f * m[c][k];
-    }
-  }
-  return LowFrequency{m[0][0] / m[0][3], m[1][3] / m[1][1]};
+  // p22(s) = -1/(A s) - c - e s and p21(s) = 1/(A s) - tau/A + e' s.
+  const ThreeTerms out = FitThreeTerms(s, p22, {-1, 0, 1});
+  const ThreeTerms in = FitThreeTerms(s, p21, {-1, 0, 1});
+  return LowFrequency{-1.0 / out.k[0], -out.k[1], -in.k[1] / in.k[0]};
 }
 
 // The theory's two-part profile is an approximation: on canal 2's long mild pools it is within
 // 2.6 % (area, pool 1) and 5 % (low-frequency p22) of the true profile's linearised equations; on
 // canal 1's short steep pools, whose backwater curve the straight line follows less well,
-// within 8.8 % and 12.6 % (pool 1). Those measured figures set the two tolerances.
+// within 8.8 % and 12.6 % (pool 1). The low-frequency delay is within 15.7 % of the pool's delay
+// on canal 2 (pool 1, 1004 against 1253 s) and 18 % on canal 1 (pool 1, where it is -27 against
+// -22 s of a 30 s delay); on canal 1's diffusive pools 2 and 5-8 within 3.4 %. Those measured
+// figures set the three tolerances.
 struct Tolerance {
   const char* file;
   double area;
   double gain;
+  double delay;  // of the IDZ delay
 };
 
 TEST(IdzTheoryProfile, LowFrequencyGainsMatchTheLinearisedEquationsOnTheTrueProfile) {
-  for (const Tolerance& tolerance : {Tolerance{"/config/sim/asce-canal1.toml", 0.10, 0.14},
-                                     Tolerance{"/config/sim/asce-canal2.toml", 0.03, 0.06}}) {
+  for (const Tolerance& tolerance : {Tolerance{"/config/sim/asce-canal1.toml", 0.10, 0.14, 0.2},
+                                     Tolerance{"/config/sim/asce-canal2.toml", 0.03, 0.06, 0.17}}) {
     const char* file = tolerance.file;
     const Canal canal = LoadCanal(std::string(CANALID_SOURCE_DIR) + file);
     const std::vector<double> flows = SteadyPoolFlows(canal);
@@ -145,11 +173,15 @@ TEST(IdzTheoryProfile, LowFrequencyGainsMatchTheLinearisedEquationsOnTheTrueProf
       std::cout << file << " pool " << pool.name << ": area " << theory.model.area_m2 << " vs "
                 << truth.area_m2 << ", low-frequency p22 "
                 << theory.outflow_gain_low_frequency_s_per_m2 << " vs "
-                << truth.outflow_gain_s_per_m2 << "\n";
+                << truth.outflow_gain_s_per_m2 << ", low-frequency delay "
+                << theory.delay_low_frequency_s << " vs " << truth.inflow_delay_s << " s\n";
       EXPECT_NEAR(theory.model.area_m2 / truth.area_m2, 1.0, tolerance.area)
           << file << " pool " << pool.name;
       EXPECT_NEAR(theory.outflow_gain_low_frequency_s_per_m2 / truth.outflow_gain_s_per_m2, 1.0,
                   tolerance.gain)
+          << file << " pool " << pool.name;
+      EXPECT_NEAR(theory.delay_low_frequency_s, truth.inflow_delay_s,
+                  tolerance.delay * theory.model.delay_s)
           << file << " pool " << pool.name;
     }
   }
