@@ -50,7 +50,7 @@ class FractionalFoptdPlant final : public SampledPlant {
 
 /// The integrator-delay level equation of `canalid identify --model id`
 /// (core/integrator_delay/integrator_delay_model.h), and with p22 the IDZ one of `--model idz`
-/// (core::IdzLevel):
+/// (core::IdzLevel, whose q_in(k - nk) term is (p21 - b): give that as p21):
 ///   Q(k) = Q(k-1) + q_in(k - nk) - q_out(k - 1),  Q(k0 - 1) = 0,
 ///   y(k) = b Q(k) + p21 q_in(k - nk) - p22 q_out(k) + c + d (k - k0),
 /// with inputs (q_in, q_out) in m^3/s and y in m.  The plant's sample 0 is the model's sample 0;

@@ -17,11 +17,19 @@ namespace {
 
 constexpr int kMinFitSamples = 20;
 
-// Regressors [Q, q_in(k - nk), 1, k - k0] and, when p22 is fitted, -q_out(k).
+// [Q - q_in(k - nk), q_in(k - nk), 1, k - k0]: the IDZ level equation's regressors (IdzLevel).
+Eigen::MatrixXd IdzRegressors(const Eigen::Ref<const Eigen::VectorXd>& q_in,
+                              const Eigen::Ref<const Eigen::VectorXd>& q_out, int nk, int k0) {
+  Eigen::MatrixXd x = OpenLoopRegressors(q_in, q_out, nk, k0);
+  x.col(0) -= x.col(1);
+  return x;
+}
+
+// IdzRegressors and, when p22 is fitted, -q_out(k).
 Eigen::MatrixXd Regressors(const Eigen::Ref<const Eigen::VectorXd>& q_in,
                            const Eigen::Ref<const Eigen::VectorXd>& q_out, int nk, int k0,
                            bool fit_p22) {
-  Eigen::MatrixXd base = OpenLoopRegressors(q_in, q_out, nk, k0);
+  Eigen::MatrixXd base = IdzRegressors(q_in, q_out, nk, k0);
   if (!fit_p22) return base;
   Eigen::MatrixXd x(base.rows(), 5);
   x.leftCols(4) = base;
@@ -60,7 +68,7 @@ Eigen::VectorXd IdzLevel(const Eigen::Ref<const Eigen::VectorXd>& q_in,
   }
   const Eigen::Vector4d theta(model.b, model.p21_s_per_m2, model.offset_m,
                               model.drift_m_per_sample);
-  const Eigen::MatrixXd x = OpenLoopRegressors(q_in, q_out, model.nk, k0);
+  const Eigen::MatrixXd x = IdzRegressors(q_in, q_out, model.nk, k0);
   return x * theta - model.p22_s_per_m2 * q_out.tail(x.rows());
 }
 

@@ -42,15 +42,22 @@ struct IdzLevelModel {
   double drift_m_per_sample = 0.0;
 };
 
-/// y(k) = b Q(k) + p21 q_in(k - nk) - p22 q_out(k) + c + d (k - k0) for k = k0..N-1 (Q as in
-/// IdzFit).  @throws std::invalid_argument unless 0 <= nk <= k0 < N and the sizes agree.
+/// y(k) = b Q(k) + (p21 - b) q_in(k - nk) - p22 q_out(k) + c + d (k - k0) for k = k0..N-1 (Q as
+/// in IdzFit).  @throws std::invalid_argument unless 0 <= nk <= k0 < N and the sizes agree.
 Eigen::VectorXd IdzLevel(const Eigen::Ref<const Eigen::VectorXd>& q_in,
                          const Eigen::Ref<const Eigen::VectorXd>& q_out, const IdzLevelModel& model,
                          int k0);
 
 /// The IDZ model of a pool identified from a record (Litrico & Fromion 2004's structure):
-///   y(k) = b Q(k) + p21 q_in(k - nk) - p22 q_out(k) + c + d (k - k0),
-///   Q(k) = sum_{j=k0..k} (q_in(j - nk) - q_out(j - 1)),  b = Ts / A.
+///   y(k) = b Q(k) + (p21 - b) q_in(k - nk) - p22 q_out(k) + c + d (k - k0),
+///   Q(k) = sum_{j=k0..k} (q_in(j - nk) - q_out(j - 1)),  b = Ts / A,
+/// the zero-order hold of the continuous model y = (1/(A s) + p21) e^{-tau s} q_in - (1/(A s) +
+/// p22) q_out with tau = nk Ts: the inflow that arrives at sample k has added no volume by then
+/// (b (Q(k) - q_in(k - nk)) sums the delayed inflow up to sample k - 1, as Q already does the
+/// outflow), while its front p21 q_in(k - nk) is there.  So p21 is the continuous model's, the
+/// one `canalid theory` computes.  (Q(k) holds q_in(k - nk), the ID fit's convention: with the
+/// front's column the two forms fit the same, and Q's would report p21 - b, 9.5 % of p21 on ASCE
+/// canal 2 pool 2 at Ts = 60 s.)
 struct IdzFit {
   int nk = 0;
   double sample_time_s = 1.0;
@@ -85,8 +92,7 @@ struct IdzFit {
 
 /// Fits the IDZ model: for each nk the regression above by least squares (QR) with p21 >= 0 (as
 /// the ID fit: a negative p21 is held at 0, with a warning), the nk with the smallest residual
-/// kept.  As in the ID fit, Q(k) already holds q_in(k - nk), so the integrator's response starts
-/// with the sample at k - nk.  p22 is
+/// kept.  With p21 held at 0 the level is b (Q(k) - q_in(k - nk)): the ID fit's at nk + 1.  p22 is
 ///  - fitted (kData) when the outflow moves (std above 2 % of the inflow's) and does not follow
 ///    the level (r <= 0.3 between the detrended outflow and level: a level-driven outflow rises
 ///    with the level, while one moved on its own lowers it, r < 0): a second structure moved on

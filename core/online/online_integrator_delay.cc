@@ -116,6 +116,9 @@ void OnlineIntegratorDelayOptions::Validate() const {
     Fail("outflow_direct_gain_s_per_m2", outflow_direct_gain_s_per_m2, "0..10");
   }
   rls.Validate(wave_front_term ? 4 : 3);
+  if (idz_level_equation && !wave_front_term) {
+    throw std::invalid_argument("idz_level_equation needs wave_front_term");
+  }
   selector.Validate();
   health.Validate();
   if (closed_loop == ClosedLoopMode::kThreeStep) three_step.Validate();
@@ -256,7 +259,9 @@ void OnlineIntegratorDelayBank::UpdateIvCandidates(std::vector<IvRls<N>>& estima
     const double tc = t - t_centre_;
     const double qin = qin_integrated_[ui] - qin_centre_[ui];
     if constexpr (N == 4) {
-      phi << q_integrated_[ui] - q_centre_[ui], q_in_history_[nk], 1.0, tc;
+      const double volume = q_integrated_[ui] - q_centre_[ui];
+      phi << (options_.idz_level_equation ? volume - q_in_history_[nk] : volume), q_in_history_[nk],
+          1.0, tc;
       z << qin, q_in_history_[nk], 1.0, tc;
     } else {
       phi << q_integrated_[ui] - q_centre_[ui], 1.0, tc;
@@ -287,6 +292,7 @@ void OnlineIntegratorDelayBank::UpdateCandidates(RlsBank<N>& estimators, double 
   phi.row(0).head(n) = Row(q_integrated_.data(), n) - Row(q_centre_.data(), n);
   if constexpr (N == 4) {
     phi.row(1).head(n) = Row(q_in_history_.Lags() + options_.min_delay_samples, n);
+    if (options_.idz_level_equation) phi.row(0).head(n) -= phi.row(1).head(n);
   }
   phi.row(N - 1).head(n).setConstant(t - t_centre_);
   if (selector_.criterion() == BankCriterion::kResidual) {

@@ -76,6 +76,13 @@ struct OnlineIntegratorDelayOptions {
   /// fixed-gate pool 2 record ended with areas of 0-748 m^2, so the bank could not choose the
   /// batch's nk = 12.)
   bool wave_front_non_negative = false;
+  /// IDZ's level equation (core::IdzLevel, the online `idz` kind): the integral without the
+  /// sample's own delayed inflow, Q_nk(k) - q_in(k - nk), the zero-order hold of the continuous
+  /// model, so that p21 is the continuous model's, as the batch FitIdz reports it.  The same fit
+  /// as Q_nk's (the columns span the same space), whose p21 is this one's less b; with p21 held at
+  /// 0 a candidate is the plain ID regression at nk + 1.  wave_front_term only.  The three-step
+  /// estimate (closed_loop kThreeStep, p21 = 0) keeps Q_nk.
+  bool idz_level_equation = false;
   /// The delay's choice.  Default kResidual: the candidate of smallest least-squares loss (with
   /// p21 >= 0: of the reported, constrained fit), so that with lambda = 1 the bank's delay is the
   /// batch FitIntegratorDelay scan's at every sample.  The least-squares bank only: the IV bank

@@ -81,6 +81,7 @@ OnlineModelOptions OnlineModelOptionsFor(OnlineModelKind kind, const OnlineModel
       o.id.max_delay_samples = Samples("max_delay_s", s.max_delay_s, s.sample_time_s);
       o.id.wave_front_term = true;
       o.id.wave_front_non_negative = true;
+      o.id.idz_level_equation = true;
       o.id.rls = RlsOptionsFor(s, 4);
       o.id.closed_loop = s.closed_loop;
       o.id.outflow_direct_gain_s_per_m2 = s.idz_p22_s_per_m2;

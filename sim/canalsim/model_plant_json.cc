@@ -97,8 +97,9 @@ std::unique_ptr<SampledPlant> PlantFromModelJson(
     const drivers::IdzModelRecord r = drivers::IdzModelFromJson(json, source);
     if (r.sample_time_s > 0.0) RequireSampleTime(r.sample_time_s, sample_time_s, source);
     const core::IntegratorDelayModel model{r.model.b, r.model.nk, sample_time_s};
+    // The IDZ level equation's q_in(k - nk) term is (p21 - b) (core::IdzLevel).
     return std::make_unique<IntegratorDelayLevelPlant>(
-        model, r.model.p21_s_per_m2, r.model.offset_m, r.drift_m_per_s * sample_time_s,
+        model, r.model.p21_s_per_m2 - r.model.b, r.model.offset_m, r.drift_m_per_s * sample_time_s,
         r.fit_from_sample, initial_inputs(0), r.model.p22_s_per_m2);
   }
   if (kind == "arx") {

@@ -1,7 +1,7 @@
 // Issue 5 acceptance over several pools: for pools of ASCE canals 1 and 2 at the high regime,
 // canalsim's Saint-Venant solver (sim/, Preissmann) runs the pool alone under an inflow PRBS with
 // the outflow held (config/sim/scenarios/asce<c>-pool<p>-prbs.toml), and `canalid identify
-// --model id` must find the IDZ backwater area of Litrico & Fromion (2004) within 15 % and a
+// --model id` must find the IDZ backwater area of Litrico & Fromion (2004) within 10 % and a
 // delay of 0.5-1.2 x the IDZ delay.  The reference numbers come from
 // shared/domain/reference/asce_idz_litrico_fromion_2004.csv, which neither program reads.  The
 // records are generated at test time in the test's output folder.
@@ -57,10 +57,11 @@ TEST_P(IdentifyPools, PrbsAreaWithinFifteenPercentOfIdz) {
                                    dir);
   ASSERT_EQ(id.exit_code, 0) << id.err;
   const auto model = nlohmann::json::parse(id.out);
-  // The issue's tolerances: area within 15 % of the IDZ backwater area; delay 0.5-1.2 x the IDZ
-  // delay (the ID delay comes out shorter than the wave travel time, as the IDZ's direct term
-  // p21 is folded into it).
-  EXPECT_NEAR(model["area_m2"].get<double>(), c.idz_area_m2, 0.15 * c.idz_area_m2) << model.dump();
+  // The issues' tolerances: area within 10 % of the IDZ backwater area (the closed-loop issue's
+  // on canal 2; issue 5 asked 15 %; measured -8.9 to +5.3 % on all 16 pools); delay 0.5-1.2 x
+  // the IDZ delay (the ID delay comes out shorter than the wave travel time, as the IDZ's direct
+  // term p21 is folded into it).
+  EXPECT_NEAR(model["area_m2"].get<double>(), c.idz_area_m2, 0.10 * c.idz_area_m2) << model.dump();
   EXPECT_GE(model["delay_s"].get<double>(), 0.5 * c.idz_delay_s) << model.dump();
   EXPECT_LE(model["delay_s"].get<double>(), c.max_delay_ratio * c.idz_delay_s) << model.dump();
   std::printf(
@@ -74,8 +75,8 @@ TEST_P(IdentifyPools, PrbsAreaWithinFifteenPercentOfIdz) {
 
   // The IDZ model of the same record, with the theory's prior (the outflow is held, so p22 is
   // the prior's and does not move the area): the closed-loop issue's tolerances, area within
-  // 10 % and delay within 15 % (wider on canal 1's diffusive pools, see there), p21 within 30 %
-  // on canal 2 (measured -11 to -25.2 %, pool 4 the worst: the issue's 25 % is not met there).
+  // 10 %, delay within 15 % (of the low-frequency delay on canal 1's diffusive pools, see there)
+  // and p21 within 25 % where it is checked (measured on canal 2 pools 2-8: -13.9 to -1.9 %).
   const ProgramRun idz = RunProgram(
       CanalidProgram() + " identify --model idz --max-delay-s " + std::to_string(max_delay_s) +
           " --input " + csv + " --canal " + source + "/config/sim/asce-canal" +
@@ -102,7 +103,7 @@ TEST_P(IdentifyPools, PrbsAreaWithinFifteenPercentOfIdz) {
     EXPECT_GT(z_delay, 1.15 * c.idz_delay_s) << "the diffusive case is no longer needed";
   }
   if (c.idz_p21 > 0.0) {
-    EXPECT_NEAR(z["p21_s_per_m2"].get<double>(), c.idz_p21, 0.30 * c.idz_p21) << z.dump();
+    EXPECT_NEAR(z["p21_s_per_m2"].get<double>(), c.idz_p21, 0.25 * c.idz_p21) << z.dump();
   }
   std::printf(
       "canal %d pool %d idz: area %+.1f %%, delay %.2f x (low-frequency delay %.0f s), p21 %.4g "
@@ -113,7 +114,7 @@ TEST_P(IdentifyPools, PrbsAreaWithinFifteenPercentOfIdz) {
 
 INSTANTIATE_TEST_SUITE_P(AsceHighRegime, IdentifyPools,
                          // Pool 1's p21 (0.0061 s/m2, the smallest of the canal) comes out
-                         // -49 % and is not checked.
+                         // -32 % and is not checked.
                          ::testing::Values(PoolCase{2, 1, 1582.8, 61245.0, 1.2, 0.0},
                                            PoolCase{2, 2, 682.0, 34113.0, 1.2, 0.0185},
                                            PoolCase{2, 3, 690.9, 34891.0, 1.2, 0.0195},
@@ -131,18 +132,21 @@ INSTANTIATE_TEST_SUITE_P(AsceHighRegime, IdentifyPools,
 // of 0.0007-0.002 s/m2) a flow change travels as a diffusive wave, and the integrator-delay fit
 // puts its delay where the late level ramp starts, 1.35-1.41 x the front's arrival (which the
 // wave-arrival test in tests/sim/saint_venant_test.cc finds within 2 % of the IDZ delay).
-// The IDZ fit does the same on pools 5-8 (measured 1.37-1.41 x) and on pool 2 (1.16 x): by the
-// table's p21 their fronts move the level by 0.01-0.75 mm at a PRBS switch, against the 3.5-6 mm
-// the ramp adds over one clock, so a least-squares fit is set by the ramp, whose start is the
-// low-frequency delay: 1.19 (pool 2) and 1.38-1.40 x (pools 5-8) the front's by the linearised
-// equations (idz_theory_profile_test checks that figure on the true profile).
-// Those pools are `diffusive`: the issue's 15 % against the table's delay cannot be met by a fit
-// of the record. Its p21 is not checked on canal 1: the fronts are diffusive and the fit holds p21
-// at 0 (its constraint) on pools 2, 4, 5, 6 and 8. Its area is within 9 % on every pool.
+// The IDZ fit does the same on pools 5-8 (measured 1.37-1.39 x): by the table's p21 their
+// fronts move the level by 0.01-0.04 mm at a PRBS switch, against the 3.5-6 mm the ramp adds over
+// one clock, so a least-squares fit is set by the ramp, whose start is the low-frequency delay:
+// 1.38-1.40 x the front's by the linearised equations (idz_theory_profile_test checks that figure
+// on the true profile). Those pools are `diffusive`: the issue's 15 % against the table's delay
+// cannot be met by a fit of the record. Pool 2 lies between (front 0.75 mm; low-frequency delay
+// 1.19 x): its IDZ delay, 1.13 x, is checked against the table's. Its p21 is checked where the
+// front is seen (pools 1 and 3, measured -15.7 and -0.7 %); pools 2 and 4 come out -73 and -70 %
+// and the diffusive pools 5-8 at 5-10 times the table's 0.0007-0.002 s/m2 (the fit's p21 there
+// stands for the ramp's start between two samples, not a front). Its area is within 9 % on every
+// pool.
 INSTANTIATE_TEST_SUITE_P(AsceCanal1HighRegime, IdentifyPools,
-                         ::testing::Values(PoolCase{1, 1, 29.6, 331.2, 1.5},
-                                           PoolCase{1, 2, 337.4, 575.9, 1.5, 0.0, true},
-                                           PoolCase{1, 3, 117.0, 436.3, 1.5},
+                         ::testing::Values(PoolCase{1, 1, 29.6, 331.2, 1.5, 0.2454},
+                                           PoolCase{1, 2, 337.4, 575.9, 1.5},
+                                           PoolCase{1, 3, 117.0, 436.3, 1.5, 0.1477},
                                            PoolCase{1, 4, 238.2, 575.8, 1.5},
                                            PoolCase{1, 5, 610.8, 620.8, 1.5, 0.0, true},
                                            PoolCase{1, 6, 541.3, 496.2, 1.5, 0.0, true},
@@ -206,12 +210,12 @@ TEST_P(IdentifyPoolsTwoStructures, OutflowPrbsGivesP22FromTheData) {
   ASSERT_EQ(id.exit_code, 0) << id.err;
   EXPECT_FALSE(nlohmann::json::parse(id.out)["closed_loop"].get<bool>()) << id.out;
   // The issue's tolerances: A 10 %, tau 15 %, p21 and p22 25 % (measured on canal 2: A -7.3 to
-  // +4.8 %, tau 0.99-1.06, p22 -1 to +12 %, p21 -11 to -26 % but -49 % on pool 1, unchecked).
+  // +4.8 %, tau 0.99-1.06, p22 -1 to +12 %, p21 -14.4 to -4.2 % but -32 % on pool 1, unchecked).
   EXPECT_NEAR(z["area_m2"].get<double>(), c.idz_area_m2, 0.10 * c.idz_area_m2) << z.dump();
   EXPECT_NEAR(z["delay_s"].get<double>(), c.idz_delay_s, 0.15 * c.idz_delay_s) << z.dump();
   EXPECT_NEAR(z["p22_s_per_m2"].get<double>(), c.idz_p22, 0.25 * c.idz_p22) << z.dump();
   if (c.idz_p21 > 0.0) {
-    EXPECT_NEAR(z["p21_s_per_m2"].get<double>(), c.idz_p21, 0.30 * c.idz_p21) << z.dump();
+    EXPECT_NEAR(z["p21_s_per_m2"].get<double>(), c.idz_p21, 0.25 * c.idz_p21) << z.dump();
   }
   std::printf(
       "canal 2 pool %d two structures: area %+.1f %%, delay %.2f x, p21 %.4g (table %.4g), "
@@ -225,8 +229,7 @@ std::string TwoStructureName(const ::testing::TestParamInfo<TwoStructureCase>& i
   return "Canal2Pool" + std::to_string(info.param.pool);
 }
 
-// Canal 2 at the high flows (asce_idz_litrico_fromion_2004.csv). Pool 4's p21 came out -26 %: the
-// 30 % bound on p21 is the one-structure test's (see there).
+// Canal 2 at the high flows (asce_idz_litrico_fromion_2004.csv).
 INSTANTIATE_TEST_SUITE_P(
     AsceCanal2HighRegime, IdentifyPoolsTwoStructures,
     ::testing::Values(TwoStructureCase{1, 11.0, 1582.8, 61245.0, 0.0, 0.024},

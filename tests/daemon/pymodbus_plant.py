@@ -13,10 +13,11 @@ Register map (0-based, float32 high word first, the map of canalsim's pool recor
   input   316-317  inflow (m3/s)      input 318-319 outflow (m3/s)      input 320-321 level (m)
 
 PARAMS_JSON["kind"]:
-  "idz": a pool with the IDZ model (Litrico & Fromion 2004) around a steady state, outflow held,
-      in the discrete convention of canalid's integrator-delay model (y(k) - y(k-1) = Ts/A
-      (q_in(k - nk) - q_out), delay nk Ts):
-      x(k) = x(k-1) + ts / A (q_in(k - nk) - q0),  level(k) = level0 + x(k) + p21 (q_in(k - nk) - q0),
+  "idz": a pool with the IDZ model (Litrico & Fromion 2004) around a steady state, outflow held:
+      level = level0 + (1/(A s) + p21) e^{-tau s} (q_in - q0), the inflow held over each sample
+      (zero-order hold) and tau = nk ts, so the inflow that arrives at sample k has added no
+      volume yet while its front p21 is there:
+      level(k) = level0 + x(k - 1) + p21 (q_in(k - nk) - q0),  x(k) = x(k-1) + ts / A (q_in(k - nk) - q0),
       q_in = q0 + gate_gain (setpoint - setpoint0), nk = delay_samples.
   "fractional": level = level0 + K e^{-tau s} / (1 + T s^alpha) (setpoint - setpoint0) in
       continuous time, the setpoint read with sample k held from t_k to t_(k+1) (zero-order hold)
@@ -58,8 +59,8 @@ class IdzPool:
         q_in = p["q0"] + p["gate_gain"] * (setpoint - p["setpoint0"])
         self.queue.append(q_in)
         arriving = self.queue.pop(0)
-        self.x += p["ts"] / p["area"] * (arriving - p["q0"])
         level = p["level0"] + self.x + p["p21"] * (arriving - p["q0"])
+        self.x += p["ts"] / p["area"] * (arriving - p["q0"])
         return q_in, p["q0"], level
 
 
