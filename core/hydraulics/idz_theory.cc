@@ -72,19 +72,19 @@ double OutflowResponse(const LinearisedReach& up, double up_length, const Linear
   return (phi(1, 1) / phi(0, 1)).real();
 }
 
-// The constant c of p22(s) = -1/(A s) - c - e s + O(s^2) at low frequencies, from three real
-// frequencies far below 1/delay (solved exactly for 1/A, c and e).
-double LowFrequencyOutflowGain(const LinearisedReach& up, double up_length,
-                               const LinearisedReach& down, double down_length, double delay_s) {
+// k of response(s) = k(0)/s + k(1) + k(2) s + O(s^2) at low frequencies, from three real
+// frequencies far below 1/delay (solved exactly).
+template <typename Response>
+Eigen::Vector3d LowFrequencyExpansion(const Response& response, double delay_s) {
   const double e = 1e-4 / delay_s;
   Eigen::Matrix3d x;
   Eigen::Vector3d p;
   for (int i = 0; i < 3; ++i) {
     const double s = e * (i + 1);
-    x.row(i) << -1.0 / s, -1.0, -s;
-    p(i) = OutflowResponse(up, up_length, down, down_length, s);
+    x.row(i) << 1.0 / s, 1.0, s;
+    p(i) = response(s);
   }
-  return x.partialPivLu().solve(p)(1);
+  return x.partialPivLu().solve(p);
 }
 
 // trace(M(s)) of TransferMatrix: (2 V T s + delta)/W.
@@ -105,22 +105,6 @@ double InflowResponse(const LinearisedReach& up, double up_length, const Lineari
     log_det += TransferTrace(up, s) * up_length;
   }
   return (-std::exp(log_det) / phi(0, 1)).real();
-}
-
-// The delay tau of p21(s) = 1/(A s) - tau/A + e s + O(s^2) at low frequencies, from three real
-// frequencies far below 1/delay (solved exactly for 1/A, -tau/A and e).
-double LowFrequencyInflowDelay(const LinearisedReach& up, double up_length,
-                               const LinearisedReach& down, double down_length, double delay_s) {
-  const double e = 1e-4 / delay_s;
-  Eigen::Matrix3d x;
-  Eigen::Vector3d p;
-  for (int i = 0; i < 3; ++i) {
-    const double s = e * (i + 1);
-    x.row(i) << 1.0 / s, 1.0, s;
-    p(i) = InflowResponse(up, up_length, down, down_length, s);
-  }
-  const Eigen::Vector3d k = x.partialPivLu().solve(p);
-  return -k(1) / k(0);
 }
 
 void CheckPositive(const char* name, double value) {
@@ -190,12 +174,18 @@ IdzTheory IdzFromGeometry(const PoolGeometry& pool, double flow_m3s) {
   }
   // One part (the pool's only one) or the two in series.
   const bool two_parts = uniform > 0.0 && backwater > 0.0;
-  theory.outflow_gain_low_frequency_s_per_m2 = LowFrequencyOutflowGain(
-      up_reach, two_parts ? uniform : 0.0, backwater > 0.0 ? down_reach : up_reach,
-      backwater > 0.0 ? backwater : uniform, m.delay_s);
-  theory.delay_low_frequency_s = LowFrequencyInflowDelay(
-      up_reach, two_parts ? uniform : 0.0, backwater > 0.0 ? down_reach : up_reach,
-      backwater > 0.0 ? backwater : uniform, m.delay_s);
+  const double up_length = two_parts ? uniform : 0.0;
+  const LinearisedReach& last = backwater > 0.0 ? down_reach : up_reach;
+  const double last_length = backwater > 0.0 ? backwater : uniform;
+  // p22(s) = -1/(A s) - c + O(s): the constant c.
+  theory.outflow_gain_low_frequency_s_per_m2 = -LowFrequencyExpansion(
+      [&](double s) { return OutflowResponse(up_reach, up_length, last, last_length, s); },
+      m.delay_s)(1);
+  // p21(s) = 1/(A s) - tau/A + O(s): tau.
+  const Eigen::Vector3d inflow = LowFrequencyExpansion(
+      [&](double s) { return InflowResponse(up_reach, up_length, last, last_length, s); },
+      m.delay_s);
+  theory.delay_low_frequency_s = -inflow(1) / inflow(0);
   return theory;
 }
 
