@@ -36,7 +36,7 @@ std::string CaseName(const ::testing::TestParamInfo<PoolCase>& info) {
 
 class IdentifyPools : public ::testing::TestWithParam<PoolCase> {};
 
-TEST_P(IdentifyPools, PrbsAreaWithinFifteenPercentOfIdz) {
+TEST_P(IdentifyPools, PrbsAreaWithinTenPercentOfIdz) {
   const PoolCase& c = GetParam();
   const std::string name =
       "asce" + std::to_string(c.canal) + "-pool" + std::to_string(c.pool) + "-prbs";
@@ -98,7 +98,7 @@ TEST_P(IdentifyPools, PrbsAreaWithinFifteenPercentOfIdz) {
     const auto t = nlohmann::json::parse(theory.out);
     low_frequency_delay = t["delay_low_frequency_s"].get<double>();
     // The front the table's delay describes is not in the record; the ramp's start is, within
-    // 5 % of where the linearised equations put it (measured -2.5 to +0.5 %).
+    // 5 % of where the linearised equations put it (measured -1.6 to -0.6 %).
     EXPECT_NEAR(z_delay, low_frequency_delay, 0.05 * low_frequency_delay) << z.dump();
     EXPECT_GT(z_delay, 1.15 * c.idz_delay_s) << "the diffusive case is no longer needed";
   }
@@ -140,7 +140,7 @@ INSTANTIATE_TEST_SUITE_P(AsceHighRegime, IdentifyPools,
 // cannot be met by a fit of the record. Pool 2 lies between (front 0.75 mm; low-frequency delay
 // 1.19 x): its IDZ delay, 1.13 x, is checked against the table's. Its p21 is checked where the
 // front is seen (pools 1 and 3, measured -15.7 and -0.7 %); pools 2 and 4 come out -73 and -70 %
-// and the diffusive pools 5-8 at 5-10 times the table's 0.0007-0.002 s/m2 (the fit's p21 there
+// and the diffusive pools 5-8 at 5-11 times the table's 0.0007-0.002 s/m2 (the fit's p21 there
 // stands for the ramp's start between two samples, not a front). Its area is within 9 % on every
 // pool.
 INSTANTIATE_TEST_SUITE_P(AsceCanal1HighRegime, IdentifyPools,
