@@ -65,8 +65,8 @@ struct LowFrequency {
   double inflow_delay_s;  // tau of p21(s) = 1/(A s) - tau/A + O(s), the outflow held
 };
 
-// k0 + k1 s + k2 s^2 (with its terms' own powers: `power` of each column) through three points,
-// by Gauss-Jordan: the matrix is well conditioned once scaled.
+// k of k[0] s^power[0] + k[1] s^power[1] + k[2] s^power[2] through three points (s, value), by
+// Gauss-Jordan: the matrix is well conditioned once scaled.
 struct ThreeTerms {
   double k[3];
 };
