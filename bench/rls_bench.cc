@@ -108,9 +108,9 @@ BENCHMARK_TEMPLATE(BM_RlsUpdate, 8)->Apply(Methods);
 BENCHMARK_TEMPLATE(BM_RlsUpdate, 16)->Apply(Methods);
 
 // One sample through `lanes` estimators of n = N parameters with the same output: an RlsBank
-// (structure of arrays; range(1) = 1: the CPU's best ISA, AVX2 here; 2: the baseline, SSE2) or
-// the same number of Rls<N> one after the other (0, the peer).  UD directional forgetting,
-// lambda = range(2) / 1000 (0.99; 1, the daemon's default, where the bank skips three
+// (structure of arrays; range(1) = 1: the CPU's best ISA, AVX-512VL here; 2: the baseline, SSE2;
+// 3: AVX2) or the same number of Rls<N> one after the other (0, the peer).  UD directional
+// forgetting, lambda = range(2) / 1000 (0.99; 1, the daemon's default, where the bank skips three
 // divisions).  per_update: time per estimator update.
 template <int N>
 void BM_LaneUpdates(benchmark::State& state) {
@@ -118,7 +118,14 @@ void BM_LaneUpdates(benchmark::State& state) {
   const bool soa = state.range(1) != 0;
   RlsOptions options;
   options.forgetting = static_cast<double>(state.range(2)) / 1000.0;
-  RlsBank<N> bank(options, lanes, state.range(1) == 2 ? RlsBankIsa::kBaseline : RlsBankIsa::kBest);
+  const RlsBankIsa isa = state.range(1) == 2   ? RlsBankIsa::kBaseline
+                         : state.range(1) == 3 ? RlsBankIsa::kAvx2
+                                               : RlsBankIsa::kBest;
+  if (isa == RlsBankIsa::kAvx2 && __builtin_cpu_supports("avx2") == 0) {
+    state.SkipWithError("this CPU has no AVX2");
+    return;
+  }
+  RlsBank<N> bank(options, lanes, isa);
   std::vector<Rls<N>> scalar(static_cast<std::size_t>(lanes), Rls<N>(options));
   std::vector<double> values(kPool * N);
   std::vector<double> ys(kPool);
@@ -146,12 +153,14 @@ void BM_LaneUpdates(benchmark::State& state) {
   if (!soa) {
     state.SetLabel("Rls one by one");
   } else {
-    state.SetLabel(bank.isa() == RlsBankIsa::kAvx2 ? "RlsBank AVX2" : "RlsBank SSE2");
+    state.SetLabel(bank.isa() == RlsBankIsa::kAvx512 ? "RlsBank AVX-512VL"
+                   : bank.isa() == RlsBankIsa::kAvx2 ? "RlsBank AVX2"
+                                                     : "RlsBank SSE2");
   }
 }
-BENCHMARK_TEMPLATE(BM_LaneUpdates, 3)->ArgsProduct({{24}, {0, 1, 2}, {990, 1000}});
-BENCHMARK_TEMPLATE(BM_LaneUpdates, 4)->ArgsProduct({{24, 64}, {0, 1, 2}, {990, 1000}});
-BENCHMARK_TEMPLATE(BM_LaneUpdates, 8)->ArgsProduct({{24}, {0, 1, 2}, {990, 1000}});
+BENCHMARK_TEMPLATE(BM_LaneUpdates, 3)->ArgsProduct({{24}, {0, 1, 2, 3}, {990, 1000}});
+BENCHMARK_TEMPLATE(BM_LaneUpdates, 4)->ArgsProduct({{24, 64}, {0, 1, 2, 3}, {990, 1000}});
+BENCHMARK_TEMPLATE(BM_LaneUpdates, 8)->ArgsProduct({{24}, {0, 1, 2, 3}, {990, 1000}});
 
 // One IvRls<N> update (closed-loop variant; P not symmetric, plus the instruments' moment R).
 template <int N>

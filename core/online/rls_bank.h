@@ -34,9 +34,12 @@ struct LaneVectors<4> {  // one AVX2 register
 
 /// The instruction set of RlsBank's structure-of-arrays update.
 enum class RlsBankIsa {
-  kBest,      ///< AVX2 where the CPU has it, else the baseline
+  kBest,      ///< AVX-512VL where the CPU has it, else AVX2 where it has that, else the baseline
   kBaseline,  ///< SSE2, the baseline x86-64 ISA (two lanes per operation)
   kAvx2,      ///< AVX2, four lanes per operation
+  /// AVX2's four lanes per operation compiled for AVX-512VL: 32 vector registers instead of 16,
+  /// so that most of the update's live values stay in registers (the AVX2 code spills them)
+  kAvx512,
 };
 
 /// `lanes` estimators Rls<N> with the same options, updated together: one output y per sample
@@ -51,12 +54,13 @@ enum class RlsBankIsa {
 /// go lane by lane after it.  Otherwise each lane is an Rls<N> of its own (the same results,
 /// no speed-up).  What an update costs is its operation count, each operation serving the two
 /// lanes of an SSE2 register (the baseline x86-64 ISA) or, where the CPU has AVX2, the four of
-/// an AVX2 register (chosen at run time; neither contracts to FMA, so both are Rls bit for
-/// bit).  Keeping Rls's results bit for bit keeps its bookkeeping (counts, last error, outcome)
-/// per lane, and every branch becomes a select (docs/performance.md); a block whose lanes all
-/// take Bierman's update (the usual sample) stores its results without the selects.
-/// Allocates only in the constructor; Update and the accessors never allocate.
-/// Deterministic.  Not thread-safe (Lane() uses a scratch estimator).
+/// an AVX2 register (chosen at run time; with AVX-512VL the same four-lane code has twice the
+/// registers; none contracts to FMA, the build forbids it, so each is Rls bit for bit).  Keeping
+/// Rls's results bit for bit keeps its bookkeeping (counts, last error, outcome) per lane, and
+/// every branch becomes a select (docs/performance.md); a block whose lanes all take Bierman's
+/// update (the usual sample) stores its results without the selects. Allocates only in the
+/// constructor; Update and the accessors never allocate. Deterministic.  Not thread-safe (Lane()
+/// uses a scratch estimator).
 template <int N>
 class RlsBank final {
   static_assert(N != Eigen::Dynamic, "RlsBank needs a fixed parameter count");
@@ -68,13 +72,13 @@ class RlsBank final {
   using Regressors = Eigen::Matrix<double, N, Eigen::Dynamic, Eigen::RowMajor>;
   using Result = typename Rls<N>::Result;
 
-  /// `isa`: kBest takes AVX2 where the CPU has it; kBaseline keeps to SSE2; kAvx2 insists.
+  /// `isa`: kBest takes the best the CPU has; kBaseline keeps to SSE2; kAvx2 and kAvx512 insist.
   /// @throws std::invalid_argument on a bad option (RlsOptions::Validate), lanes < 1, or kAvx2
-  /// on a CPU without AVX2.
+  /// (kAvx512) on a CPU without AVX2 (AVX-512F and AVX-512VL).
   RlsBank(const RlsOptions& options, int lanes, RlsBankIsa isa = RlsBankIsa::kBest);
 
   int lanes() const { return lanes_; }
-  /// The instruction set the structure-of-arrays update runs on (kBaseline or kAvx2).
+  /// The instruction set the structure-of-arrays update runs on (kBaseline, kAvx2 or kAvx512).
   RlsBankIsa isa() const { return isa_; }
   /// Whether the lanes run as structure of arrays (a UD method without innovation guards).
   bool structure_of_arrays() const { return soa_; }
@@ -154,7 +158,7 @@ class RlsBank final {
   template <class M>
   [[gnu::always_inline]] static void Hide(M& mask) {
 #ifndef __clang__
-    __asm__("" : "+x"(mask));
+    __asm__("" : "+v"(mask));  // "v": any vector register the ISA has (32 with AVX-512VL)
 #else
     (void)mask;
 #endif
@@ -194,9 +198,15 @@ class RlsBank final {
   [[gnu::always_inline]] void LossBlocks(int constrained, double* losses) const;
   [[gnu::target("avx2,no-fma")]] void LossesAvx2(int constrained, double* losses) const;
   // Compiled for AVX2 alone, called only where the CPU has it.  "no-fma": no contraction of
-  // a * b + c, which would round differently from Rls.  (AVX-512 was tried: with its own FMA it
-  // contracts anyway, and GCC 12 compares its vectors lane by lane: 1.5 x slower than AVX2.)
+  // a * b + c, which would round differently from Rls.  (Eight lanes an AVX-512 register were
+  // tried: GCC 12 compares those vectors lane by lane, 1.5 x slower than AVX2.)
   [[gnu::target("avx2,no-fma")]] void UpdateBlockAvx2(Block& s, int first_lane, double y);
+  // The same four-lane update compiled for AVX-512VL (its 32 vector registers), called only
+  // where the CPU has AVX-512F and AVX-512VL.  AVX-512F brings FMA instructions of its own that
+  // "no-fma" does not remove: the build's -ffp-contract=off (CMakeLists.txt) keeps a * b + c two
+  // roundings, as in Rls.
+  [[gnu::target("avx2,avx512f,avx512vl")]] void UpdateBlockAvx512(Block& s, int first_lane,
+                                                                  double y);
   // The box and the trace bounds on the block's lanes that updated, lane by lane.
   void BoundLanes(Block& s, int first_lane);
   void Load(int lane, Rls<N>& into) const;
@@ -235,10 +245,20 @@ RlsBank<N>::RlsBank(const RlsOptions& options, int lanes, RlsBankIsa isa)
       options.method == RlsMethod::kUdDirectional || options.method == RlsMethod::kUdExponential;
   soa_ = ud && !scratch_.guards_;
   const bool avx2 = __builtin_cpu_supports("avx2") != 0;
+  const bool avx512 =
+      avx2 && __builtin_cpu_supports("avx512f") != 0 && __builtin_cpu_supports("avx512vl") != 0;
   if (isa == RlsBankIsa::kAvx2 && !avx2) {
     throw std::invalid_argument("RlsBank: AVX2 asked for; this CPU does not have it");
   }
-  if (soa_ && isa != RlsBankIsa::kBaseline && avx2) isa_ = RlsBankIsa::kAvx2;
+  if (isa == RlsBankIsa::kAvx512 && !avx512) {
+    throw std::invalid_argument(
+        "RlsBank: AVX-512VL asked for; this CPU does not have AVX-512F and AVX-512VL");
+  }
+  if (soa_ && (isa == RlsBankIsa::kAvx512 || (isa == RlsBankIsa::kBest && avx512))) {
+    isa_ = RlsBankIsa::kAvx512;
+  } else if (soa_ && isa != RlsBankIsa::kBaseline && avx2) {
+    isa_ = RlsBankIsa::kAvx2;
+  }
   lambda_ = scratch_.GainForgetting();
   noise_forgetting_ = scratch_.noise_forgetting_;
   has_box_ = scratch_.has_box_;
@@ -393,7 +413,7 @@ void RlsBank<N>::ResidualLosses(int nonnegative, std::span<double> losses) const
     return;
   }
   const int constrained = constrain ? nonnegative : -1;
-  if (isa_ == RlsBankIsa::kAvx2) {
+  if (isa_ != RlsBankIsa::kBaseline) {  // AVX2, or AVX-512VL (the losses need no more registers)
     LossesAvx2(constrained, losses.data());
   } else {
     LossBlocks<2>(constrained, losses.data());
@@ -472,7 +492,9 @@ void RlsBank<N>::Update(double y) {
   for (std::size_t b = 0; b < blocks_.size(); ++b) {
     Block& s = blocks_[b];
     const int first_lane = static_cast<int>(b) * kBlock;
-    if (isa_ == RlsBankIsa::kAvx2) {
+    if (isa_ == RlsBankIsa::kAvx512) {
+      UpdateBlockAvx512(s, first_lane, y);
+    } else if (isa_ == RlsBankIsa::kAvx2) {
       UpdateBlockAvx2(s, first_lane, y);
     } else {
       UpdateBlockBaseline(s, first_lane, y);
@@ -487,12 +509,17 @@ void RlsBank<N>::UpdateBlockBaseline(Block& s, int first_lane, double y) {
   UpdateLanes<2>(s, 2, first_lane + 2, y);
 }
 
-// AVX2 code in a header: this function alone is compiled for AVX2 (UpdateLanes and the helpers
-// with vector operands are always inlined into it) and runs only where
-// __builtin_cpu_supports("avx2") said yes.  What it may call out of line (Eigen's accessors) is
+// AVX2 and AVX-512VL code in a header: these two functions alone are compiled for those ISAs
+// (UpdateLanes and the helpers with vector operands are always inlined into them) and run only
+// where __builtin_cpu_supports said yes.  What they may call out of line (Eigen's accessors) is
 // compiled for the baseline, as everywhere else.
 template <int N>
 void RlsBank<N>::UpdateBlockAvx2(Block& s, int first_lane, double y) {
+  UpdateLanes<4>(s, 0, first_lane, y);
+}
+
+template <int N>
+void RlsBank<N>::UpdateBlockAvx512(Block& s, int first_lane, double y) {
   UpdateLanes<4>(s, 0, first_lane, y);
 }
 

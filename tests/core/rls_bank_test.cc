@@ -195,12 +195,39 @@ TEST(RlsBank, Avx2EqualsSeparateEstimatorsBitForBit) {
   RunAgainstSeparateEstimators<8>(7, RlsBankIsa::kAvx2);
 }
 
-TEST(RlsBank, BestIsAvx2WhereTheCpuHasIt) {
+bool HasAvx512() {
+  return __builtin_cpu_supports("avx2") != 0 && __builtin_cpu_supports("avx512f") != 0 &&
+         __builtin_cpu_supports("avx512vl") != 0;
+}
+
+// The four-lane update compiled for AVX-512VL, whose FMA instructions the build keeps from
+// contracting a * b + c (-ffp-contract=off): were a product and a sum fused, the lanes would
+// round otherwise than Rls and this test would fail.  Skipped, saying so, where the CPU lacks it.
+TEST(RlsBank, Avx512EqualsSeparateEstimatorsBitForBit) {
+  if (!HasAvx512()) {
+    EXPECT_THROW(RlsBank<3>(RlsOptions{}, 1, RlsBankIsa::kAvx512), std::invalid_argument);
+    GTEST_SKIP() << "this CPU has no AVX-512F and AVX-512VL: RlsBank's AVX-512VL update is not "
+                    "tested here";
+  }
+  RunAgainstSeparateEstimators<3>(5, RlsBankIsa::kAvx512);
+  RunAgainstSeparateEstimators<4>(24, RlsBankIsa::kAvx512);
+  RunAgainstSeparateEstimators<4>(1, RlsBankIsa::kAvx512);
+  RunAgainstSeparateEstimators<8>(7, RlsBankIsa::kAvx512);
+}
+
+TEST(RlsBank, BestIsTheWidestRegisterFileTheCpuHas) {
   RlsOptions o;
-  const RlsBankIsa want =
-      __builtin_cpu_supports("avx2") != 0 ? RlsBankIsa::kAvx2 : RlsBankIsa::kBaseline;
+  const RlsBankIsa want = HasAvx512()                           ? RlsBankIsa::kAvx512
+                          : __builtin_cpu_supports("avx2") != 0 ? RlsBankIsa::kAvx2
+                                                                : RlsBankIsa::kBaseline;
   EXPECT_EQ(RlsBank<4>(o, 3).isa(), want);
   EXPECT_EQ(RlsBank<4>(o, 3, RlsBankIsa::kBaseline).isa(), RlsBankIsa::kBaseline);
+  if (__builtin_cpu_supports("avx2") != 0) {
+    EXPECT_EQ(RlsBank<4>(o, 3, RlsBankIsa::kAvx2).isa(), RlsBankIsa::kAvx2);
+  }
+  // Innovation guards: one Rls per lane, no structure-of-arrays update, whatever was asked.
+  o.huber = 2.0;
+  EXPECT_EQ(RlsBank<4>(o, 3).isa(), RlsBankIsa::kBaseline);
 }
 
 TEST(RlsBank, TransformAndLaneRoundTrip) {
