@@ -55,38 +55,40 @@ void BankSelector::Record(int i, double prediction_error) {
 }
 
 int BankSelector::FirstSmallest() const {
-  // Without a branch per candidate (losses close to each other make such branches
-  // unpredictable: they cost more than the comparisons), and in four chains of comparisons
-  // (candidates i = c mod 4) rather than one: each chain's first smallest, then the smallest of
-  // those, the first on a tie.  A NaN compares false, so it is never smallest; nor is an infinity.
+  // Two passes.  The smallest finite loss, without a branch per candidate (losses close to each
+  // other make such branches unpredictable): vector minimums, two candidates per SSE2 operation
+  // and four independent chains of them.  Then the first candidate holding it: that branch is
+  // taken where the selection is, which rarely moves.  A non-finite loss is never smallest: it
+  // enters the minimum as +infinity, and none equals a finite minimum.
+  using Pair = double __attribute__((vector_size(2 * sizeof(double))));
   constexpr double kInfinity = std::numeric_limits<double>::infinity();
-  const std::size_t n = loss_.size();
-  struct Chain {
-    std::size_t best;
-    double loss = kInfinity;
-    void Take(double l, std::size_t i) {
-      const bool less = (l < loss) & (l > -kInfinity);
-      best = less ? i : best;
-      loss = less ? l : loss;
-    }
-  };
-  Chain c0{n}, c1{n}, c2{n}, c3{n};  // best = n: none yet
   const double* l = loss_.data();
+  const std::size_t n = loss_.size();
+  const Pair infinite = {kInfinity, kInfinity};
+  const auto take = [&infinite](Pair smallest, const double* at) {
+    Pair x;
+    __builtin_memcpy(&x, at, sizeof(x));
+    x = (x - x == 0.0) ? x : infinite;  // x - x is 0 exactly when x is finite
+    return x < smallest ? x : smallest;
+  };
+  Pair m0 = infinite, m1 = infinite, m2 = infinite, m3 = infinite;
   std::size_t i = 0;
-  for (; i + 4 <= n; i += 4) {
-    c0.Take(l[i], i);
-    c1.Take(l[i + 1], i + 1);
-    c2.Take(l[i + 2], i + 2);
-    c3.Take(l[i + 3], i + 3);
+  for (; i + 8 <= n; i += 8) {
+    m0 = take(m0, l + i);
+    m1 = take(m1, l + i + 2);
+    m2 = take(m2, l + i + 4);
+    m3 = take(m3, l + i + 6);
   }
-  if (i < n) c0.Take(l[i], i);
-  if (i + 1 < n) c1.Take(l[i + 1], i + 1);
-  if (i + 2 < n) c2.Take(l[i + 2], i + 2);
-  Chain best = c0;
-  for (const Chain& c : {c1, c2, c3}) {
-    if (c.loss < best.loss || (c.loss == best.loss && c.best < best.best)) best = c;
-  }
-  return best.best == n ? 0 : static_cast<int>(best.best);
+  for (; i + 2 <= n; i += 2) m0 = take(m0, l + i);
+  m0 = m0 < m1 ? m0 : m1;
+  m2 = m2 < m3 ? m2 : m3;
+  m0 = m0 < m2 ? m0 : m2;
+  double smallest = m0[0] < m0[1] ? m0[0] : m0[1];
+  if (i < n && std::isfinite(l[i]) && l[i] < smallest) smallest = l[i];
+  if (smallest == kInfinity) return 0;  // none is finite
+  std::size_t first = 0;
+  while (l[first] != smallest) ++first;
+  return static_cast<int>(first);
 }
 
 int BankSelector::Commit() {

@@ -1,5 +1,4 @@
 #pragma once
-#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -60,10 +59,9 @@ class BankSelector final {
   /// kResidual: candidate i's loss after the current sample (non-finite: the candidate is not
   /// chosen until its loss is finite again; while no loss is finite the choice stays as it was).
   void SetLoss(int i, double loss) { loss_[static_cast<std::size_t>(i)] = loss; }
-  /// kResidual: SetLoss(i, losses[i]) for every candidate.  @pre losses.size() >= num_candidates().
-  void SetLosses(std::span<const double> losses) {
-    std::copy_n(losses.begin(), loss_.size(), loss_.begin());
-  }
+  /// kResidual: every candidate's loss, to be written in place (as SetLoss) before Commit; one
+  /// per candidate.
+  std::span<double> LossSlots() { return loss_; }
   /// Closes the sample: updates the choice.  Returns the selected index (-1 during the warm-up).
   int Commit();
 

@@ -27,6 +27,28 @@ double FlowLevelRms(double b, double p_bb, std::int64_t updates, double forgetti
   return std::abs(b) / std::sqrt(p_bb * memory);
 }
 
+// Two candidates per SSE2 operation, two operations per step: a bank's per-sample runs over its
+// candidates are short (tens), where a loop's bookkeeping costs as much as its work.
+using Pair = double __attribute__((vector_size(2 * sizeof(double))));
+
+Pair Load(const double* at) {
+  Pair v;
+  __builtin_memcpy(&v, at, sizeof(v));
+  return v;
+}
+
+void Store(double* at, Pair v) { __builtin_memcpy(at, &v, sizeof(v)); }
+
+/// sum[i] += x[i] - c for i < n (the sum of (x - c), as Eigen's `sum += x - c` rounds it).
+void AddDifference(const double* x, double c, double* sum, int n) {
+  int i = 0;
+  for (; i + 4 <= n; i += 4) {
+    Store(sum + i, Load(sum + i) + (Load(x + i) - c));
+    Store(sum + i + 2, Load(sum + i + 2) + (Load(x + i + 2) - c));
+  }
+  for (; i < n; ++i) sum[i] += x[i] - c;
+}
+
 }  // namespace
 
 void IntegratorDelayHealthOptions::Validate() const {
@@ -150,7 +172,6 @@ OnlineIntegratorDelayBank::OnlineIntegratorDelayBank(const OnlineIntegratorDelay
     estimators_.emplace(options_.rls, n);
     estimators_->regressors().row(1).head(n).setOnes();
   }
-  losses_.assign(un, 0.0);
   constrained_error_.assign(un, 0.0);
   constrained_.assign(un, 0);
   if (iv_active_ && options_.wave_front_term) {
@@ -203,10 +224,9 @@ bool OnlineIntegratorDelayBank::Update(double q_in_m3s, double q_out_m3s, double
     if (recentre_period_ > 0 && t - t_centre_ >= recentre_period_) Recentre();
     // The candidates' delayed inflows q_in(k - nk), nk = min..max, side by side.
     const double* delayed_inflow = q_in_history_.Lags() + options_.min_delay_samples;
-    const Eigen::Map<const Eigen::ArrayXd> delayed(delayed_inflow, num_candidates());
-    Eigen::Map<Eigen::ArrayXd>(q_integrated_.data(), num_candidates()) += delayed - q_out_previous_;
+    AddDifference(delayed_inflow, q_out_previous_, q_integrated_.data(), num_candidates());
     if (iv_active_) {  // the instrument; once the IV bank stops it is never read again
-      Eigen::Map<Eigen::ArrayXd>(qin_integrated_.data(), num_candidates()) += delayed - q_ref_;
+      AddDifference(delayed_inflow, q_ref_, qin_integrated_.data(), num_candidates());
     }
     const bool level_ok = FiniteWithin(level_m, options_.level_abs_max_m);
     if (!level_ok) ++health_.bad_level_samples;
@@ -284,23 +304,44 @@ void OnlineIntegratorDelayBank::UpdateIvCandidates(std::vector<IvRls<N>>& estima
 
 template <int N>
 void OnlineIntegratorDelayBank::UpdateCandidates(RlsBank<N>& estimators, double t, double level_m) {
-  // The regressors row by row, each row a run over the candidates (the offset's, 1, is set in
-  // the constructor).
+  // The regressors: row r of phi holds regressor r of every candidate (the offset's, 1, is set
+  // in the constructor), written two candidates at a time.
   typename RlsBank<N>::Regressors& phi = estimators.regressors();
   const int n = num_candidates();
-  using Row = Eigen::Map<const Eigen::RowVectorXd>;
-  phi.row(0).head(n) = Row(q_integrated_.data(), n) - Row(q_centre_.data(), n);
-  if constexpr (N == 4) {
-    phi.row(1).head(n) = Row(q_in_history_.Lags() + options_.min_delay_samples, n);
-    if (options_.idz_level_equation) phi.row(0).head(n) -= phi.row(1).head(n);
+  double* volume = phi.row(0).data();  // each row is contiguous (RowMajor)
+  double* wave_front = N == 4 ? phi.row(1).data() : nullptr;
+  double* drift = phi.row(N - 1).data();
+  const double* q = q_integrated_.data();
+  const double* centre = q_centre_.data();
+  const double* delayed = q_in_history_.Lags() + options_.min_delay_samples;
+  const bool idz = N == 4 && options_.idz_level_equation;
+  const double tc = t - t_centre_;
+  const Pair tc2 = Pair{} + tc;
+  int c = 0;
+  for (; c + 2 <= n; c += 2) {
+    Pair v = Load(q + c) - Load(centre + c);
+    if constexpr (N == 4) {
+      const Pair u = Load(delayed + c);
+      Store(wave_front + c, u);
+      if (idz) v -= u;
+    }
+    Store(volume + c, v);
+    Store(drift + c, tc2);
   }
-  phi.row(N - 1).head(n).setConstant(t - t_centre_);
+  if (c < n) {
+    double v = q[c] - centre[c];
+    if constexpr (N == 4) {
+      wave_front[c] = delayed[c];
+      if (idz) v -= delayed[c];
+    }
+    volume[c] = v;
+    drift[c] = tc;
+  }
   if (selector_.criterion() == BankCriterion::kResidual) {
-    estimators.Update(level_m);
     // The snapshot reports the p21 = 0 fit when p21 < 0 (wave_front_non_negative): its loss is
     // that of the equality-constrained least squares.
-    estimators.ResidualLosses(N == 4 && options_.wave_front_non_negative ? 1 : -1, losses_);
-    selector_.SetLosses(losses_);
+    estimators.UpdateWithLosses(level_m, N == 4 && options_.wave_front_non_negative ? 1 : -1,
+                                selector_.LossSlots());
     return;
   }
   // The selector sees the error of the estimate the snapshot reports (p21 >= 0): for a candidate

@@ -300,8 +300,7 @@ class OnlineIntegratorDelayBank final {
   bool iv_active_ = false;
   bool three_step_active_ = false;
   double q_ref_ = 0.0;
-  LagLine q_in_history_;        // lag nk: the inflow nk samples ago
-  std::vector<double> losses_;  // kResidual: the candidates' losses of the current sample
+  LagLine q_in_history_;  // lag nk: the inflow nk samples ago
   double q_in_good_ = 0.0;
   double q_out_good_ = 0.0;
   double q_out_previous_ = 0.0;

@@ -86,6 +86,10 @@ class RlsBank final {
   Regressors& regressors() { return phi_; }
   /// One sample on every lane: as Rls<N>::Update(regressors().col(l), y) for each lane l.
   void Update(double y);
+  /// Update(y), then ResidualLosses(nonnegative, losses), in one pass over the blocks: each
+  /// block's losses from its new state while that is at hand.  The same numbers as the two
+  /// calls.  @pre losses.size() >= lanes().
+  void UpdateWithLosses(double y, int nonnegative, std::span<double> losses);
   /// What Update did on lane l.
   Result result(int lane) const;
 
@@ -188,25 +192,41 @@ class RlsBank final {
     Assign(mask, add + 1.0, add);
     counter += add;
   }
+  /// ResidualLosses' `nonnegative` as LossLanes takes it: -1 for none.
+  static int ConstrainedIndex(int nonnegative) {
+    return nonnegative >= 0 && nonnegative < N ? nonnegative : -1;
+  }
   template <int W>
   [[gnu::always_inline]] void UpdateLanes(Block& s, std::size_t at, int first_lane, double y);
-  void UpdateBlockBaseline(Block& s, int first_lane, double y);
+  // Every block updated with W lanes an operation, each followed by the bounds (if any) and,
+  // where `losses` is not null, by its losses (LossBlock).
+  template <int W>
+  [[gnu::always_inline]] void UpdateBlocks(double y, int constrained, double* losses);
+  void UpdateBlocksBaseline(double y, int constrained, double* losses);
   template <int W>
   [[gnu::always_inline]] void LossLanes(const Block& s, std::size_t at, int constrained,
                                         double* out) const;
+  // Block b's losses into losses[b * kBlock, ...) (its lanes below lanes()).
   template <int W>
-  [[gnu::always_inline]] void LossBlocks(int constrained, double* losses) const;
+  [[gnu::always_inline]] void LossBlock(std::size_t b, int constrained, double* losses) const;
   [[gnu::target("avx2,no-fma")]] void LossesAvx2(int constrained, double* losses) const;
   // Compiled for AVX2 alone, called only where the CPU has it.  "no-fma": no contraction of
   // a * b + c, which would round differently from Rls.  (Eight lanes an AVX-512 register were
   // tried: GCC 12 compares those vectors lane by lane, 1.5 x slower than AVX2.)
-  [[gnu::target("avx2,no-fma")]] void UpdateBlockAvx2(Block& s, int first_lane, double y);
+  [[gnu::target("avx2,no-fma")]] void UpdateBlocksAvx2(double y, int constrained, double* losses);
   // The same four-lane update compiled for AVX-512VL (its 32 vector registers), called only
   // where the CPU has AVX-512F and AVX-512VL.  AVX-512F brings FMA instructions of its own that
   // "no-fma" does not remove: the build's -ffp-contract=off (CMakeLists.txt) keeps a * b + c two
   // roundings, as in Rls.
-  [[gnu::target("avx2,avx512f,avx512vl")]] void UpdateBlockAvx512(Block& s, int first_lane,
-                                                                  double y);
+  [[gnu::target("avx2,avx512f,avx512vl")]] void UpdateBlocksAvx512(double y, int constrained,
+                                                                   double* losses);
+  // Whether Update rejects y on every lane (Rls::Update's output check).
+  bool OutputInvalid(double y) const {
+    return !std::isfinite(y) || std::abs(y) > options_.output_abs_max;
+  }
+  void RejectOutput();
+  // The structure-of-arrays update of a valid y on the CPU's ISA (losses as UpdateBlocks).
+  void UpdateValid(double y, int constrained, double* losses);
   // The box and the trace bounds on the block's lanes that updated, lane by lane.
   void BoundLanes(Block& s, int first_lane);
   void Load(int lane, Rls<N>& into) const;
@@ -412,35 +432,33 @@ void RlsBank<N>::ResidualLosses(int nonnegative, std::span<double> losses) const
     }
     return;
   }
-  const int constrained = constrain ? nonnegative : -1;
+  const int constrained = ConstrainedIndex(nonnegative);
   if (isa_ != RlsBankIsa::kBaseline) {  // AVX2, or AVX-512VL (the losses need no more registers)
     LossesAvx2(constrained, losses.data());
   } else {
-    LossBlocks<2>(constrained, losses.data());
+    for (std::size_t b = 0; b < blocks_.size(); ++b) LossBlock<2>(b, constrained, losses.data());
   }
 }
 
 template <int N>
 void RlsBank<N>::LossesAvx2(int constrained, double* losses) const {
-  LossBlocks<4>(constrained, losses);
+  for (std::size_t b = 0; b < blocks_.size(); ++b) LossBlock<4>(b, constrained, losses);
 }
 
 template <int N>
 template <int W>
-inline void RlsBank<N>::LossBlocks(int constrained, double* losses) const {
-  for (std::size_t b = 0; b < blocks_.size(); ++b) {
-    const std::size_t first = b * kLanes;
-    const std::size_t count = std::min(kLanes, Index(lanes_) - first);
-    if (count == kLanes) {  // straight into losses
-      for (std::size_t at = 0; at < kLanes; at += W) {
-        LossLanes<W>(blocks_[b], at, constrained, losses + first);
-      }
-      continue;
+inline void RlsBank<N>::LossBlock(std::size_t b, int constrained, double* losses) const {
+  const std::size_t first = b * kLanes;
+  const std::size_t count = std::min(kLanes, Index(lanes_) - first);
+  if (count == kLanes) {  // straight into losses
+    for (std::size_t at = 0; at < kLanes; at += W) {
+      LossLanes<W>(blocks_[b], at, constrained, losses + first);
     }
-    double out[kLanes];  // the last block's padding lanes have no place in losses
-    for (std::size_t at = 0; at < kLanes; at += W) LossLanes<W>(blocks_[b], at, constrained, out);
-    for (std::size_t l = 0; l < count; ++l) losses[first + l] = out[l];
+    return;
   }
+  double out[kLanes];  // the last block's padding lanes have no place in losses
+  for (std::size_t at = 0; at < kLanes; at += W) LossLanes<W>(blocks_[b], at, constrained, out);
+  for (std::size_t l = 0; l < count; ++l) losses[first + l] = out[l];
 }
 
 template <int N>
@@ -480,47 +498,75 @@ void RlsBank<N>::Update(double y) {
     }
     return;
   }
-  if (!std::isfinite(y) || std::abs(y) > options_.output_abs_max) {
-    for (Block& s : blocks_) {
-      for (std::size_t l = 0; l < kLanes; ++l) {
-        s.rejected_invalid[l] += 1.0;
-        s.outcome[l] = static_cast<double>(RlsOutcome::kRejectedInvalid);
-      }
-    }
+  if (OutputInvalid(y)) {
+    RejectOutput();
     return;
   }
+  UpdateValid(y, -1, nullptr);
+}
+
+template <int N>
+void RlsBank<N>::UpdateWithLosses(double y, int nonnegative, std::span<double> losses) {
+  if (!soa_ || OutputInvalid(y)) {
+    Update(y);
+    ResidualLosses(nonnegative, losses);
+    return;
+  }
+  UpdateValid(y, ConstrainedIndex(nonnegative), losses.data());
+}
+
+template <int N>
+void RlsBank<N>::RejectOutput() {
+  for (Block& s : blocks_) {
+    for (std::size_t l = 0; l < kLanes; ++l) {
+      s.rejected_invalid[l] += 1.0;
+      s.outcome[l] = static_cast<double>(RlsOutcome::kRejectedInvalid);
+    }
+  }
+}
+
+template <int N>
+void RlsBank<N>::UpdateValid(double y, int constrained, double* losses) {
+  if (isa_ == RlsBankIsa::kAvx512) {
+    UpdateBlocksAvx512(y, constrained, losses);
+  } else if (isa_ == RlsBankIsa::kAvx2) {
+    UpdateBlocksAvx2(y, constrained, losses);
+  } else {
+    UpdateBlocksBaseline(y, constrained, losses);
+  }
+}
+
+template <int N>
+template <int W>
+inline void RlsBank<N>::UpdateBlocks(double y, int constrained, double* losses) {
   for (std::size_t b = 0; b < blocks_.size(); ++b) {
     Block& s = blocks_[b];
     const int first_lane = static_cast<int>(b) * kBlock;
-    if (isa_ == RlsBankIsa::kAvx512) {
-      UpdateBlockAvx512(s, first_lane, y);
-    } else if (isa_ == RlsBankIsa::kAvx2) {
-      UpdateBlockAvx2(s, first_lane, y);
-    } else {
-      UpdateBlockBaseline(s, first_lane, y);
+    for (std::size_t at = 0; at < kLanes; at += W) {
+      UpdateLanes<W>(s, at, first_lane + static_cast<int>(at), y);
     }
     if (has_box_ || trace_bounds_) BoundLanes(s, first_lane);
+    if (losses != nullptr) LossBlock<W>(b, constrained, losses);
   }
 }
 
 template <int N>
-void RlsBank<N>::UpdateBlockBaseline(Block& s, int first_lane, double y) {
-  UpdateLanes<2>(s, 0, first_lane, y);
-  UpdateLanes<2>(s, 2, first_lane + 2, y);
+void RlsBank<N>::UpdateBlocksBaseline(double y, int constrained, double* losses) {
+  UpdateBlocks<2>(y, constrained, losses);
 }
 
 // AVX2 and AVX-512VL code in a header: these two functions alone are compiled for those ISAs
-// (UpdateLanes and the helpers with vector operands are always inlined into them) and run only
-// where __builtin_cpu_supports said yes.  What they may call out of line (Eigen's accessors) is
-// compiled for the baseline, as everywhere else.
+// (UpdateBlocks, UpdateLanes, LossBlock and the helpers with vector operands are always inlined
+// into them) and run only where __builtin_cpu_supports said yes.  What they call out of line
+// (BoundLanes, Eigen's accessors) is compiled for the baseline, as everywhere else.
 template <int N>
-void RlsBank<N>::UpdateBlockAvx2(Block& s, int first_lane, double y) {
-  UpdateLanes<4>(s, 0, first_lane, y);
+void RlsBank<N>::UpdateBlocksAvx2(double y, int constrained, double* losses) {
+  UpdateBlocks<4>(y, constrained, losses);
 }
 
 template <int N>
-void RlsBank<N>::UpdateBlockAvx512(Block& s, int first_lane, double y) {
-  UpdateLanes<4>(s, 0, first_lane, y);
+void RlsBank<N>::UpdateBlocksAvx512(double y, int constrained, double* losses) {
+  UpdateBlocks<4>(y, constrained, losses);
 }
 
 template <int N>

@@ -50,22 +50,22 @@ TEST(BankSelector, ResidualNeverChoosesANonFiniteLoss) {
   EXPECT_EQ(fresh.Commit(), -1);
 }
 
-// The choice is the first smallest finite loss, for every bank size (whole chains of four and
-// the rest), with ties, NaNs and infinities of both signs among the losses.  The reference is the
-// plain one-pass search.
+// The choice is the first smallest finite loss, for every bank size (whole runs of eight, pairs
+// and a last odd one), with ties (zeros of both signs among them), NaNs and infinities of both
+// signs among the losses.  The reference is the plain one-pass search.
 TEST(BankSelector, ResidualChoosesTheFirstSmallestFiniteLossAtEverySize) {
   const double inf = std::numeric_limits<double>::infinity();
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  const double pool[] = {3.0, 1.0, 2.0, 1.0, nan, inf, -inf, 0.5, 0.5, 7.0};
+  const double pool[] = {3.0, 1.0, 2.0, 1.0, nan, inf, -inf, 0.5, 0.5, 7.0, 0.0, -0.0};
   std::uint64_t state = 12345;
-  for (int n = 1; n <= 13; ++n) {
-    for (int trial = 0; trial < 200; ++trial) {
+  for (int n = 1; n <= 27; ++n) {
+    for (int trial = 0; trial < 300; ++trial) {
       BankSelector s(n, Residual(0));
       int expected = -1;
       double smallest = inf;
       for (int i = 0; i < n; ++i) {
         state = state * 6364136223846793005ULL + 1442695040888963407ULL;
-        const double l = pool[(state >> 33) % 10];
+        const double l = pool[(state >> 33) % std::size(pool)];
         s.SetLoss(i, l);
         if (std::isfinite(l) && l < smallest) {
           smallest = l;
