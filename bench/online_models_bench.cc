@@ -90,6 +90,16 @@ void BM_DirectIdBank(benchmark::State& state) {
 }
 BENCHMARK(BM_DirectIdBank);
 
+// The ID bank's update alone (no snapshot), as the replay of config/canalidd-asce2.toml runs it
+// on every poll: the bank's part of a replay's cost per sample.
+void BM_IdBankUpdate(benchmark::State& state) {
+  OnlineIntegratorDelayBank bank(
+      OnlineModelOptionsFor(OnlineModelKind::kIntegratorDelay, PoolSettings()).id);
+  RunDirect(state, "id (bank update only)",
+            [&](const OnlineSample& s) { return bank.Update(s.q_in_m3s, s.q_out_m3s, s.level_m); });
+}
+BENCHMARK(BM_IdBankUpdate);
+
 void BM_DirectArxBank(benchmark::State& state) {
   OnlineArxBank bank(OnlineModelOptionsFor(OnlineModelKind::kArx, PoolSettings()).arx);
   RunDirect(state, "arx (bank direct)", [&](const OnlineSample& s) {
