@@ -5,6 +5,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/numerics/lane_vectors.h"
+
 namespace canalid::core {
 
 void BankSelectorOptions::Validate() const {
@@ -60,18 +62,16 @@ int BankSelector::FirstSmallest() const {
   // and four independent chains of them.  Then the first candidate holding it: that branch is
   // taken where the selection is, which rarely moves.  A non-finite loss is never smallest: it
   // enters the minimum as +infinity, and none equals a finite minimum.
-  using Pair = double __attribute__((vector_size(2 * sizeof(double))));
   constexpr double kInfinity = std::numeric_limits<double>::infinity();
   const double* l = loss_.data();
   const std::size_t n = loss_.size();
-  const Pair infinite = {kInfinity, kInfinity};
-  const auto take = [&infinite](Pair smallest, const double* at) {
-    Pair x;
-    __builtin_memcpy(&x, at, sizeof(x));
+  const DoublePair infinite = {kInfinity, kInfinity};
+  const auto take = [&infinite](DoublePair smallest, const double* at) {
+    DoublePair x = LoadPair(at);
     x = (x - x == 0.0) ? x : infinite;  // x - x is 0 exactly when x is finite
     return x < smallest ? x : smallest;
   };
-  Pair m0 = infinite, m1 = infinite, m2 = infinite, m3 = infinite;
+  DoublePair m0 = infinite, m1 = infinite, m2 = infinite, m3 = infinite;
   std::size_t i = 0;
   for (; i + 8 <= n; i += 8) {
     m0 = take(m0, l + i);

@@ -7,6 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/numerics/lane_vectors.h"
 #include "core/online/option_checks.h"
 
 namespace canalid::core {
@@ -27,24 +28,13 @@ double FlowLevelRms(double b, double p_bb, std::int64_t updates, double forgetti
   return std::abs(b) / std::sqrt(p_bb * memory);
 }
 
-// Two candidates per SSE2 operation, two operations per step: a bank's per-sample runs over its
-// candidates are short (tens), where a loop's bookkeeping costs as much as its work.
-using Pair = double __attribute__((vector_size(2 * sizeof(double))));
-
-Pair Load(const double* at) {
-  Pair v;
-  __builtin_memcpy(&v, at, sizeof(v));
-  return v;
-}
-
-void Store(double* at, Pair v) { __builtin_memcpy(at, &v, sizeof(v)); }
-
-/// sum[i] += x[i] - c for i < n (the sum of (x - c), as Eigen's `sum += x - c` rounds it).
+/// sum[i] += x[i] - c for i < n (the sum of (x - c), as Eigen's `sum += x - c` rounds it), two
+/// pairs a step.
 void AddDifference(const double* x, double c, double* sum, int n) {
   int i = 0;
   for (; i + 4 <= n; i += 4) {
-    Store(sum + i, Load(sum + i) + (Load(x + i) - c));
-    Store(sum + i + 2, Load(sum + i + 2) + (Load(x + i + 2) - c));
+    StorePair(sum + i, LoadPair(sum + i) + (LoadPair(x + i) - c));
+    StorePair(sum + i + 2, LoadPair(sum + i + 2) + (LoadPair(x + i + 2) - c));
   }
   for (; i < n; ++i) sum[i] += x[i] - c;
 }
@@ -316,17 +306,17 @@ void OnlineIntegratorDelayBank::UpdateCandidates(RlsBank<N>& estimators, double 
   const double* delayed = q_in_history_.Lags() + options_.min_delay_samples;
   const bool idz = N == 4 && options_.idz_level_equation;
   const double tc = t - t_centre_;
-  const Pair tc2 = Pair{} + tc;
+  const DoublePair tc2 = DoublePair{} + tc;
   int c = 0;
   for (; c + 2 <= n; c += 2) {
-    Pair v = Load(q + c) - Load(centre + c);
+    DoublePair v = LoadPair(q + c) - LoadPair(centre + c);
     if constexpr (N == 4) {
-      const Pair u = Load(delayed + c);
-      Store(wave_front + c, u);
+      const DoublePair u = LoadPair(delayed + c);
+      StorePair(wave_front + c, u);
       if (idz) v -= u;
     }
-    Store(volume + c, v);
-    Store(drift + c, tc2);
+    StorePair(volume + c, v);
+    StorePair(drift + c, tc2);
   }
   if (c < n) {
     double v = q[c] - centre[c];

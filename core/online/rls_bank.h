@@ -11,26 +11,10 @@
 #include <string>
 #include <vector>
 
+#include "core/numerics/lane_vectors.h"
 #include "core/online/rls.h"
 
 namespace canalid::core {
-
-/// W lanes of doubles as one value (GCC's and Clang's vector extension): +, -, *, / act lane by
-/// lane with IEEE rounding, as on doubles (no FMA in the ISAs RlsBank uses, so no contraction
-/// either); a comparison gives a mask of -1 / 0 per lane.  Spelled out per width: GCC drops a
-/// vector_size whose value depends on a template parameter.
-template <int W>
-struct LaneVectors;
-template <>
-struct LaneVectors<2> {  // one SSE2 register
-  using Lanes = double __attribute__((vector_size(2 * sizeof(double))));
-  using Mask = std::int64_t __attribute__((vector_size(2 * sizeof(std::int64_t))));
-};
-template <>
-struct LaneVectors<4> {  // one AVX2 register
-  using Lanes = double __attribute__((vector_size(4 * sizeof(double))));
-  using Mask = std::int64_t __attribute__((vector_size(4 * sizeof(std::int64_t))));
-};
 
 /// The instruction set of RlsBank's structure-of-arrays update.
 enum class RlsBankIsa {
